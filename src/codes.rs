@@ -1,0 +1,51 @@
+//! Stable diagnostic codes. Codes never change meaning once published; the
+//! table [`ALL`] documents each one and the UI tests cover every code.
+
+macro_rules! codes {
+    ($($name:ident = $code:literal : $doc:literal;)*) => {
+        $(#[doc = $doc] pub const $name: &str = $code;)*
+        /// Every code with a one-line description, in order.
+        pub const ALL: &[(&str, &str)] = &[$(($code, $doc)),*];
+    };
+}
+
+codes! {
+    E_UNEXPECTED_CHAR = "E0001": "a character that is not part of the language";
+    E_UNTERMINATED_STRING = "E0002": "a string literal without its closing quote";
+    E_UNTERMINATED_COMMENT = "E0003": "a block comment without its closing `*/`";
+    E_BAD_NUMBER = "E0004": "a malformed number literal";
+    E_SYNTAX = "E0010": "a syntax error: the parser expected something else";
+    E_TOO_DEEP = "E0011": "an expression nested deeper than the limit";
+    E_UNKNOWN_NAME = "E0100": "a name that is not defined";
+    E_DUPLICATE_DEF = "E0101": "a name defined twice";
+    E_USED_BEFORE_DEF = "E0102": "a name used before its definition";
+    E_UNKNOWN_FUNCTION = "E0103": "a call of a function that does not exist";
+    E_UNKNOWN_ARG = "E0104": "a named argument the function does not have";
+    E_DUPLICATE_ARG = "E0105": "an argument given twice";
+    E_TOO_MANY_ARGS = "E0106": "more positional arguments than the function takes";
+    E_MISSING_ARG = "E0107": "a required argument left out";
+    E_ARG_ORDER = "E0108": "a positional argument after a named one";
+    E_UNKNOWN_FIELD = "E0109": "a field or swizzle the value does not have";
+    E_UNKNOWN_SETTING = "E0110": "a setting the block does not have";
+    E_DUPLICATE_SETTING = "E0111": "a setting given twice in one block";
+    E_DUPLICATE_SEED = "E0112": "a seed declared twice in one atlas";
+    E_UNKNOWN_SEED = "E0113": "a merge of a seed the atlas does not declare";
+    E_BAD_MERGE = "E0114": "a merge that names fewer than two seeds, or a seed with itself";
+    E_NO_SEEDS = "E0115": "an atlas with no seed";
+    E_DUPLICATE_RENDER = "E0116": "more than one render item";
+    E_TYPE_MISMATCH = "E0200": "a value of the wrong type";
+    E_BAD_OPERANDS = "E0201": "an operator applied to types it does not accept";
+    E_VECTOR_SIZE = "E0202": "a vector of the wrong size, or vectors of different sizes";
+    E_NOT_CONSTANT = "E0203": "a surface field where a constant is required";
+    E_ATLAS_NOT_SHAPE = "E0204": "an atlas on something that is not a shape";
+    E_RENDER_NOT_SHAPE = "E0205": "a render item whose target is not a shape";
+    E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
+    E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
+    E_NON_FINITE = "E0302": "a constant that is NaN or infinite";
+    E_MISSING_FILE = "E0303": "a texture file that does not exist";
+    E_IMAGE_FORMAT = "E0304": "a texture file in a format sdfc cannot read";
+    E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
+    W_UNUSED = "W0001": "a `let` binding that is never used";
+    W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";
+    W_UNUSED_ITEM = "W0003": "a material that is never used";
+}

@@ -1,0 +1,254 @@
+//! The one plain diagnostic type shared by the CLI, the language server and the tests.
+//!
+//! A [`Diagnostic`] carries a severity, a stable code (`E0001`, `W0001`, …), a
+//! message, a primary label, secondary labels, notes and an optional help line.
+//! It knows nothing about how it is shown: [`render`] draws it with
+//! codespan-reporting, [`to_json`] turns it into the machine-readable form of
+//! `sdfc check --format json`.
+
+use crate::span::{LineIndex, Span};
+use codespan_reporting::diagnostic as cs;
+use codespan_reporting::files::SimpleFile;
+use codespan_reporting::term;
+use serde::Serialize;
+
+/// How bad a diagnostic is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    Note,
+    Warning,
+    Error,
+}
+
+/// A span with a message, pointing into the source.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Label {
+    pub span: Span,
+    pub message: String,
+}
+
+impl Label {
+    pub fn new(span: Span, message: impl Into<String>) -> Self {
+        Label {
+            span,
+            message: message.into(),
+        }
+    }
+}
+
+/// One problem (or fact) about a source file.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    /// Stable code, see [`crate::codes`].
+    pub code: &'static str,
+    pub message: String,
+    pub primary: Label,
+    pub secondary: Vec<Label>,
+    pub notes: Vec<String>,
+    pub help: Option<String>,
+}
+
+impl Diagnostic {
+    pub fn error(
+        code: &'static str,
+        message: impl Into<String>,
+        span: Span,
+        label: impl Into<String>,
+    ) -> Self {
+        Self::new(Severity::Error, code, message, span, label)
+    }
+
+    pub fn warning(
+        code: &'static str,
+        message: impl Into<String>,
+        span: Span,
+        label: impl Into<String>,
+    ) -> Self {
+        Self::new(Severity::Warning, code, message, span, label)
+    }
+
+    pub fn note_diag(
+        code: &'static str,
+        message: impl Into<String>,
+        span: Span,
+        label: impl Into<String>,
+    ) -> Self {
+        Self::new(Severity::Note, code, message, span, label)
+    }
+
+    fn new(
+        severity: Severity,
+        code: &'static str,
+        message: impl Into<String>,
+        span: Span,
+        label: impl Into<String>,
+    ) -> Self {
+        Diagnostic {
+            severity,
+            code,
+            message: message.into(),
+            primary: Label::new(span, label),
+            secondary: Vec::new(),
+            notes: Vec::new(),
+            help: None,
+        }
+    }
+
+    pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Self {
+        self.secondary.push(Label::new(span, message));
+        self
+    }
+
+    pub fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.notes.push(note.into());
+        self
+    }
+
+    pub fn with_help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+}
+
+/// Sorts diagnostics by position, then severity, so output is stable.
+pub fn sort(diags: &mut [Diagnostic]) {
+    diags.sort_by(|a, b| {
+        (
+            a.primary.span.start,
+            a.primary.span.end,
+            std::cmp::Reverse(a.severity),
+            a.code,
+        )
+            .cmp(&(
+                b.primary.span.start,
+                b.primary.span.end,
+                std::cmp::Reverse(b.severity),
+                b.code,
+            ))
+    });
+}
+
+fn to_codespan(d: &Diagnostic, len: usize) -> cs::Diagnostic<()> {
+    let sev = match d.severity {
+        Severity::Error => cs::Severity::Error,
+        Severity::Warning => cs::Severity::Warning,
+        Severity::Note => cs::Severity::Note,
+    };
+    let clamp = |s: Span| s.start.min(len)..s.end.min(len).max(s.start.min(len));
+    let mut labels =
+        vec![cs::Label::primary((), clamp(d.primary.span)).with_message(&d.primary.message)];
+    for l in &d.secondary {
+        labels.push(cs::Label::secondary((), clamp(l.span)).with_message(&l.message));
+    }
+    let mut notes: Vec<String> = d.notes.iter().map(|n| format!("note: {n}")).collect();
+    if let Some(h) = &d.help {
+        notes.push(format!("help: {h}"));
+    }
+    cs::Diagnostic::new(sev)
+        .with_code(d.code)
+        .with_message(&d.message)
+        .with_labels(labels)
+        .with_notes(notes)
+}
+
+/// Renders diagnostics as text, the way `sdfc check` prints them.
+pub fn render(file_name: &str, source: &str, diags: &[Diagnostic], color: bool) -> String {
+    let file = SimpleFile::new(file_name, source);
+    let config = term::Config::default();
+    let mut out = Vec::new();
+    if color {
+        let mut writer = term::termcolor::Ansi::new(&mut out);
+        for d in diags {
+            let _ = term::emit_to_write_style(
+                &mut writer,
+                &config,
+                &file,
+                &to_codespan(d, source.len()),
+            );
+        }
+    } else {
+        let mut writer = term::termcolor::NoColor::new(&mut out);
+        for d in diags {
+            let _ = term::emit_to_write_style(
+                &mut writer,
+                &config,
+                &file,
+                &to_codespan(d, source.len()),
+            );
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[derive(Serialize)]
+struct JsonPos {
+    line: usize,
+    column: usize,
+}
+
+#[derive(Serialize)]
+struct JsonLabel<'a> {
+    message: &'a str,
+    byte_start: usize,
+    byte_end: usize,
+    start: JsonPos,
+    end: JsonPos,
+}
+
+#[derive(Serialize)]
+struct JsonDiagnostic<'a> {
+    code: &'static str,
+    severity: Severity,
+    message: &'a str,
+    file: &'a str,
+    byte_start: usize,
+    byte_end: usize,
+    start: JsonPos,
+    end: JsonPos,
+    labels: Vec<JsonLabel<'a>>,
+    notes: &'a [String],
+    help: Option<&'a str>,
+}
+
+/// One JSON object (a single line) for a diagnostic, as `sdfc check --format json` prints it.
+/// Lines and columns are 1-based; columns count Unicode scalar values.
+pub fn to_json(file_name: &str, source: &str, d: &Diagnostic) -> String {
+    let index = LineIndex::new(source);
+    let pos = |offset: usize| {
+        let (line, column) = index.line_col(source, offset);
+        JsonPos {
+            line: line + 1,
+            column: column + 1,
+        }
+    };
+    let mut labels = Vec::new();
+    for l in std::iter::once(&d.primary).chain(&d.secondary) {
+        labels.push(JsonLabel {
+            message: &l.message,
+            byte_start: l.span.start,
+            byte_end: l.span.end,
+            start: pos(l.span.start),
+            end: pos(l.span.end),
+        });
+    }
+    let j = JsonDiagnostic {
+        code: d.code,
+        severity: d.severity,
+        message: &d.message,
+        file: file_name,
+        byte_start: d.primary.span.start,
+        byte_end: d.primary.span.end,
+        start: pos(d.primary.span.start),
+        end: pos(d.primary.span.end),
+        labels,
+        notes: &d.notes,
+        help: d.help.as_deref(),
+    };
+    serde_json::to_string(&j).unwrap_or_else(|_| String::from("{}"))
+}

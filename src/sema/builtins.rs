@@ -1,0 +1,475 @@
+//! The builtins table: every builtin function and constant with its signature,
+//! defaults and documentation. The checker, hover, completion and signature
+//! help all read this one table.
+
+use super::types::Ty;
+
+/// The type a parameter accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PTy {
+    Float,
+    Vec2,
+    Vec3,
+    Bool,
+    Str,
+    Shape,
+    Texture,
+    Material,
+    /// A float or a vector; all `T` parameters of a call agree, and floats broadcast.
+    T,
+    /// A float (uniform) or a vec3 (per axis).
+    FloatOrVec3,
+}
+
+impl PTy {
+    pub fn describe(self) -> &'static str {
+        match self {
+            PTy::Float => "float",
+            PTy::Vec2 => "vec2",
+            PTy::Vec3 => "vec3",
+            PTy::Bool => "bool",
+            PTy::Str => "string",
+            PTy::Shape => "shape",
+            PTy::Texture => "texture",
+            PTy::Material => "material",
+            PTy::T => "float or vector",
+            PTy::FloatOrVec3 => "float or vec3",
+        }
+    }
+}
+
+/// A default value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Dflt {
+    F(f64),
+    V(&'static [f64]),
+    B(bool),
+    S(&'static str),
+}
+
+impl Dflt {
+    pub fn display(self) -> String {
+        match self {
+            Dflt::F(x) => super::types::fmt_num(x),
+            Dflt::V(v) => format!(
+                "[{}]",
+                v.iter()
+                    .map(|x| super::types::fmt_num(*x))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            Dflt::B(b) => b.to_string(),
+            Dflt::S(s) => format!("{s:?}"),
+        }
+    }
+}
+
+/// A check on a constant argument.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Check {
+    None,
+    /// Every component > 0.
+    Positive,
+    /// Every component ≥ 0.
+    NonNegative,
+    /// Not the zero vector (a direction or axis).
+    NonZero,
+    /// One of the listed strings.
+    OneOf(&'static [&'static str]),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Param {
+    pub name: &'static str,
+    pub ty: PTy,
+    pub default: Option<Dflt>,
+    pub check: Check,
+}
+
+const fn p(name: &'static str, ty: PTy) -> Param {
+    Param {
+        name,
+        ty,
+        default: None,
+        check: Check::None,
+    }
+}
+const fn pos(name: &'static str, ty: PTy) -> Param {
+    Param {
+        name,
+        ty,
+        default: None,
+        check: Check::Positive,
+    }
+}
+const fn posd(name: &'static str, ty: PTy, d: Dflt) -> Param {
+    Param {
+        name,
+        ty,
+        default: Some(d),
+        check: Check::Positive,
+    }
+}
+const fn d(name: &'static str, ty: PTy, d: Dflt) -> Param {
+    Param {
+        name,
+        ty,
+        default: Some(d),
+        check: Check::None,
+    }
+}
+const fn dir(name: &'static str, v: &'static [f64]) -> Param {
+    Param {
+        name,
+        ty: PTy::Vec3,
+        default: Some(Dflt::V(v)),
+        check: Check::NonZero,
+    }
+}
+
+/// What a builtin returns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ret {
+    Shape,
+    Texture,
+    Camera,
+    Light,
+    Float,
+    Vec3,
+    Vec4,
+    /// The unified type of the `T` parameters.
+    T,
+}
+
+/// What family a builtin belongs to (for documentation, completion and lowering).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Primitive,
+    Csg,
+    Transform,
+    Warp,
+    Texture,
+    Render,
+    Math,
+}
+
+impl Kind {
+    pub fn title(self) -> &'static str {
+        match self {
+            Kind::Primitive => "primitive",
+            Kind::Csg => "CSG",
+            Kind::Transform => "transform",
+            Kind::Warp => "warp",
+            Kind::Texture => "texture",
+            Kind::Render => "render setting",
+            Kind::Math => "math",
+        }
+    }
+
+    /// Whether the builtin accepts surface fields and then returns one.
+    pub fn lifts_fields(self) -> bool {
+        matches!(self, Kind::Math | Kind::Texture)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Builtin {
+    pub name: &'static str,
+    pub params: &'static [Param],
+    pub ret: Ret,
+    pub kind: Kind,
+    pub doc: &'static str,
+}
+
+impl Builtin {
+    pub fn param(&self, name: &str) -> Option<(usize, &Param)> {
+        self.params.iter().enumerate().find(|(_, p)| p.name == name)
+    }
+
+    /// `name(param: type = default, …) -> ret`, for hover and signature help.
+    pub fn signature(&self) -> String {
+        let params: Vec<String> = self
+            .params
+            .iter()
+            .map(|p| match p.default {
+                Some(d) => format!("{}: {} = {}", p.name, p.ty.describe(), d.display()),
+                None => format!("{}: {}", p.name, p.ty.describe()),
+            })
+            .collect();
+        let ret = match self.ret {
+            Ret::Shape => "shape",
+            Ret::Texture => "texture",
+            Ret::Camera => "camera",
+            Ret::Light => "light",
+            Ret::Float => "float",
+            Ret::Vec3 => "vec3",
+            Ret::Vec4 => "vec4",
+            Ret::T => "T",
+        };
+        format!("{}({}) -> {}", self.name, params.join(", "), ret)
+    }
+}
+
+use Dflt::{F, V};
+use PTy::*;
+
+const S: Param = p("shape", Shape);
+const A: Param = p("a", Shape);
+const B: Param = p("b", Shape);
+const K: Param = pos("k", Float);
+const TX: Param = p("x", T);
+
+macro_rules! b {
+    ($name:literal, [$($param:expr),*], $ret:ident, $kind:ident, $doc:literal) => {
+        Builtin { name: $name, params: &[$($param),*], ret: Ret::$ret, kind: Kind::$kind, doc: $doc }
+    };
+}
+
+/// Every builtin function.
+pub static BUILTINS: &[Builtin] = &[
+    // Primitives, centred at the origin.
+    b!("sphere", [posd("radius", Float, F(1.0))], Shape, Primitive, "A sphere of `radius` centred at the origin."),
+    b!("box", [posd("size", FloatOrVec3, F(1.0))], Shape, Primitive, "An axis-aligned box with full edge lengths `size` (a float for a cube)."),
+    b!("round_box", [posd("size", FloatOrVec3, F(1.0)), posd("radius", Float, F(0.1))], Shape, Primitive, "A box with edges rounded by `radius`; `size` is the outer size."),
+    b!("box_frame", [posd("size", FloatOrVec3, F(1.0)), posd("thickness", Float, F(0.05))], Shape, Primitive, "The edges of a box, as bars of `thickness`."),
+    b!("torus", [posd("major", Float, F(1.0)), posd("minor", Float, F(0.25))], Shape, Primitive, "A torus in the xz-plane: ring radius `major`, tube radius `minor`."),
+    b!("capsule", [d("a", Vec3, V(&[0.0, -0.5, 0.0])), d("b", Vec3, V(&[0.0, 0.5, 0.0])), posd("radius", Float, F(0.25))], Shape, Primitive, "A capsule: all points within `radius` of the segment from `a` to `b`."),
+    b!("cylinder", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cylinder along y of `radius` and total `height`."),
+    b!("cone", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cone along y: base of `radius` at y = 0, apex at y = `height`."),
+    b!("capped_cone", [posd("height", Float, F(1.0)), Param { name: "bottom", ty: Float, default: Some(F(0.5)), check: Check::NonNegative }, Param { name: "top", ty: Float, default: Some(F(0.25)), check: Check::NonNegative }], Shape, Primitive, "A truncated cone along y of total `height`, with radii `bottom` and `top`."),
+    b!("plane", [dir("normal", &[0.0, 1.0, 0.0]), d("offset", Float, F(0.0))], Shape, Primitive, "The half-space below the plane `dot(p, normal) = offset`."),
+    b!("ellipsoid", [posd("radii", Vec3, V(&[1.0, 0.5, 0.5]))], Shape, Primitive, "An ellipsoid with semi-axes `radii` (a bound, not an exact distance)."),
+    b!("octahedron", [posd("radius", Float, F(1.0))], Shape, Primitive, "A regular octahedron with vertices at distance `radius`."),
+    b!("hex_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A hexagonal prism along z: inradius `radius`, total `height`."),
+    b!("tri_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A triangular prism along z: inradius `radius`, total `height`."),
+    b!("pyramid", [posd("height", Float, F(1.0))], Shape, Primitive, "A square pyramid with a unit base in the xz-plane and apex at y = `height`."),
+    b!("link", [posd("length", Float, F(0.5)), posd("major", Float, F(0.4)), posd("minor", Float, F(0.1))], Shape, Primitive, "A chain link: a torus stretched along y by `length`."),
+    // CSG.
+    b!("union", [A, B], Shape, Csg, "Everything in `a` or `b` (also `a | b`). Each hit keeps the material of the nearer operand."),
+    b!("intersection", [A, B], Shape, Csg, "Everything in both `a` and `b` (also `a & b`)."),
+    b!("difference", [A, B], Shape, Csg, "`a` with `b` carved out (also `a - b`)."),
+    b!("smooth_union", [A, B, K], Shape, Csg, "Union blended over a fillet of size `k` (polynomial smooth minimum)."),
+    b!("smooth_intersection", [A, B, K], Shape, Csg, "Intersection blended over a fillet of size `k`."),
+    b!("smooth_difference", [A, B, K], Shape, Csg, "Difference blended over a fillet of size `k`."),
+    // Transforms.
+    b!("translate", [S, p("offset", Vec3)], Shape, Transform, "Moves the shape by `offset`."),
+    b!("rotate", [S, dir("axis", &[0.0, 1.0, 0.0]), p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about `axis` through the origin."),
+    b!("rotate_x", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the x axis."),
+    b!("rotate_y", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the y axis."),
+    b!("rotate_z", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the z axis."),
+    b!("scale", [S, pos("factor", FloatOrVec3)], Shape, Transform, "Scales the shape about the origin; a vec3 scales per axis (the sphere tracer compensates for the stretched distance)."),
+    // Warps.
+    b!("twist", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Twists the shape about `axis` by `rate` radians per unit length."),
+    b!("bend", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Bends the shape: points along `axis` rotate about z by `rate` radians per unit length."),
+    b!("repeat", [S, posd("period", FloatOrVec3, F(2.0))], Shape, Warp, "Repeats the shape forever on a grid with cell size `period`."),
+    b!("mirror", [S, dir("normal", &[1.0, 0.0, 0.0])], Shape, Warp, "Mirrors the half on the positive side of the plane through the origin with `normal` onto the other side."),
+    b!("elongate", [S, Param { name: "amount", ty: Vec3, default: None, check: Check::NonNegative }], Shape, Warp, "Stretches the shape by inserting `amount` of straight extrusion along each axis."),
+    b!("round", [S, Param { name: "radius", ty: Float, default: None, check: Check::NonNegative }], Shape, Warp, "Rounds the shape by offsetting its surface outwards by `radius`."),
+    b!("shell", [S, pos("thickness", Float)], Shape, Warp, "Hollows the shape into a shell of `thickness` around its surface."),
+    b!("paint", [S, p("material", Material)], Shape, Transform, "Gives the shape a material. Unions keep each operand's material."),
+    // Textures and procedural patterns.
+    b!("image", [p("path", Str)], Texture, Texture, "Loads a PNG or JPEG image; the path is relative to the scene file."),
+    b!("sample", [p("texture", Texture), p("uv", Vec2), Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec4, Texture, "Samples `texture` at `uv` (rgba, linear), with mip-mapping and the `wrap` mode `repeat`, `mirror` or `clamp`."),
+    b!("checker", [p("uv", Vec2), posd("n", Float, F(8.0))], Float, Texture, "A checkerboard of `n` squares per unit of uv: 0 or 1."),
+    b!("grid", [p("uv", Vec2), posd("n", Float, F(8.0)), posd("width", Float, F(0.05))], Float, Texture, "Grid lines, `n` per unit of uv, of relative `width`: 1 on a line, 0 elsewhere."),
+    // Render settings.
+    b!("orbit", [d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("distance", Float, F(5.0)), d("yaw", Float, F(0.0)), d("pitch", Float, F(0.0)), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera looking at `target` from `distance`, turned by `yaw` about y and raised by `pitch`; `fov` is the vertical field of view."),
+    b!("look_at", [p("eye", Vec3), d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera at `eye` looking at `target`; `fov` is the vertical field of view."),
+    b!("sun", [dir("direction", &[0.5, 1.0, 0.3]), Param { name: "color", ty: Vec3, default: Some(V(&[1.0, 1.0, 1.0])), check: Check::NonNegative }, Param { name: "intensity", ty: Float, default: Some(F(3.0)), check: Check::NonNegative }], Light, Render, "A directional light; `direction` points from the surface towards the sun."),
+    // Math; all of these also work on surface fields.
+    b!("sin", [TX], T, Math, "Sine, per component."),
+    b!("cos", [TX], T, Math, "Cosine, per component."),
+    b!("tan", [TX], T, Math, "Tangent, per component."),
+    b!("asin", [TX], T, Math, "Arc sine, per component."),
+    b!("acos", [TX], T, Math, "Arc cosine, per component."),
+    b!("atan", [TX], T, Math, "Arc tangent, per component."),
+    b!("atan2", [p("y", T), TX], T, Math, "Arc tangent of y/x using both signs, per component."),
+    b!("sqrt", [TX], T, Math, "Square root, per component."),
+    b!("abs", [TX], T, Math, "Absolute value, per component."),
+    b!("floor", [TX], T, Math, "Rounds down, per component."),
+    b!("ceil", [TX], T, Math, "Rounds up, per component."),
+    b!("fract", [TX], T, Math, "`x - floor(x)`, per component."),
+    b!("sign", [TX], T, Math, "-1, 0 or 1, per component."),
+    b!("exp", [TX], T, Math, "e to the power x, per component."),
+    b!("log", [TX], T, Math, "Natural logarithm, per component."),
+    b!("pow", [TX, p("y", T)], T, Math, "x to the power y, per component."),
+    b!("min", [p("a", T), p("b", T)], T, Math, "The smaller value, per component."),
+    b!("max", [p("a", T), p("b", T)], T, Math, "The larger value, per component."),
+    b!("clamp", [TX, p("lo", T), p("hi", T)], T, Math, "`x` limited to `[lo, hi]`, per component."),
+    b!("mix", [p("a", T), p("b", T), p("t", T)], T, Math, "Linear interpolation `a + (b - a) * t`."),
+    b!("smoothstep", [p("edge0", T), p("edge1", T), TX], T, Math, "Hermite step from 0 at `edge0` to 1 at `edge1`."),
+    b!("step", [p("edge", T), TX], T, Math, "0 where `x < edge`, else 1."),
+    b!("length", [TX], Float, Math, "Euclidean length of a vector."),
+    b!("distance", [p("a", T), p("b", T)], Float, Math, "Euclidean distance between two points."),
+    b!("dot", [p("a", T), p("b", T)], Float, Math, "Dot product."),
+    b!("cross", [p("a", Vec3), p("b", Vec3)], Vec3, Math, "Cross product of two vec3."),
+    b!("normalize", [TX], T, Math, "The vector scaled to unit length."),
+    b!("radians", [TX], T, Math, "Degrees to radians (or write `90deg`)."),
+    b!("degrees", [TX], T, Math, "Radians to degrees."),
+];
+
+/// A builtin constant or surface input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Constant {
+    pub name: &'static str,
+    pub doc: &'static str,
+}
+
+/// Every builtin name that is not a function.
+pub static CONSTANTS: &[Constant] = &[
+    Constant {
+        name: "pi",
+        doc: "π = 3.14159…",
+    },
+    Constant {
+        name: "tau",
+        doc: "τ = 2π = 6.28318…",
+    },
+    Constant {
+        name: "position",
+        doc: "The surface point being shaded (field<vec3>).",
+    },
+    Constant {
+        name: "normal",
+        doc: "The unit surface normal at the point being shaded (field<vec3>).",
+    },
+];
+
+pub fn lookup(name: &str) -> Option<&'static Builtin> {
+    BUILTINS.iter().find(|b| b.name == name)
+}
+
+/// A setting of a block (`atlas`, `material` or `render`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettingSpec {
+    pub name: &'static str,
+    pub ty: PTy,
+    pub default: Option<Dflt>,
+    pub check: Check,
+    /// Whether a surface field is allowed (material attributes).
+    pub field: bool,
+    pub doc: &'static str,
+}
+
+const fn set(
+    name: &'static str,
+    ty: PTy,
+    default: Option<Dflt>,
+    check: Check,
+    field: bool,
+    doc: &'static str,
+) -> SettingSpec {
+    SettingSpec {
+        name,
+        ty,
+        default,
+        check,
+        field,
+        doc,
+    }
+}
+
+/// Settings of an `atlas` block (the parameters of Alg. 1 and Alg. 2).
+pub static ATLAS_SETTINGS: &[SettingSpec] = &[
+    set("steps", Float, Some(F(20.0)), Check::None, false, "N: the number of steps of every geodesic walk, a whole number in 1..=64."),
+    set("max_distance", Float, Some(F(3.0)), Check::Positive, false, "D: points farther than this (Euclidean, then geodesic) from a seed get status too_far."),
+    set("heuristic_tolerance", Float, Some(F(1e-3)), Check::Positive, false, "ε1: the walk fails (heuristic_failed) when the tangent direction to the seed is shorter than this."),
+    set("sharp_tolerance", Float, Some(F(0.015)), Check::Positive, false, "ε2: the walk stops at a sharp feature when consecutive normals satisfy n_i·n_{i+1} < 1 - ε2."),
+    set("min_reach", Float, Some(F(0.01)), Check::Positive, false, "r_min: the walk fails (not_reached) when it ends farther than this from the seed."),
+    set("reproject", Bool, Some(Dflt::B(false)), Check::None, false, "Project every step back onto the surface (Eq. 18)."),
+    set("sigma", Float, None, Check::Positive, false, "σ: half-width of the blend band between merged seeds (default: the shortest merge edge / 3)."),
+];
+
+/// Settings of a `material` block. Each may be a surface field.
+pub static MATERIAL_SETTINGS: &[SettingSpec] = &[
+    set(
+        "color",
+        FloatOrVec3,
+        Some(V(&[0.8, 0.8, 0.8])),
+        Check::NonNegative,
+        true,
+        "Base colour (linear RGB). A vec4, such as a texture sample, gives its rgb.",
+    ),
+    set(
+        "roughness",
+        Float,
+        Some(F(0.5)),
+        Check::NonNegative,
+        true,
+        "Perceptual roughness in [0, 1].",
+    ),
+    set(
+        "metallic",
+        Float,
+        Some(F(0.0)),
+        Check::NonNegative,
+        true,
+        "Metalness in [0, 1].",
+    ),
+    set(
+        "emission",
+        Vec3,
+        Some(V(&[0.0, 0.0, 0.0])),
+        Check::NonNegative,
+        true,
+        "Emitted radiance (linear RGB).",
+    ),
+];
+
+/// Settings of a `render` block.
+pub static RENDER_SETTINGS: &[SettingSpec] = &[
+    set(
+        "camera",
+        PTy::Float,
+        None,
+        Check::None,
+        false,
+        "The camera: `orbit(…)` or `look_at(…)` (default: framed on the shape's bounds).",
+    ),
+    set(
+        "size",
+        Vec2,
+        Some(V(&[960.0, 540.0])),
+        Check::Positive,
+        false,
+        "Image size in pixels, [width, height]: whole numbers.",
+    ),
+    set(
+        "light",
+        PTy::Float,
+        None,
+        Check::None,
+        false,
+        "The light: `sun(…)` (default: `sun()`).",
+    ),
+    set(
+        "background",
+        Vec3,
+        Some(V(&[0.05, 0.06, 0.08])),
+        Check::NonNegative,
+        false,
+        "Background colour (linear RGB).",
+    ),
+    set(
+        "ambient",
+        Float,
+        Some(F(0.15)),
+        Check::NonNegative,
+        false,
+        "Strength of the ambient term.",
+    ),
+];
+
+/// The type a setting expects, for messages (camera and light are not parameter types).
+pub fn setting_type(block: &str, s: &SettingSpec) -> Ty {
+    match (block, s.name) {
+        ("render", "camera") => Ty::Camera,
+        ("render", "light") => Ty::Light,
+        (_, "reproject") => Ty::Bool,
+        _ => match s.ty {
+            PTy::Vec2 => Ty::Vec(2),
+            PTy::Vec3 | PTy::FloatOrVec3 => Ty::Vec(3),
+            _ => Ty::Float,
+        },
+    }
+}

@@ -1,0 +1,184 @@
+//! Semantic analysis: name resolution, type checking and constant folding.
+//!
+//! The checker walks the AST once, in order, and produces a [`Program`]: every
+//! definition with its type and folded value, every reference (for go-to-definition
+//! and rename), and the atlases, materials and render settings in a form the IR
+//! lowers directly. It keeps going after errors; an expression with an error has
+//! the value [`Value::Error`], which is accepted everywhere so one mistake is
+//! reported once.
+
+pub mod builtins;
+mod check;
+mod expr;
+pub mod fold;
+pub mod types;
+
+pub use check::check;
+pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
+
+use crate::span::Span;
+use std::path::PathBuf;
+
+/// Index of a definition in [`Program::defs`].
+pub type DefId = usize;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DefKind {
+    Let,
+    Atlas,
+    Material,
+    Seed { atlas: AtlasId },
+}
+
+/// A named definition.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Def {
+    pub name: String,
+    pub kind: DefKind,
+    /// The span of the name where it is defined.
+    pub span: Span,
+    /// The span of the whole item or statement.
+    pub item_span: Span,
+    pub ty: Ty,
+    /// The folded value (for seeds, the position as written).
+    pub value: Value,
+}
+
+/// A use of a definition.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reference {
+    pub span: Span,
+    pub def: DefId,
+}
+
+/// The parameters of Alg. 1 and Alg. 2 for one atlas, with defaults filled in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AtlasParams {
+    pub steps: u32,
+    pub max_distance: f64,
+    pub heuristic_tolerance: f64,
+    pub sharp_tolerance: f64,
+    pub min_reach: f64,
+    pub reproject: bool,
+    pub sigma: Option<f64>,
+}
+
+impl Default for AtlasParams {
+    fn default() -> Self {
+        AtlasParams {
+            steps: 20,
+            max_distance: 3.0,
+            heuristic_tolerance: 1e-3,
+            sharp_tolerance: 0.015,
+            min_reach: 0.01,
+            reproject: false,
+            sigma: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeedDef {
+    pub name: String,
+    pub def: DefId,
+    pub span: Span,
+    /// The position as written (projection onto the surface happens later).
+    pub position: [f64; 3],
+    pub position_span: Span,
+    pub tangent: Option<[f64; 3]>,
+    pub tangent_span: Option<Span>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergeDef {
+    /// Seed indices within the atlas.
+    pub a: usize,
+    pub b: usize,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct AtlasDef {
+    pub name: String,
+    pub def: DefId,
+    pub span: Span,
+    pub shape: Value,
+    pub shape_span: Span,
+    pub params: AtlasParams,
+    pub seeds: Vec<SeedDef>,
+    pub merges: Vec<MergeDef>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialDef {
+    pub name: String,
+    pub def: DefId,
+    pub span: Span,
+    /// float, vec3 or vec4 (rgb is used), constant or field.
+    pub color: Value,
+    pub roughness: Value,
+    pub metallic: Value,
+    pub emission: Value,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderDef {
+    pub span: Span,
+    pub target: Value,
+    pub target_span: Span,
+    pub camera: Option<Value>,
+    pub light: Option<Value>,
+    pub size: [u32; 2],
+    pub background: [f64; 3],
+    pub ambient: f64,
+}
+
+/// A texture file referenced by `image(path)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureRef {
+    pub path: String,
+    /// The path resolved against the scene file's folder, when it is known.
+    pub resolved: Option<PathBuf>,
+    pub span: Span,
+}
+
+/// The checked program: the output of semantic analysis.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Program {
+    pub defs: Vec<Def>,
+    pub references: Vec<Reference>,
+    pub atlases: Vec<AtlasDef>,
+    pub materials: Vec<MaterialDef>,
+    pub render: Option<RenderDef>,
+    pub textures: Vec<TextureRef>,
+}
+
+impl Program {
+    /// The top-level definition of a name (a `let`, atlas or material).
+    pub fn lookup(&self, name: &str) -> Option<&Def> {
+        self.defs
+            .iter()
+            .find(|d| d.name == name && !matches!(d.kind, DefKind::Seed { .. }))
+    }
+
+    /// Every shape bound by a `let`, in order.
+    pub fn shapes(&self) -> impl Iterator<Item = &Def> {
+        self.defs
+            .iter()
+            .filter(|d| d.kind == DefKind::Let && d.ty == Ty::Shape)
+    }
+
+    /// The definition at a source offset, from a definition or any of its references.
+    pub fn def_at(&self, offset: usize) -> Option<DefId> {
+        self.references
+            .iter()
+            .find(|r| r.span.contains(offset))
+            .map(|r| r.def)
+            .or_else(|| self.defs.iter().position(|d| d.span.contains(offset)))
+    }
+
+    /// Every reference to a definition.
+    pub fn references_to(&self, def: DefId) -> impl Iterator<Item = &Reference> {
+        self.references.iter().filter(move |r| r.def == def)
+    }
+}

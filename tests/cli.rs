@@ -1,0 +1,150 @@
+//! The `sdfc` binary: exit codes, human and JSON output.
+
+use std::path::Path;
+use std::process::Command;
+
+fn sdfc(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn clean_file_exits_zero() {
+    let (code, _, err) = sdfc(&["check", "examples/capsule.sdf"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("checked 1 file: 0 errors, 0 warnings"),
+        "{err}"
+    );
+}
+
+#[test]
+fn errors_exit_one_and_are_all_printed() {
+    let (code, _, err) = sdfc(&[
+        "check",
+        "--color",
+        "never",
+        "tests/ui/many_independent_errors.sdf",
+    ]);
+    assert_eq!(code, 1);
+    for c in [
+        "E0010", "E0100", "E0103", "E0107", "E0110", "E0113", "E0200", "E0300", "E0301",
+    ] {
+        assert!(
+            err.contains(&format!("error[{c}]")),
+            "missing {c} in:\n{err}"
+        );
+    }
+    assert!(
+        err.contains("checked 1 file: 9 errors, 0 warnings"),
+        "{err}"
+    );
+}
+
+#[test]
+fn warnings_alone_exit_zero() {
+    let (code, _, _) = sdfc(&["check", "tests/ui/unused_binding.sdf"]);
+    assert_eq!(code, 0);
+}
+
+#[test]
+fn several_files_any_error_exits_one() {
+    let (code, _, _) = sdfc(&["check", "examples/capsule.sdf", "tests/ui/unknown_name.sdf"]);
+    assert_eq!(code, 1);
+}
+
+#[test]
+fn io_and_usage_problems_exit_two() {
+    let (code, _, err) = sdfc(&["check", "does/not/exist.sdf"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("cannot read does/not/exist.sdf"), "{err}");
+    assert_eq!(sdfc(&["check"]).0, 2);
+    assert_eq!(sdfc(&["frobnicate"]).0, 2);
+    assert_eq!(
+        sdfc(&["check", "--format", "xml", "examples/capsule.sdf"]).0,
+        2
+    );
+}
+
+#[test]
+fn help_on_every_subcommand() {
+    let (code, out, _) = sdfc(&["--help"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("check"));
+    let (code, out, _) = sdfc(&["check", "--help"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("Exit status"), "{out}");
+}
+
+#[test]
+fn json_output_has_positions_labels_and_notes() {
+    let (code, out, _) = sdfc(&["check", "--format", "json", "tests/ui/unknown_name.sdf"]);
+    assert_eq!(code, 1);
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(lines.len(), 2);
+    let e = lines.iter().find(|d| d["code"] == "E0100").unwrap();
+    assert_eq!(e["severity"], "error");
+    assert_eq!(e["message"], "cannot find `raduis` in this scene");
+    assert_eq!(e["file"], "tests/ui/unknown_name.sdf");
+    let src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui/unknown_name.sdf"),
+    )
+    .unwrap();
+    let start = e["byte_start"].as_u64().unwrap() as usize;
+    let end = e["byte_end"].as_u64().unwrap() as usize;
+    assert_eq!(&src[start..end], "raduis");
+    assert_eq!(e["start"]["line"], 3);
+    assert_eq!(e["start"]["column"], 16);
+    assert_eq!(e["end"]["line"], 3);
+    assert_eq!(e["end"]["column"], 22);
+    assert_eq!(e["labels"][0]["message"], "not defined");
+    assert_eq!(e["help"], "did you mean `radius`?");
+    let w = lines.iter().find(|d| d["code"] == "W0001").unwrap();
+    assert_eq!(w["severity"], "warning");
+    assert!(w["notes"].is_array());
+}
+
+#[test]
+fn json_columns_count_characters_not_bytes() {
+    let (_, out, _) = sdfc(&["check", "--format", "json", "tests/ui/unicode_and_crlf.sdf"]);
+    let e: serde_json::Value = out
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|d| d["code"] == "E0100")
+        .unwrap();
+    // `let label = "größe"; let s = sphere(grosse);`: `grosse` starts at character 37.
+    assert_eq!(e["start"]["line"], 3);
+    assert_eq!(e["start"]["column"], 37);
+}
+
+#[test]
+fn reads_standard_input() {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(["check", "--format", "json", "-"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"render spher(1);")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("E0103"));
+}

@@ -20,7 +20,9 @@ fn cases() -> Vec<std::path::PathBuf> {
 
 #[test]
 fn ui_snapshots() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui");
+    // Relative, so that paths in messages do not depend on where the repository lives
+    // (cargo runs integration tests in the package root).
+    let dir = Path::new("tests/ui");
     let mut seen_codes = BTreeSet::new();
     let files = cases();
     assert!(
@@ -31,7 +33,7 @@ fn ui_snapshots() {
     for path in &files {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         let source = std::fs::read_to_string(path).unwrap();
-        let analysis = analyze(&source, Some(&dir));
+        let analysis = analyze(&source, Some(dir));
         assert!(
             !analysis.diagnostics.is_empty(),
             "{name}: a UI case must produce at least one diagnostic"

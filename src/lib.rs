@@ -20,6 +20,7 @@
 pub mod codes;
 pub mod diagnostic;
 pub mod driver;
+pub mod ir;
 pub mod sema;
 pub mod span;
 pub mod syntax;

@@ -148,3 +148,84 @@ fn reads_standard_input() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stdout).contains("E0103"));
 }
+
+#[test]
+fn eval_prints_one_object_per_point_in_order() {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(["eval", "examples/sphere.sdf", "--points", "-"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"[[0, 0, 2], [0, 0.5, 0], [3, 4, 0]]")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("{\"point\":[0.0,0.0,2.0],\"distance\":1.0,"),
+        "{text}"
+    );
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    let d: Vec<f64> = lines
+        .iter()
+        .map(|l| l["distance"].as_f64().unwrap())
+        .collect();
+    assert!(
+        (d[0] - 1.0).abs() < 1e-12 && (d[1] + 0.5).abs() < 1e-12 && (d[2] - 4.0).abs() < 1e-12,
+        "{d:?}"
+    );
+    let s = &lines[2]["surface"];
+    assert!(
+        (s[0].as_f64().unwrap() - 0.6).abs() < 1e-8 && (s[1].as_f64().unwrap() - 0.8).abs() < 1e-8
+    );
+}
+
+#[test]
+fn eval_rejects_bad_points_and_unknown_shapes() {
+    let dir = std::env::temp_dir().join(format!("sdfc-eval-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "[[1, 2]]").unwrap();
+    let (code, _, err) = sdfc(&[
+        "eval",
+        "examples/sphere.sdf",
+        "--points",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("point 0 is not an [x, y, z] array"), "{err}");
+    let (code, _, err) = sdfc(&[
+        "eval",
+        "examples/sphere.sdf",
+        "--shape",
+        "nope",
+        "--points",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no shape `nope`"), "{err}");
+    let (code, _, _) = sdfc(&[
+        "eval",
+        "tests/ui/unknown_name.sdf",
+        "--points",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+}

@@ -260,7 +260,7 @@ pub static BUILTINS: &[Builtin] = &[
     b!("scale", [S, pos("factor", FloatOrVec3)], Shape, Transform, "Scales the shape about the origin; a vec3 scales per axis (the sphere tracer compensates for the stretched distance)."),
     // Warps.
     b!("twist", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Twists the shape about `axis` by `rate` radians per unit length."),
-    b!("bend", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Bends the shape: points along `axis` rotate about z by `rate` radians per unit length."),
+    b!("bend", [S, dir("axis", &[1.0, 0.0, 0.0]), p("rate", Float)], Shape, Warp, "Bends the shape in the xy-plane: each point turns about z by `rate` times its coordinate along `axis`."),
     b!("repeat", [S, posd("period", FloatOrVec3, F(2.0))], Shape, Warp, "Repeats the shape forever on a grid with cell size `period`."),
     b!("mirror", [S, dir("normal", &[1.0, 0.0, 0.0])], Shape, Warp, "Mirrors the half on the positive side of the plane through the origin with `normal` onto the other side."),
     b!("elongate", [S, Param { name: "amount", ty: Vec3, default: None, check: Check::NonNegative }], Shape, Warp, "Stretches the shape by inserting `amount` of straight extrusion along each axis."),

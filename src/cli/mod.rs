@@ -1,0 +1,113 @@
+//! The command line's definition and the commands.
+
+pub mod check;
+pub mod eval;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// sdfc compiles signed-distance scenes with Implicit UVs.
+#[derive(Parser)]
+#[command(name = "sdfc", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Check scene files and print every diagnostic.
+    ///
+    /// Exit status: 0 when there are no errors (warnings allowed), 1 when any file has
+    /// errors, 2 on usage or I/O problems.
+    Check(CheckArgs),
+    /// Evaluate a shape's signed distance at points (CPU reference in f64).
+    ///
+    /// Reads a JSON array of points `[[x, y, z], …]` and prints one JSON object per point, in
+    /// order: `{"point", "distance", "gradient", "surface"}`, where `surface` is the point
+    /// projected onto the zero set (null when the projection does not converge).
+    Eval(EvalArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum Format {
+    /// Rendered diagnostics with source excerpts.
+    Human,
+    /// One JSON object per diagnostic, one per line.
+    Json,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum Color {
+    Auto,
+    Always,
+    Never,
+}
+
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// Scene files to check (`-` reads standard input).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "human")]
+    pub format: Format,
+    /// When to colour human output.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub color: Color,
+}
+
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The shape to evaluate (a `let` name); default: the render target, or the only shape.
+    #[arg(long)]
+    pub shape: Option<String>,
+    /// A JSON file of points `[[x, y, z], …]`; `-` reads standard input.
+    #[arg(long, default_value = "-")]
+    pub points: PathBuf,
+}
+
+pub fn read_source(path: &Path) -> std::io::Result<String> {
+    if path == Path::new("-") {
+        let mut s = String::new();
+        std::io::stdin().read_to_string(&mut s)?;
+        Ok(s)
+    } else {
+        std::fs::read_to_string(path)
+    }
+}
+
+/// The folder texture paths are relative to.
+pub fn base_dir(path: &Path) -> PathBuf {
+    if path == Path::new("-") {
+        return std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
+    }
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Reads and checks a scene for the commands that need a valid one: prints its
+/// diagnostics, and gives the exit code to return when it cannot be used.
+pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
+    let name = path.display().to_string();
+    let source = read_source(path).map_err(|e| {
+        eprintln!("error: cannot read {name}: {e}");
+        std::process::ExitCode::from(2)
+    })?;
+    let analysis = sdfc::driver::analyze(&source, Some(&base_dir(path)));
+    let color = std::io::IsTerminal::is_terminal(&std::io::stderr())
+        && std::env::var_os("NO_COLOR").is_none();
+    eprint!(
+        "{}",
+        sdfc::diagnostic::render(&name, &source, &analysis.diagnostics, color)
+    );
+    if analysis.has_errors() {
+        return Err(std::process::ExitCode::from(1));
+    }
+    Ok((source, analysis))
+}

@@ -1,0 +1,261 @@
+//! The CPU reference: the IR evaluated in f64.
+//!
+//! It is the oracle for the GPU path and the compiler's tool for geometry at
+//! compile time (seed projection). Every function here mirrors one in
+//! `shaders/sdf.wgsl`.
+
+use super::*;
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+fn box_dist(p: DVec3, half: DVec3) -> f64 {
+    let q = p.abs() - half;
+    q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+}
+
+/// A primitive's distance at a local point.
+pub fn prim(p: DVec3, prim: &Prim) -> f64 {
+    match *prim {
+        Prim::Sphere { r } => p.length() - r,
+        Prim::Box { half } => box_dist(p, half),
+        Prim::RoundBox { half, r } => box_dist(p, half) - r,
+        Prim::BoxFrame { half, e } => {
+            let p = p.abs() - half;
+            let q = (p + DVec3::splat(e)).abs() - DVec3::splat(e);
+            let a = DVec3::new(p.x, q.y, q.z);
+            let b = DVec3::new(q.x, p.y, q.z);
+            let c = DVec3::new(q.x, q.y, p.z);
+            let part = |v: DVec3| v.max(DVec3::ZERO).length() + v.max_element().min(0.0);
+            part(a).min(part(b)).min(part(c))
+        }
+        Prim::Torus { major, minor } => {
+            DVec2::new(DVec2::new(p.x, p.z).length() - major, p.y).length() - minor
+        }
+        Prim::Capsule { a, b, r } => {
+            let (pa, ba) = (p - a, b - a);
+            let bb = ba.dot(ba);
+            let h = if bb > 0.0 {
+                (pa.dot(ba) / bb).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (pa - ba * h).length() - r
+        }
+        Prim::Cylinder { r, half_h } => {
+            let d = DVec2::new(DVec2::new(p.x, p.z).length(), p.y).abs() - DVec2::new(r, half_h);
+            d.x.max(d.y).min(0.0) + d.max(DVec2::ZERO).length()
+        }
+        Prim::CappedCone { half_h: h, r1, r2 } => {
+            let q = DVec2::new(DVec2::new(p.x, p.z).length(), p.y);
+            let k1 = DVec2::new(r2, h);
+            let k2 = DVec2::new(r2 - r1, 2.0 * h);
+            let ca = DVec2::new(
+                q.x - q.x.min(if q.y < 0.0 { r1 } else { r2 }),
+                q.y.abs() - h,
+            );
+            let cb = q - k1 + k2 * ((k1 - q).dot(k2) / k2.dot(k2)).clamp(0.0, 1.0);
+            let s = if cb.x < 0.0 && ca.y < 0.0 { -1.0 } else { 1.0 };
+            s * ca.dot(ca).min(cb.dot(cb)).sqrt()
+        }
+        Prim::Plane { n, offset } => p.dot(n) - offset,
+        Prim::Ellipsoid { radii } => {
+            let k0 = (p / radii).length();
+            let k1 = (p / (radii * radii)).length();
+            if k1 == 0.0 {
+                -radii.min_element()
+            } else {
+                k0 * (k0 - 1.0) / k1
+            }
+        }
+        Prim::Octahedron { s } => {
+            let p = p.abs();
+            let m = p.x + p.y + p.z - s;
+            let q = if 3.0 * p.x < m {
+                p
+            } else if 3.0 * p.y < m {
+                DVec3::new(p.y, p.z, p.x)
+            } else if 3.0 * p.z < m {
+                DVec3::new(p.z, p.x, p.y)
+            } else {
+                return m * 0.577_350_269_189_625_8;
+            };
+            let k = (0.5 * (q.z - q.y + s)).clamp(0.0, s);
+            DVec3::new(q.x, q.y - s + k, q.z - k).length()
+        }
+        Prim::HexPrism { r, half_h } => {
+            let k = DVec3::new(-0.866_025_403_784_438_6, 0.5, 0.577_350_269_189_625_8);
+            let mut p = p.abs();
+            let kxy = DVec2::new(k.x, k.y);
+            let pxy = DVec2::new(p.x, p.y) - 2.0 * kxy.dot(DVec2::new(p.x, p.y)).min(0.0) * kxy;
+            p.x = pxy.x;
+            p.y = pxy.y;
+            let d = DVec2::new(
+                (DVec2::new(p.x, p.y) - DVec2::new(p.x.clamp(-k.z * r, k.z * r), r)).length()
+                    * (p.y - r).signum(),
+                p.z - half_h,
+            );
+            d.x.max(d.y).min(0.0) + d.max(DVec2::ZERO).length()
+        }
+        Prim::TriPrism { r, half_h } => {
+            let q = p.abs();
+            (q.z - half_h).max((q.x * 0.866_025_403_784_438_6 + p.y * 0.5).max(-p.y) - r * 0.5)
+        }
+        Prim::Pyramid { h } => {
+            // Below the base the nearest point is on the base square; IQ's formula
+            // overestimates there.
+            if p.y < 0.0 {
+                return DVec3::new((p.x.abs() - 0.5).max(0.0), p.y, (p.z.abs() - 0.5).max(0.0))
+                    .length();
+            }
+            let m2 = h * h + 0.25;
+            let (mut px, py, mut pz) = (p.x.abs(), p.y, p.z.abs());
+            if pz > px {
+                std::mem::swap(&mut px, &mut pz);
+            }
+            px -= 0.5;
+            pz -= 0.5;
+            let q = DVec3::new(pz, h * py - 0.5 * px, h * px + 0.5 * py);
+            let s = (-q.x).max(0.0);
+            let t = ((q.y - 0.5 * pz) / (m2 + 0.25)).clamp(0.0, 1.0);
+            let a = m2 * (q.x + s) * (q.x + s) + q.y * q.y;
+            let b = m2 * (q.x + 0.5 * t) * (q.x + 0.5 * t) + (q.y - m2 * t) * (q.y - m2 * t);
+            let d2 = if q.y.min(-q.x * m2 - q.y * 0.5) > 0.0 {
+                0.0
+            } else {
+                a.min(b)
+            };
+            ((d2 + q.z * q.z) / m2).sqrt() * q.z.max(-py).signum()
+        }
+        Prim::Link { le, r1, r2 } => {
+            let q = DVec3::new(p.x, (p.y.abs() - le).max(0.0), p.z);
+            DVec2::new(DVec2::new(q.x, q.y).length() - r1, q.z).length() - r2
+        }
+    }
+}
+
+/// Quadratic polynomial smooth minimum (IQ), with the blend factor for materials.
+pub fn smin(a: f64, b: f64, k: f64) -> f64 {
+    if k <= 0.0 {
+        return a.min(b);
+    }
+    let h = (k - (a - b).abs()).max(0.0) / k;
+    a.min(b) - h * h * k * 0.25
+}
+
+/// Distance and material id (0 = default) of a shape at `p`.
+pub fn eval(shape: &Shape, p: DVec3) -> (f64, u32) {
+    eval_node(shape, shape.root(), p)
+}
+
+/// Just the distance.
+pub fn distance(shape: &Shape, p: DVec3) -> f64 {
+    eval(shape, p).0
+}
+
+fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
+    match &shape.nodes[id].op {
+        Op::Prim(pr) => (prim(p, pr), 0),
+        Op::Csg { op, k, a, b } => {
+            let (da, ma) = eval_node(shape, *a, p);
+            let (db, mb) = eval_node(shape, *b, p);
+            match op {
+                Csg::Union => (smin(da, db, *k), if da <= db { ma } else { mb }),
+                Csg::Intersection => (-smin(-da, -db, *k), if da >= db { ma } else { mb }),
+                Csg::Difference => (-smin(-da, db, *k), if da >= -db { ma } else { mb }),
+            }
+        }
+        Op::Translate { offset, child } => eval_node(shape, *child, p - *offset),
+        Op::Rotate { inverse, child } => eval_node(shape, *child, *inverse * p),
+        Op::Scale { factor, child } => {
+            let (d, m) = eval_node(shape, *child, p / *factor);
+            (d * factor.min_element(), m)
+        }
+        Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > *radius => {
+            (p.length() - radius, 0)
+        }
+        Op::Twist {
+            frame, rate, child, ..
+        } => {
+            let q = *frame * p;
+            let (s, c) = (rate * q.y).sin_cos();
+            let t = DVec3::new(c * q.x - s * q.z, q.y, s * q.x + c * q.z);
+            eval_node(shape, *child, frame.transpose() * t)
+        }
+        Op::Bend {
+            frame, rate, child, ..
+        } => {
+            let q = *frame * p;
+            let (s, c) = (rate * q.x).sin_cos();
+            let t = DVec3::new(c * q.x - s * q.y, s * q.x + c * q.y, q.z);
+            eval_node(shape, *child, frame.transpose() * t)
+        }
+        Op::Repeat { period, child } => {
+            eval_node(shape, *child, p - *period * (p / *period).round())
+        }
+        Op::Mirror { normal, child } => {
+            eval_node(shape, *child, p - 2.0 * p.dot(*normal).min(0.0) * *normal)
+        }
+        Op::Elongate { h, child } => eval_node(shape, *child, p - p.clamp(-*h, *h)),
+        Op::Round { r, child } => {
+            let (d, m) = eval_node(shape, *child, p);
+            (d - r, m)
+        }
+        Op::Shell { thickness, child } => {
+            let (d, m) = eval_node(shape, *child, p);
+            (d.abs() - thickness * 0.5, m)
+        }
+        Op::Paint { material, child } => (eval_node(shape, *child, p).0, *material),
+    }
+}
+
+/// Step for central differences, relative to the scene's scale.
+pub const GRADIENT_STEP: f64 = 1e-6;
+
+/// The gradient by central differences in f64.
+pub fn gradient(shape: &Shape, p: DVec3) -> DVec3 {
+    let h = GRADIENT_STEP;
+    let d = |o: DVec3| distance(shape, p + o) - distance(shape, p - o);
+    DVec3::new(d(DVec3::X * h), d(DVec3::Y * h), d(DVec3::Z * h)) / (2.0 * h)
+}
+
+/// Projects a point onto the zero set with Newton steps along the gradient
+/// (Π_f, Eq. 18 of the Implicit UVs paper), iterated until |f| < `tolerance`.
+/// `None` when it does not converge (a flat gradient, or no surface nearby).
+pub fn project(shape: &Shape, p: DVec3, tolerance: f64) -> Option<DVec3> {
+    let mut x = p;
+    for _ in 0..200 {
+        let d = distance(shape, x);
+        if d.abs() < tolerance {
+            return Some(x);
+        }
+        let g = gradient(shape, x);
+        let g2 = g.length_squared();
+        if !(g2 > 1e-12) || !d.is_finite() {
+            return None;
+        }
+        x -= g * (d / g2);
+    }
+    None
+}
+
+/// One `sdfc eval` answer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Query {
+    pub point: DVec3,
+    pub distance: f64,
+    pub gradient: DVec3,
+    pub surface: Option<DVec3>,
+}
+
+/// Evaluates many points in parallel.
+pub fn query_all(shape: &Shape, points: &[DVec3]) -> Vec<Query> {
+    points
+        .par_iter()
+        .map(|&p| Query {
+            point: p,
+            distance: distance(shape, p),
+            gradient: gradient(shape, p),
+            surface: project(shape, p, 1e-10),
+        })
+        .collect()
+}

@@ -1,0 +1,405 @@
+//! Lowering: folded shape values of the checked program → IR nodes with bounds
+//! and Lipschitz constants.
+
+use super::*;
+use crate::sema::{DefKind, Program, Ty, Value};
+
+/// Lowers every named shape and the render target of a checked, error-free program.
+pub fn lower(program: &Program) -> Scene {
+    let shapes = program
+        .defs
+        .iter()
+        .filter(|d| d.kind == DefKind::Let && d.ty == Ty::Shape)
+        .filter_map(|d| {
+            Some(NamedShape {
+                name: d.name.clone(),
+                shape: lower_shape(&d.value)?,
+            })
+        })
+        .collect();
+    let render = program.render.as_ref().and_then(|r| lower_shape(&r.target));
+    Scene { shapes, render }
+}
+
+/// Lowers one shape value; `None` for values that are not (error-free) shapes.
+pub fn lower_shape(value: &Value) -> Option<Shape> {
+    let mut shape = Shape::default();
+    Lowerer { out: &mut shape }.node(value)?;
+    Some(shape)
+}
+
+struct Lowerer<'a> {
+    out: &'a mut Shape,
+}
+
+fn f(v: &Value) -> Option<f64> {
+    v.as_float()
+}
+
+fn v3(v: &Value) -> Option<DVec3> {
+    v.as_vec3().map(DVec3::from_array)
+}
+
+/// A float or vec3 argument as a vec3.
+fn fv3(v: &Value) -> Option<DVec3> {
+    f(v).map(DVec3::splat).or_else(|| v3(v))
+}
+
+/// A rotation taking `axis` (unit) to `to` (unit).
+fn align(axis: DVec3, to: DVec3) -> DMat3 {
+    let q = glam::DQuat::from_rotation_arc(axis, to);
+    DMat3::from_quat(q)
+}
+
+impl Lowerer<'_> {
+    fn push(&mut self, op: Op, bounds: Aabb, lipschitz: f64) -> Option<NodeId> {
+        self.out.nodes.push(Node {
+            op,
+            bounds,
+            lipschitz,
+        });
+        Some(self.out.nodes.len() - 1)
+    }
+
+    fn info(&self, id: NodeId) -> (Aabb, f64) {
+        let n = &self.out.nodes[id];
+        (n.bounds, n.lipschitz)
+    }
+
+    fn prim(&mut self, p: Prim) -> Option<NodeId> {
+        let b = match &p {
+            Prim::Sphere { r } => Aabb::centered(DVec3::splat(*r)),
+            Prim::Box { half } | Prim::RoundBox { half, .. } | Prim::BoxFrame { half, .. } => {
+                Aabb::centered(*half)
+            }
+            Prim::Torus { major, minor } => {
+                Aabb::centered(DVec3::new(major + minor, *minor, major + minor))
+            }
+            Prim::Capsule { a, b, r } => Aabb {
+                min: a.min(*b),
+                max: a.max(*b),
+            }
+            .expand(*r),
+            Prim::Cylinder { r, half_h } => Aabb::centered(DVec3::new(*r, *half_h, *r)),
+            Prim::CappedCone { half_h, r1, r2 } => {
+                Aabb::centered(DVec3::new(r1.max(*r2), *half_h, r1.max(*r2)))
+            }
+            Prim::Plane { .. } => Aabb::INFINITE,
+            Prim::Ellipsoid { radii } => Aabb::centered(*radii),
+            Prim::Octahedron { s } => Aabb::centered(DVec3::splat(*s)),
+            Prim::HexPrism { r, half_h } => Aabb::centered(DVec3::new(
+                r * 1.154_700_538_379_251_5,
+                r * 1.154_700_538_379_251_5,
+                *half_h,
+            )),
+            Prim::TriPrism { r, half_h } => Aabb::centered(DVec3::new(r * 2.0, r * 2.0, *half_h)),
+            Prim::Pyramid { h } => Aabb {
+                min: DVec3::new(-0.5, 0.0, -0.5),
+                max: DVec3::new(0.5, *h, 0.5),
+            },
+            Prim::Link { le, r1, r2 } => Aabb::centered(DVec3::new(r1 + r2, le + r1 + r2, *r2)),
+        };
+        // IQ's ellipsoid is a bound whose gradient can exceed 1 by the axis ratio.
+        let l = match &p {
+            Prim::Ellipsoid { radii } => radii.max_element() / radii.min_element(),
+            _ => 1.0,
+        };
+        self.push(Op::Prim(p), b, l)
+    }
+
+    fn node(&mut self, value: &Value) -> Option<NodeId> {
+        let Value::Shape(n) = value else { return None };
+        let a = &n.args;
+        match n.builtin {
+            "sphere" => self.prim(Prim::Sphere { r: f(&a[0])? }),
+            "box" => self.prim(Prim::Box {
+                half: fv3(&a[0])? * 0.5,
+            }),
+            "round_box" => {
+                let r = f(&a[1])?;
+                let half = fv3(&a[0])? * 0.5;
+                let r = r.min(half.min_element());
+                self.prim(Prim::RoundBox {
+                    half: half - DVec3::splat(r),
+                    r,
+                })
+                .map(|id| {
+                    self.out.nodes[id].bounds = Aabb::centered(half);
+                    id
+                })
+            }
+            "box_frame" => self.prim(Prim::BoxFrame {
+                half: fv3(&a[0])? * 0.5,
+                e: f(&a[1])? * 0.5,
+            }),
+            "torus" => self.prim(Prim::Torus {
+                major: f(&a[0])?,
+                minor: f(&a[1])?,
+            }),
+            "capsule" => self.prim(Prim::Capsule {
+                a: v3(&a[0])?,
+                b: v3(&a[1])?,
+                r: f(&a[2])?,
+            }),
+            "cylinder" => self.prim(Prim::Cylinder {
+                r: f(&a[0])?,
+                half_h: f(&a[1])? * 0.5,
+            }),
+            "cone" => {
+                let (r, h) = (f(&a[0])?, f(&a[1])?);
+                let cone = self.prim(Prim::CappedCone {
+                    half_h: h * 0.5,
+                    r1: r,
+                    r2: 0.0,
+                })?;
+                self.translate(DVec3::new(0.0, h * 0.5, 0.0), cone)
+            }
+            "capped_cone" => self.prim(Prim::CappedCone {
+                half_h: f(&a[0])? * 0.5,
+                r1: f(&a[1])?,
+                r2: f(&a[2])?,
+            }),
+            "plane" => self.prim(Prim::Plane {
+                n: v3(&a[0])?.normalize(),
+                offset: f(&a[1])?,
+            }),
+            "ellipsoid" => self.prim(Prim::Ellipsoid { radii: v3(&a[0])? }),
+            "octahedron" => self.prim(Prim::Octahedron { s: f(&a[0])? }),
+            "hex_prism" => self.prim(Prim::HexPrism {
+                r: f(&a[0])?,
+                half_h: f(&a[1])? * 0.5,
+            }),
+            "tri_prism" => self.prim(Prim::TriPrism {
+                r: f(&a[0])?,
+                half_h: f(&a[1])? * 0.5,
+            }),
+            "pyramid" => self.prim(Prim::Pyramid { h: f(&a[0])? }),
+            "link" => self.prim(Prim::Link {
+                le: f(&a[0])?,
+                r1: f(&a[1])?,
+                r2: f(&a[2])?,
+            }),
+            "union"
+            | "intersection"
+            | "difference"
+            | "smooth_union"
+            | "smooth_intersection"
+            | "smooth_difference" => {
+                let x = self.node(&a[0])?;
+                let y = self.node(&a[1])?;
+                let k = if n.builtin.starts_with("smooth_") {
+                    f(&a[2])?
+                } else {
+                    0.0
+                };
+                let op = match n.builtin.trim_start_matches("smooth_") {
+                    "union" => Csg::Union,
+                    "intersection" => Csg::Intersection,
+                    _ => Csg::Difference,
+                };
+                let ((ba, la), (bb, lb)) = (self.info(x), self.info(y));
+                let bounds = match op {
+                    Csg::Union => ba.union(bb).expand(k * 0.25),
+                    Csg::Intersection => ba.intersect(bb),
+                    Csg::Difference => ba,
+                };
+                self.push(Op::Csg { op, k, a: x, b: y }, bounds, la.max(lb))
+            }
+            "translate" => {
+                let child = self.node(&a[0])?;
+                self.translate(v3(&a[1])?, child)
+            }
+            "rotate" | "rotate_x" | "rotate_y" | "rotate_z" => {
+                let child = self.node(&a[0])?;
+                let (axis, angle) = match n.builtin {
+                    "rotate" => (v3(&a[1])?.normalize(), f(&a[2])?),
+                    "rotate_x" => (DVec3::X, f(&a[1])?),
+                    "rotate_y" => (DVec3::Y, f(&a[1])?),
+                    _ => (DVec3::Z, f(&a[1])?),
+                };
+                let forward = DMat3::from_axis_angle(axis, angle);
+                let (b, l) = self.info(child);
+                self.push(
+                    Op::Rotate {
+                        inverse: forward.transpose(),
+                        child,
+                    },
+                    b.transform(forward),
+                    l,
+                )
+            }
+            "scale" => {
+                let child = self.node(&a[0])?;
+                let factor = fv3(&a[1])?;
+                let (b, l) = self.info(child);
+                let stretch = factor.max_element() / factor.min_element();
+                self.push(
+                    Op::Scale { factor, child },
+                    b.transform(DMat3::from_diagonal(factor)),
+                    l * stretch,
+                )
+            }
+            "twist" | "bend" => {
+                let child = self.node(&a[0])?;
+                let axis = v3(&a[1])?.normalize();
+                let rate = f(&a[2])?;
+                let (b, l) = self.info(child);
+                // A point at distance R from the axis moves sideways by up to |rate|·R per unit
+                // along it; the field's gradient grows to at most √(1 + (rate·R)²).
+                let bounded = b.radius_from_origin();
+                let r = if bounded.is_finite() { bounded } else { 10.0 };
+                let radius = bounded;
+                let stretch = (1.0 + (rate * r).powi(2)).sqrt();
+                let bounds = Aabb::centered(DVec3::splat(r));
+                if n.builtin == "twist" {
+                    self.push(
+                        Op::Twist {
+                            frame: align(axis, DVec3::Y),
+                            rate,
+                            radius,
+                            child,
+                        },
+                        bounds,
+                        l * stretch,
+                    )
+                } else {
+                    self.push(
+                        Op::Bend {
+                            frame: align(axis, DVec3::X),
+                            rate,
+                            radius,
+                            child,
+                        },
+                        bounds,
+                        l * stretch,
+                    )
+                }
+            }
+            "repeat" => {
+                let child = self.node(&a[0])?;
+                let (_, l) = self.info(child);
+                self.push(
+                    Op::Repeat {
+                        period: fv3(&a[1])?,
+                        child,
+                    },
+                    Aabb::INFINITE,
+                    l,
+                )
+            }
+            "mirror" => {
+                let child = self.node(&a[0])?;
+                let normal = v3(&a[1])?.normalize();
+                let (b, l) = self.info(child);
+                let reflect = DMat3::IDENTITY
+                    - 2.0
+                        * DMat3::from_cols(normal * normal.x, normal * normal.y, normal * normal.z);
+                self.push(
+                    Op::Mirror { normal, child },
+                    b.union(b.transform(reflect)),
+                    l,
+                )
+            }
+            "elongate" => {
+                let child = self.node(&a[0])?;
+                let h = v3(&a[1])?;
+                let (b, l) = self.info(child);
+                self.push(
+                    Op::Elongate { h, child },
+                    Aabb {
+                        min: b.min - h,
+                        max: b.max + h,
+                    },
+                    l,
+                )
+            }
+            "round" => {
+                let child = self.node(&a[0])?;
+                let r = f(&a[1])?;
+                let (b, l) = self.info(child);
+                self.push(Op::Round { r, child }, b.expand(r), l)
+            }
+            "shell" => {
+                let child = self.node(&a[0])?;
+                let t = f(&a[1])?;
+                let (b, l) = self.info(child);
+                self.push(
+                    Op::Shell {
+                        thickness: t,
+                        child,
+                    },
+                    b.expand(t * 0.5),
+                    l,
+                )
+            }
+            "paint" => {
+                let child = self.node(&a[0])?;
+                let Value::Material(m) = a[1] else {
+                    return None;
+                };
+                let (b, l) = self.info(child);
+                self.push(
+                    Op::Paint {
+                        material: m as u32 + 1,
+                        child,
+                    },
+                    b,
+                    l,
+                )
+            }
+            _ => None,
+        }
+    }
+
+    fn translate(&mut self, offset: DVec3, child: NodeId) -> Option<NodeId> {
+        let (b, l) = self.info(child);
+        self.push(
+            Op::Translate { offset, child },
+            Aabb {
+                min: b.min + offset,
+                max: b.max + offset,
+            },
+            l,
+        )
+    }
+}
+
+/// Every builtin the lowering handles, for a test that none is forgotten.
+pub const LOWERED: &[&str] = &[
+    "sphere",
+    "box",
+    "round_box",
+    "box_frame",
+    "torus",
+    "capsule",
+    "cylinder",
+    "cone",
+    "capped_cone",
+    "plane",
+    "ellipsoid",
+    "octahedron",
+    "hex_prism",
+    "tri_prism",
+    "pyramid",
+    "link",
+    "union",
+    "intersection",
+    "difference",
+    "smooth_union",
+    "smooth_intersection",
+    "smooth_difference",
+    "translate",
+    "rotate",
+    "rotate_x",
+    "rotate_y",
+    "rotate_z",
+    "scale",
+    "twist",
+    "bend",
+    "repeat",
+    "mirror",
+    "elongate",
+    "round",
+    "shell",
+    "paint",
+];

@@ -1,0 +1,306 @@
+//! The IR: a scene's signed distance fields as a flat, typed tree.
+//!
+//! Lowering turns the checked program's folded shape values into [`Op`] nodes
+//! with every constant resolved to the form the evaluators need (half sizes,
+//! inverse rotations, normalized axes). Each node carries an axis-aligned bound
+//! and a **Lipschitz bound**: warps and non-uniform scales stretch distances, and
+//! the sphere tracer divides its steps by the root's bound so it never
+//! oversteps the surface. The WGSL generator and the CPU reference
+//! ([`eval`]) both walk this IR.
+
+pub mod eval;
+mod lower;
+
+pub use lower::{lower, lower_shape, LOWERED};
+
+use glam::{DMat3, DVec3};
+
+/// Index of a node in [`Scene::nodes`].
+pub type NodeId = usize;
+
+/// A primitive's distance function, in its local frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Prim {
+    Sphere {
+        r: f64,
+    },
+    Box {
+        half: DVec3,
+    },
+    RoundBox {
+        half: DVec3,
+        r: f64,
+    },
+    BoxFrame {
+        half: DVec3,
+        e: f64,
+    },
+    Torus {
+        major: f64,
+        minor: f64,
+    },
+    Capsule {
+        a: DVec3,
+        b: DVec3,
+        r: f64,
+    },
+    Cylinder {
+        r: f64,
+        half_h: f64,
+    },
+    /// A capped cone centred on the origin (IQ's sdCappedCone): half height, bottom and top radii.
+    CappedCone {
+        half_h: f64,
+        r1: f64,
+        r2: f64,
+    },
+    Plane {
+        n: DVec3,
+        offset: f64,
+    },
+    Ellipsoid {
+        radii: DVec3,
+    },
+    Octahedron {
+        s: f64,
+    },
+    HexPrism {
+        r: f64,
+        half_h: f64,
+    },
+    TriPrism {
+        r: f64,
+        half_h: f64,
+    },
+    Pyramid {
+        h: f64,
+    },
+    Link {
+        le: f64,
+        r1: f64,
+        r2: f64,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Csg {
+    Union,
+    Intersection,
+    Difference,
+}
+
+/// A node of the SDF tree.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Op {
+    Prim(Prim),
+    /// Hard (`k == 0`) or smooth CSG. The material of the nearer operand is kept.
+    Csg {
+        op: Csg,
+        k: f64,
+        a: NodeId,
+        b: NodeId,
+    },
+    /// Child evaluated at `p - offset`.
+    Translate {
+        offset: DVec3,
+        child: NodeId,
+    },
+    /// Child evaluated at `inverse * p`.
+    Rotate {
+        inverse: DMat3,
+        child: NodeId,
+    },
+    /// Child evaluated at `p / factor`, distance times `min(factor)`.
+    Scale {
+        factor: DVec3,
+        child: NodeId,
+    },
+    /// Twist about `axis` (through the origin) by `rate` radians per unit length.
+    /// `frame` maps world to a frame whose y is the axis. Warps are rotations about the
+    /// origin, so the result lies within `radius` (the child's bound) of the origin; beyond
+    /// it the distance is `|p| - radius`, which keeps the Lipschitz bound valid everywhere.
+    Twist {
+        frame: DMat3,
+        rate: f64,
+        radius: f64,
+        child: NodeId,
+    },
+    /// Bend: p turns about the frame's z by `rate * (p · axis)`; `frame` maps axis to x.
+    Bend {
+        frame: DMat3,
+        rate: f64,
+        radius: f64,
+        child: NodeId,
+    },
+    Repeat {
+        period: DVec3,
+        child: NodeId,
+    },
+    /// Points on the negative side of the plane through the origin are reflected.
+    Mirror {
+        normal: DVec3,
+        child: NodeId,
+    },
+    Elongate {
+        h: DVec3,
+        child: NodeId,
+    },
+    /// Distance minus `r`.
+    Round {
+        r: f64,
+        child: NodeId,
+    },
+    /// `|d| - thickness / 2`.
+    Shell {
+        thickness: f64,
+        child: NodeId,
+    },
+    /// Gives the subtree a material (1-based; 0 is the default material).
+    Paint {
+        material: u32,
+        child: NodeId,
+    },
+}
+
+/// An axis-aligned bound; infinite for unbounded shapes (planes, repetition).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub const INFINITE: Aabb = Aabb {
+        min: DVec3::splat(f64::NEG_INFINITY),
+        max: DVec3::splat(f64::INFINITY),
+    };
+
+    pub fn centered(half: DVec3) -> Aabb {
+        Aabb {
+            min: -half,
+            max: half,
+        }
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
+    pub fn union(self, o: Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    pub fn intersect(self, o: Aabb) -> Aabb {
+        Aabb {
+            min: self.min.max(o.min),
+            max: self.max.min(o.max),
+        }
+    }
+
+    pub fn expand(self, r: f64) -> Aabb {
+        Aabb {
+            min: self.min - DVec3::splat(r),
+            max: self.max + DVec3::splat(r),
+        }
+    }
+
+    pub fn center(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// The largest distance from the origin to the box.
+    pub fn radius_from_origin(&self) -> f64 {
+        self.min.abs().max(self.max.abs()).length()
+    }
+
+    /// The bound of the box after a linear map.
+    pub fn transform(self, m: DMat3) -> Aabb {
+        if !self.is_finite() {
+            return Aabb::INFINITE;
+        }
+        let mut out = Aabb {
+            min: DVec3::splat(f64::INFINITY),
+            max: DVec3::splat(f64::NEG_INFINITY),
+        };
+        for i in 0..8 {
+            let c = DVec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            let q = m * c;
+            out.min = out.min.min(q);
+            out.max = out.max.max(q);
+        }
+        out
+    }
+}
+
+/// A node with its bound and Lipschitz constant.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    pub op: Op,
+    pub bounds: Aabb,
+    /// An upper bound of |∇f|: sphere-tracing steps are divided by it.
+    pub lipschitz: f64,
+}
+
+/// A lowered shape: nodes in child-before-parent order, the last one the root.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Shape {
+    pub nodes: Vec<Node>,
+}
+
+impl Shape {
+    pub fn root(&self) -> NodeId {
+        self.nodes.len() - 1
+    }
+
+    pub fn root_node(&self) -> &Node {
+        &self.nodes[self.root()]
+    }
+
+    pub fn lipschitz(&self) -> f64 {
+        self.root_node().lipschitz
+    }
+
+    /// A finite bound for framing a camera: the shape's bound, or a 4-unit cube when unbounded.
+    pub fn framing_bounds(&self) -> Aabb {
+        let b = self.root_node().bounds;
+        let fallback = Aabb::centered(DVec3::splat(2.0));
+        if b.is_finite() {
+            b
+        } else {
+            Aabb {
+                min: b.min.max(fallback.min),
+                max: b.max.min(fallback.max),
+            }
+        }
+    }
+}
+
+/// A named shape of the program, lowered.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedShape {
+    pub name: String,
+    pub shape: Shape,
+}
+
+/// The lowered scene: every named shape and the render target.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Scene {
+    pub shapes: Vec<NamedShape>,
+    pub render: Option<Shape>,
+}
+
+impl Scene {
+    pub fn shape(&self, name: &str) -> Option<&Shape> {
+        self.shapes
+            .iter()
+            .find(|s| s.name == name)
+            .map(|s| &s.shape)
+    }
+}

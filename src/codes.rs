@@ -45,6 +45,8 @@ codes! {
     E_MISSING_FILE = "E0303": "a texture file that does not exist";
     E_IMAGE_FORMAT = "E0304": "a texture file in a format sdfc cannot read";
     E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
+    E_CODEGEN = "E0400": "a scene the code generator cannot compile yet";
+    E_INTERNAL = "E0900": "an internal compiler error: naga rejected generated code";
     W_UNUSED = "W0001": "a `let` binding that is never used";
     W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";
     W_UNUSED_ITEM = "W0003": "a material that is never used";

@@ -17,9 +17,11 @@
 //! Every stage reports problems as [`diagnostic::Diagnostic`]s and keeps going,
 //! so one run shows every independent problem. No input makes any stage panic.
 
+pub mod codegen;
 pub mod codes;
 pub mod diagnostic;
 pub mod driver;
+pub mod fsutil;
 pub mod ir;
 pub mod sema;
 pub mod span;

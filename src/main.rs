@@ -22,5 +22,6 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Check(args) => cli::check::run(args),
         Command::Eval(args) => cli::eval::run(args),
+        Command::Compile(args) => cli::compile::run(args),
     }
 }

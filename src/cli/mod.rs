@@ -1,6 +1,7 @@
 //! The command line's definition and the commands.
 
 pub mod check;
+pub mod compile;
 pub mod eval;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -28,6 +29,35 @@ pub enum Command {
     /// order: `{"point", "distance", "gradient", "surface"}`, where `surface` is the point
     /// projected onto the zero set (null when the projection does not converge).
     Eval(EvalArgs),
+    /// Compile a scene to one standalone shader module, validated by naga.
+    ///
+    /// The module has a full-screen render entry point pair (vs_main, fs_main), compute
+    /// entry points (cs_points, cs_grid) and an `sdf_NAME(p) -> f32` per named shape;
+    /// its header comment documents the bind groups. Exit status: 0 on success, 1 when
+    /// the scene has errors, 2 on usage or I/O problems, 3 on an internal compiler error
+    /// (the generated WGSL is saved for the bug report).
+    Compile(CompileArgs),
+}
+
+#[derive(clap::Args)]
+pub struct CompileArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output file (written atomically); standard output when left out (not for SPIR-V).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Output language.
+    #[arg(long, value_enum, default_value = "wgsl")]
+    pub target: sdfc::codegen::Target,
+    /// Also write a JSON description of the entry points and bindings.
+    #[arg(long, value_name = "FILE")]
+    pub manifest: Option<PathBuf>,
+    /// Render this named shape instead of the `render` item's target.
+    #[arg(long)]
+    pub shape: Option<String>,
+    /// The entry point to translate for GLSL (one per file).
+    #[arg(long, default_value = "fs_main")]
+    pub entry: String,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]

@@ -1,0 +1,95 @@
+//! `sdfc compile`: a scene → one validated shader module (WGSL, SPIR-V, GLSL or MSL).
+
+use super::{load, CompileArgs};
+use sdfc::codegen::{self, targets::Output, Target};
+use sdfc::fsutil::write_atomic;
+use sdfc::ir;
+use std::io::Write;
+use std::process::ExitCode;
+
+/// Exit status for an internal compiler error.
+pub const ICE_EXIT: u8 = 3;
+
+/// Generates and validates a module; on an internal compiler error, saves the WGSL
+/// for the bug report and says where.
+pub fn build(
+    args_scene: &std::path::Path,
+    shape: Option<&str>,
+) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
+    let (source, analysis) = load(args_scene)?;
+    let scene = ir::lower(&analysis.program);
+    let module = codegen::generate(&analysis.program, &scene, shape).map_err(|diags| {
+        let name = args_scene.display().to_string();
+        eprint!(
+            "{}",
+            sdfc::diagnostic::render(&name, &source, &diags, false)
+        );
+        ExitCode::from(1)
+    })?;
+    match codegen::validate(&module.wgsl) {
+        Ok(v) => Ok((module, v)),
+        Err(e) => {
+            let path = std::env::temp_dir().join(format!("sdfc-ice-{}.wgsl", std::process::id()));
+            let saved = write_atomic(&path, module.wgsl.as_bytes()).is_ok();
+            eprintln!(
+                "error[{}]: internal compiler error: naga rejected the generated WGSL",
+                sdfc::codes::E_INTERNAL
+            );
+            eprintln!("{e}");
+            if saved {
+                eprintln!(
+                    "note: the generated WGSL is saved at {}; please attach it to a bug report",
+                    path.display()
+                );
+            }
+            Err(ExitCode::from(ICE_EXIT))
+        }
+    }
+}
+
+pub fn run(args: CompileArgs) -> ExitCode {
+    let (module, validated) = match build(&args.scene, args.shape.as_deref()) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let output = match codegen::translate(&validated, &module.wgsl, args.target, &args.entry) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!(
+                "error[{}]: internal compiler error: naga could not translate to {:?}: {e}",
+                sdfc::codes::E_INTERNAL,
+                args.target
+            );
+            return ExitCode::from(ICE_EXIT);
+        }
+    };
+    let bytes = match output {
+        Output::Text(t) => t.into_bytes(),
+        Output::Binary(b) => b,
+    };
+    if let Some(path) = &args.manifest {
+        let json = serde_json::to_string_pretty(&module.manifest).unwrap_or_default();
+        if let Err(e) = write_atomic(path, json.as_bytes()) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(2);
+        }
+    }
+    match &args.output {
+        Some(path) => {
+            if let Err(e) = write_atomic(path, &bytes) {
+                eprintln!("error: cannot write {}: {e}", path.display());
+                return ExitCode::from(2);
+            }
+        }
+        None if args.target == Target::Spirv => {
+            eprintln!("error: SPIR-V is binary; write it to a file with -o");
+            return ExitCode::from(2);
+        }
+        None => {
+            if std::io::stdout().write_all(&bytes).is_err() {
+                return ExitCode::from(2);
+            }
+        }
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,385 @@
+//! The WGSL emitter: IR shapes and surface fields → WGSL source, with every
+//! constant folded in. Only this file writes WGSL text from Rust; the shared
+//! functions it calls live in `shaders/*.wgsl`.
+
+use crate::ir::{Csg, NodeId, Op, Prim, Shape};
+use crate::sema::{FieldExpr, SurfaceInput, Ty, Value};
+use crate::syntax::ast::{BinaryOp, UnaryOp};
+use glam::{DMat3, DVec3};
+use std::fmt::Write;
+
+/// A WGSL float literal for a constant (always with a decimal point or exponent).
+pub fn lit(x: f64) -> String {
+    let x = x as f32;
+    let s = format!("{x:?}");
+    let s = if s.contains('.') || s.contains('e') || s.contains("inf") || s.contains("NaN") {
+        s
+    } else {
+        format!("{s}.0")
+    };
+    if x < 0.0 {
+        format!("({s})")
+    } else {
+        s
+    }
+}
+
+pub fn vec3(v: DVec3) -> String {
+    format!("vec3<f32>({}, {}, {})", lit(v.x), lit(v.y), lit(v.z))
+}
+
+/// `m * expr`, or just `expr` when `m` is the identity.
+fn apply(m: DMat3, expr: &str) -> String {
+    if m.abs_diff_eq(DMat3::IDENTITY, 1e-12) {
+        expr.to_string()
+    } else {
+        format!("{} * {expr}", mat3(m))
+    }
+}
+
+fn mat3(m: DMat3) -> String {
+    format!(
+        "mat3x3<f32>({}, {}, {})",
+        vec3(m.x_axis),
+        vec3(m.y_axis),
+        vec3(m.z_axis)
+    )
+}
+
+/// Writes indented WGSL statements with fresh temporary names.
+pub struct Writer {
+    pub out: String,
+    indent: usize,
+    next: usize,
+}
+
+impl Writer {
+    pub fn new() -> Self {
+        Writer {
+            out: String::new(),
+            indent: 1,
+            next: 0,
+        }
+    }
+
+    fn fresh(&mut self, prefix: &str) -> String {
+        self.next += 1;
+        format!("{prefix}{}", self.next)
+    }
+
+    pub fn line(&mut self, text: &str) {
+        let _ = writeln!(self.out, "{}{}", "    ".repeat(self.indent), text);
+    }
+
+    /// Emits the evaluation of `id` at the point variable `p`; returns the name of the
+    /// `vec2<f32>` holding (distance, material).
+    pub fn shape(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
+        let d = self.fresh("d");
+        match &shape.nodes[id].op {
+            Op::Prim(pr) => {
+                let call = match pr {
+                    Prim::Sphere { r } => format!("sd_sphere({p}, {})", lit(*r)),
+                    Prim::Box { half } => format!("sd_box({p}, {})", vec3(*half)),
+                    Prim::RoundBox { half, r } => {
+                        format!("sd_round_box({p}, {}, {})", vec3(*half), lit(*r))
+                    }
+                    Prim::BoxFrame { half, e } => {
+                        format!("sd_box_frame({p}, {}, {})", vec3(*half), lit(*e))
+                    }
+                    Prim::Torus { major, minor } => {
+                        format!("sd_torus({p}, {}, {})", lit(*major), lit(*minor))
+                    }
+                    Prim::Capsule { a, b, r } => {
+                        format!("sd_capsule({p}, {}, {}, {})", vec3(*a), vec3(*b), lit(*r))
+                    }
+                    Prim::Cylinder { r, half_h } => {
+                        format!("sd_cylinder({p}, {}, {})", lit(*r), lit(*half_h))
+                    }
+                    Prim::CappedCone { half_h, r1, r2 } => format!(
+                        "sd_capped_cone({p}, {}, {}, {})",
+                        lit(*half_h),
+                        lit(*r1),
+                        lit(*r2)
+                    ),
+                    Prim::Plane { n, offset } => {
+                        format!("sd_plane({p}, {}, {})", vec3(*n), lit(*offset))
+                    }
+                    Prim::Ellipsoid { radii } => format!("sd_ellipsoid({p}, {})", vec3(*radii)),
+                    Prim::Octahedron { s } => format!("sd_octahedron({p}, {})", lit(*s)),
+                    Prim::HexPrism { r, half_h } => {
+                        format!("sd_hex_prism({p}, {}, {})", lit(*r), lit(*half_h))
+                    }
+                    Prim::TriPrism { r, half_h } => {
+                        format!("sd_tri_prism({p}, {}, {})", lit(*r), lit(*half_h))
+                    }
+                    Prim::Pyramid { h } => format!("sd_pyramid({p}, {})", lit(*h)),
+                    Prim::Link { le, r1, r2 } => {
+                        format!("sd_link({p}, {}, {}, {})", lit(*le), lit(*r1), lit(*r2))
+                    }
+                };
+                self.line(&format!("let {d} = vec2<f32>({call}, 0.0);"));
+            }
+            Op::Csg { op, k, a, b } => {
+                let da = self.shape(shape, *a, p);
+                let db = self.shape(shape, *b, p);
+                let f = match op {
+                    Csg::Union => "op_union",
+                    Csg::Intersection => "op_intersection",
+                    Csg::Difference => "op_difference",
+                };
+                self.line(&format!("let {d} = {f}({da}, {db}, {});", lit(*k)));
+            }
+            Op::Translate { offset, child } => {
+                return self.point(shape, *child, &format!("{p} - {}", vec3(*offset)))
+            }
+            Op::Rotate { inverse, child } => {
+                return self.point(shape, *child, &format!("{} * {p}", mat3(*inverse)))
+            }
+            Op::Scale { factor, child } => {
+                let dc = self.point(shape, *child, &format!("{p} / {}", vec3(*factor)));
+                self.line(&format!(
+                    "let {d} = vec2<f32>({dc}.x * {}, {dc}.y);",
+                    lit(factor.min_element())
+                ));
+            }
+            Op::Twist {
+                frame,
+                rate,
+                radius,
+                child,
+            }
+            | Op::Bend {
+                frame,
+                rate,
+                radius,
+                child,
+            } => {
+                let warp = if matches!(shape.nodes[id].op, Op::Twist { .. }) {
+                    "op_twist"
+                } else {
+                    "op_bend"
+                };
+                let inner = apply(
+                    frame.transpose(),
+                    &format!("{warp}({}, {})", apply(*frame, p), lit(*rate)),
+                );
+                if radius.is_finite() {
+                    let l = self.fresh("l");
+                    self.line(&format!("let {l} = length({p});"));
+                    self.line(&format!("var {d}: vec2<f32>;"));
+                    self.line(&format!("if ({l} > {}) {{", lit(*radius)));
+                    self.indent += 1;
+                    self.line(&format!("{d} = vec2<f32>({l} - {}, 0.0);", lit(*radius)));
+                    self.indent -= 1;
+                    self.line("} else {");
+                    self.indent += 1;
+                    let dc = self.point(shape, *child, &inner);
+                    self.line(&format!("{d} = {dc};"));
+                    self.indent -= 1;
+                    self.line("}");
+                } else {
+                    return self.point(shape, *child, &inner);
+                }
+            }
+            Op::Repeat { period, child } => {
+                return self.point(shape, *child, &format!("op_repeat({p}, {})", vec3(*period)))
+            }
+            Op::Mirror { normal, child } => {
+                return self.point(shape, *child, &format!("op_mirror({p}, {})", vec3(*normal)))
+            }
+            Op::Elongate { h, child } => {
+                return self.point(shape, *child, &format!("op_elongate({p}, {})", vec3(*h)))
+            }
+            Op::Round { r, child } => {
+                let dc = self.shape(shape, *child, p);
+                self.line(&format!(
+                    "let {d} = vec2<f32>({dc}.x - {}, {dc}.y);",
+                    lit(*r)
+                ));
+            }
+            Op::Shell { thickness, child } => {
+                let dc = self.shape(shape, *child, p);
+                self.line(&format!(
+                    "let {d} = vec2<f32>(abs({dc}.x) - {}, {dc}.y);",
+                    lit(thickness * 0.5)
+                ));
+            }
+            Op::Paint { material, child } => {
+                let dc = self.shape(shape, *child, p);
+                self.line(&format!(
+                    "let {d} = vec2<f32>({dc}.x, {});",
+                    lit(*material as f64)
+                ));
+            }
+        }
+        d
+    }
+
+    /// Binds a transformed point and evaluates a child there.
+    fn point(&mut self, shape: &Shape, child: NodeId, expr: &str) -> String {
+        let q = self.fresh("p");
+        self.line(&format!("let {q} = {expr};"));
+        self.shape(shape, child, &q)
+    }
+}
+
+/// What a surface field needs that the generator cannot give yet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unsupported(pub String);
+
+fn wgsl_ty(t: &Ty) -> String {
+    match t {
+        Ty::Vec(n) => format!("vec{n}<f32>"),
+        Ty::Bool => String::from("bool"),
+        _ => String::from("f32"),
+    }
+}
+
+/// A texture binding the module needs: an image file with a wrap mode.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct TextureUse {
+    pub path: String,
+    pub wrap: String,
+}
+
+/// Textures in binding order; texture `i` binds at 1 + 2i, its sampler at 2 + 2i.
+#[derive(Debug, Default)]
+pub struct Textures(pub Vec<TextureUse>);
+
+impl Textures {
+    fn index(&mut self, path: &str, wrap: &str) -> usize {
+        let u = TextureUse {
+            path: path.to_string(),
+            wrap: wrap.to_string(),
+        };
+        if let Some(i) = self.0.iter().position(|x| *x == u) {
+            return i;
+        }
+        self.0.push(u);
+        self.0.len() - 1
+    }
+}
+
+/// A surface field (or constant) as a WGSL expression over `p` (position) and `n` (normal).
+pub fn field(v: &Value, tex: &mut Textures) -> Result<String, Unsupported> {
+    Ok(match v {
+        Value::Float(x) => lit(*x),
+        Value::Bool(b) => b.to_string(),
+        Value::Vec(c) => format!(
+            "vec{}<f32>({})",
+            c.len(),
+            c.iter().map(|x| lit(*x)).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Field(expr, ty) => match &**expr {
+            FieldExpr::Input(SurfaceInput::Position) => String::from("p"),
+            FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
+            FieldExpr::Atlas { .. } => {
+                return Err(Unsupported(String::from(
+                    "Implicit UV fields (`ATLAS.uv`, …) are not generated yet",
+                )))
+            }
+            FieldExpr::Unary { op, operand } => {
+                let o = field(operand, tex)?;
+                match op {
+                    UnaryOp::Neg => format!("(-{o})"),
+                    UnaryOp::Not => format!("(!{o})"),
+                }
+            }
+            FieldExpr::Binary { op, lhs, rhs } => binary(*op, lhs, rhs, ty, tex)?,
+            FieldExpr::Swizzle { base, components } => {
+                let s: String = components
+                    .iter()
+                    .map(|c| ['x', 'y', 'z', 'w'][*c as usize])
+                    .collect();
+                format!("({}).{s}", field(base, tex)?)
+            }
+            FieldExpr::Call { builtin, args } => call(builtin, args, ty, tex)?,
+        },
+        other => {
+            return Err(Unsupported(format!(
+                "a {} cannot be used per point",
+                other.ty()
+            )))
+        }
+    })
+}
+
+/// Broadcasts a float operand to the vector type of the result where WGSL needs it.
+fn widen(v: &Value, to: &Ty, tex: &mut Textures) -> Result<String, Unsupported> {
+    let e = field(v, tex)?;
+    Ok(match (v.ty().base(), to) {
+        (Ty::Float, Ty::Vec(n)) => format!("vec{n}<f32>({e})"),
+        _ => e,
+    })
+}
+
+fn binary(
+    op: BinaryOp,
+    l: &Value,
+    r: &Value,
+    ty: &Ty,
+    tex: &mut Textures,
+) -> Result<String, Unsupported> {
+    let numeric = match (l.ty().base(), r.ty().base()) {
+        (Ty::Vec(n), _) | (_, Ty::Vec(n)) => Ty::Vec(*n),
+        _ => Ty::Float,
+    };
+    let (a, b) = (widen(l, &numeric, tex)?, widen(r, &numeric, tex)?);
+    Ok(match op {
+        BinaryOp::Or => format!("({a} || {b})"),
+        BinaryOp::And => format!("({a} && {b})"),
+        BinaryOp::Rem => format!("({a} - {b} * floor({a} / {b}))"),
+        BinaryOp::Eq | BinaryOp::Ne if matches!(numeric, Ty::Vec(_)) && *ty == Ty::Bool => {
+            format!("all({a} {} {b})", op.symbol())
+        }
+        _ => format!("({a} {} {b})", op.symbol()),
+    })
+}
+
+fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Textures) -> Result<String, Unsupported> {
+    let t_ty = args
+        .iter()
+        .map(|a| a.ty().base().clone())
+        .find(|t| matches!(t, Ty::Vec(_)))
+        .unwrap_or(Ty::Float);
+    let mut f = |v: &Value| field(v, tex);
+    Ok(match name {
+        "vec" => format!(
+            "{}({})",
+            wgsl_ty(ty),
+            args.iter()
+                .map(&mut f)
+                .collect::<Result<Vec<_>, _>>()?
+                .join(", ")
+        ),
+        "checker" => format!("sdfc_checker({}, {})", f(&args[0])?, f(&args[1])?),
+        "grid" => format!(
+            "sdfc_grid({}, {}, {})",
+            f(&args[0])?,
+            f(&args[1])?,
+            f(&args[2])?
+        ),
+        "sample" => {
+            let (Value::Texture(node), Value::Str(wrap)) = (&args[0], &args[2]) else {
+                return Err(Unsupported(String::from(
+                    "a texture sample needs an image and a wrap mode",
+                )));
+            };
+            let Some(Value::Str(path)) = node.args.first() else {
+                return Err(Unsupported(String::from("a texture sample needs an image")));
+            };
+            let uv = f(&args[1])?;
+            let i = tex.index(path, wrap);
+            format!("textureSampleLevel(texture_{i}, sampler_{i}, {uv}, 0.0)")
+        }
+        "cross" => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
+        "length" | "normalize" => format!("{name}({})", f(&args[0])?),
+        _ => format!(
+            "{name}({})",
+            args.iter()
+                .map(|a| widen(a, &t_ty, tex))
+                .collect::<Result<Vec<_>, _>>()?
+                .join(", ")
+        ),
+    })
+}

@@ -1,0 +1,279 @@
+//! Code generation: the checked program and its IR → one standalone, specialized
+//! WGSL module per scene, validated by naga before anyone sees it.
+//!
+//! The module is the shared library (`shaders/sdf.wgsl`, `shaders/render.wgsl`)
+//! followed by the scene: an `sdf_NAME(p) -> f32` per named shape, the render
+//! target's `scene_map`, its materials, a full-screen render entry point pair
+//! and two compute entry points (points and grids). Its header documents the
+//! bind groups; [`Manifest`] describes them as JSON.
+
+mod emit;
+pub mod targets;
+
+pub use emit::{lit, TextureUse};
+pub use targets::{translate, validate, Target, Validated};
+
+use crate::codes;
+use crate::diagnostic::Diagnostic;
+use crate::ir::{self, Scene};
+use crate::sema::{Program, Value};
+use emit::{field, Textures, Writer};
+use serde::Serialize;
+use std::fmt::Write;
+
+/// The shared WGSL library, included into every module.
+pub const SDF_LIBRARY: &str = include_str!("../../shaders/sdf.wgsl");
+pub const RENDER_LIBRARY: &str = include_str!("../../shaders/render.wgsl");
+
+/// A generated module with its description.
+#[derive(Debug, Clone)]
+pub struct Module {
+    pub wgsl: String,
+    pub manifest: Manifest,
+}
+
+/// A resource binding of the generated module.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Binding {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    /// `uniform`, `storage-read`, `storage-read-write`, `texture-2d` or `sampler`.
+    pub kind: &'static str,
+    /// WGSL type, or the image path for textures, or the wrap mode for samplers.
+    pub detail: String,
+    pub used_by: Vec<&'static str>,
+}
+
+/// What an application needs to drive the module: entry points, bindings and the
+/// byte layout of the uniform blocks.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Manifest {
+    pub entry_points: Vec<(&'static str, &'static str)>,
+    pub bindings: Vec<Binding>,
+    /// Field names of `Globals`, each a `vec4<f32>` (16 bytes), in order.
+    pub globals_layout: Vec<&'static str>,
+    /// Lipschitz bound of the render target: sphere-tracing steps are divided by it.
+    pub lipschitz: f64,
+    /// Names of the shapes with an `sdf_NAME` function.
+    pub shapes: Vec<String>,
+    pub textures: Vec<TextureUse>,
+}
+
+pub const GLOBALS_LAYOUT: &[&str] = &[
+    "camera_pos",
+    "camera_forward",
+    "camera_right",
+    "camera_up",
+    "light_dir",
+    "light_color",
+    "background",
+    "resolution",
+    "trace",
+];
+
+/// Generates the module for a checked, error-free program. `shape` picks the render
+/// target by name instead of the `render` item's. Problems come back as diagnostics.
+pub fn generate(
+    program: &Program,
+    scene: &Scene,
+    shape: Option<&str>,
+) -> Result<Module, Vec<Diagnostic>> {
+    let target = match shape {
+        Some(n) => scene.shape(n).cloned().ok_or_else(|| {
+            vec![Diagnostic::error(
+                codes::E_CODEGEN,
+                format!("the scene has no shape `{n}`"),
+                Default::default(),
+                "",
+            )]
+        })?,
+        None => match (&scene.render, scene.shapes.as_slice()) {
+            (Some(r), _) => r.clone(),
+            (None, [only]) => only.shape.clone(),
+            _ => {
+                return Err(vec![Diagnostic::error(
+                    codes::E_CODEGEN,
+                    "the scene has no render item; choose a shape",
+                    Default::default(),
+                    "",
+                )])
+            }
+        },
+    };
+    let mut out = String::new();
+    let mut textures = Textures::default();
+    let mut problems = Vec::new();
+
+    let _ = writeln!(out, "// ---- scene ----");
+    let _ = writeln!(
+        out,
+        "const SCENE_LIPSCHITZ: f32 = {};",
+        lit(target.lipschitz().max(1.0))
+    );
+    let b = target.framing_bounds();
+    let _ = writeln!(
+        out,
+        "const SCENE_SCALE: f32 = {};\n",
+        lit((b.max - b.min).max_element().max(1e-3))
+    );
+    for named in &scene.shapes {
+        map_fn(&mut out, &format!("map_{}", named.name), &named.shape);
+        let _ = writeln!(
+            out,
+            "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
+            named.name
+        );
+    }
+    map_fn(&mut out, "scene_map", &target);
+
+    // Materials: id 0 is the default; id i + 1 is program.materials[i].
+    let _ = writeln!(
+        out,
+        "fn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>) -> Material {{\n    switch id {{"
+    );
+    for (i, m) in program.materials.iter().enumerate() {
+        let mut attr = |v: &Value, what: &str| match field(v, &mut textures) {
+            Ok(e) => e,
+            Err(e) => {
+                problems.push(
+                    Diagnostic::error(codes::E_CODEGEN, format!("cannot generate the {what} of material `{}`: {}", m.name, e.0), program.defs[m.def].span, "in this material")
+                        .with_note("Implicit UVs land with the log map (Alg. 1); until then materials cannot use atlas fields in generated code"),
+                );
+                String::from("0.0")
+            }
+        };
+        let color = match m.color.ty().base() {
+            crate::sema::Ty::Vec(4) => format!("({}).rgb", attr(&m.color, "color")),
+            crate::sema::Ty::Vec(3) => attr(&m.color, "color"),
+            _ => format!("vec3<f32>({})", attr(&m.color, "color")),
+        };
+        let (r, mt, e) = (
+            attr(&m.roughness, "roughness"),
+            attr(&m.metallic, "metallic"),
+            attr(&m.emission, "emission"),
+        );
+        let _ = writeln!(out, "        case {}: {{\n            return Material({color}, {r}, {mt}, {e});\n        }}", i + 1);
+    }
+    let _ = writeln!(out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
+    if !problems.is_empty() {
+        return Err(problems);
+    }
+
+    let mut bindings = vec![Binding {
+        group: 0,
+        binding: 0,
+        name: "globals".into(),
+        kind: "uniform",
+        detail: "Globals".into(),
+        used_by: vec!["vs_main", "fs_main"],
+    }];
+    for (i, t) in textures.0.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "@group(0) @binding({}) var texture_{i}: texture_2d<f32>;",
+            1 + 2 * i
+        );
+        let _ = writeln!(
+            out,
+            "@group(0) @binding({}) var sampler_{i}: sampler;",
+            2 + 2 * i
+        );
+        bindings.push(Binding {
+            group: 0,
+            binding: 1 + 2 * i as u32,
+            name: format!("texture_{i}"),
+            kind: "texture-2d",
+            detail: t.path.clone(),
+            used_by: vec!["fs_main"],
+        });
+        bindings.push(Binding {
+            group: 0,
+            binding: 2 + 2 * i as u32,
+            name: format!("sampler_{i}"),
+            kind: "sampler",
+            detail: t.wrap.clone(),
+            used_by: vec!["fs_main"],
+        });
+    }
+    bindings.push(Binding {
+        group: 1,
+        binding: 0,
+        name: "grid".into(),
+        kind: "uniform",
+        detail: "GridParams".into(),
+        used_by: vec!["cs_grid"],
+    });
+    bindings.push(Binding {
+        group: 1,
+        binding: 1,
+        name: "points".into(),
+        kind: "storage-read",
+        detail: "array<vec4<f32>>".into(),
+        used_by: vec!["cs_points"],
+    });
+    bindings.push(Binding {
+        group: 1,
+        binding: 2,
+        name: "results".into(),
+        kind: "storage-read-write",
+        detail: "array<vec4<f32>>".into(),
+        used_by: vec!["cs_points", "cs_grid"],
+    });
+    out.push_str(ENTRY_POINTS);
+
+    let mut header = String::new();
+    let _ = writeln!(
+        header,
+        "// Generated by sdfc {}. Do not edit: regenerate from the scene.",
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(header, "//\n// Entry points: vs_main + fs_main (full-screen render), cs_points and cs_grid (compute, workgroup 64).\n// Bind groups:");
+    for b in &bindings {
+        let _ = writeln!(
+            header,
+            "//   @group({}) @binding({}) {} {}: {} (used by {})",
+            b.group,
+            b.binding,
+            b.kind,
+            b.name,
+            b.detail,
+            b.used_by.join(", ")
+        );
+    }
+    let _ = writeln!(
+        header,
+        "// Globals is {} vec4<f32> fields, in order: {}.",
+        GLOBALS_LAYOUT.len(),
+        GLOBALS_LAYOUT.join(", ")
+    );
+    let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
+    let wgsl = format!("{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{out}");
+    let manifest = Manifest {
+        entry_points: vec![
+            ("vs_main", "vertex"),
+            ("fs_main", "fragment"),
+            ("cs_points", "compute"),
+            ("cs_grid", "compute"),
+        ],
+        bindings,
+        globals_layout: GLOBALS_LAYOUT.to_vec(),
+        lipschitz: target.lipschitz(),
+        shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
+        textures: textures.0,
+    };
+    Ok(Module { wgsl, manifest })
+}
+
+fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
+    let mut w = Writer::new();
+    let d = w.shape(shape, shape.root(), "p");
+    let _ = writeln!(
+        out,
+        "fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {d};\n}}\n",
+        w.out
+    );
+}
+
+/// The scene-independent tail of every module: tracing, normals and entry points.
+const ENTRY_POINTS: &str = include_str!("entry.wgsl.in");

@@ -64,9 +64,11 @@ fn ui_snapshots() {
             insta::assert_snapshot!(name, snapshot);
         });
     }
+    // Codes from E0400 on come from code generation, after checking; tests/codegen.rs covers them.
     let missing: Vec<&str> = codes::ALL
         .iter()
         .map(|(c, _)| *c)
+        .filter(|c| c.starts_with('W') || *c < "E0400")
         .filter(|c| !seen_codes.contains(c))
         .collect();
     assert!(

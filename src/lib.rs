@@ -22,10 +22,12 @@ pub mod codes;
 pub mod diagnostic;
 pub mod driver;
 pub mod fsutil;
+pub mod gpu;
 pub mod ir;
 pub mod sema;
 pub mod span;
 pub mod syntax;
+pub mod view;
 
 pub use diagnostic::{Diagnostic, Severity};
 pub use span::Span;

@@ -23,5 +23,6 @@ fn main() -> ExitCode {
         Command::Check(args) => cli::check::run(args),
         Command::Eval(args) => cli::eval::run(args),
         Command::Compile(args) => cli::compile::run(args),
+        Command::Render(args) => cli::render::run(args),
     }
 }

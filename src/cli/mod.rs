@@ -3,6 +3,7 @@
 pub mod check;
 pub mod compile;
 pub mod eval;
+pub mod render;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Read;
@@ -37,6 +38,40 @@ pub enum Command {
     /// the scene has errors, 2 on usage or I/O problems, 3 on an internal compiler error
     /// (the generated WGSL is saved for the bug report).
     Compile(CompileArgs),
+    /// Render a scene headless to a PNG through wgpu (Vulkan, GL, Metal or DX12).
+    ///
+    /// Camera, size and light come from the scene's `render` item; the flags override
+    /// them. With no `render` item (or with --shape), the camera frames the shape.
+    /// Exit status: 0 on success, 1 when the scene has errors, 2 on usage or I/O
+    /// problems, 3 on an internal compiler error, 4 when no GPU adapter can be used.
+    Render(RenderArgs),
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The PNG to write (atomically).
+    #[arg(short, long, default_value = "out.png")]
+    pub output: PathBuf,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = render::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Render this named shape, framed automatically, instead of the `render` item.
+    #[arg(long)]
+    pub shape: Option<String>,
+    /// What to show.
+    #[arg(long, value_enum, default_value = "color")]
+    pub view: sdfc::gpu::ViewMode,
+    /// Also write a 32-bit float EXR: depth, normal, position or steps (repeatable).
+    #[arg(long, value_name = "NAME=FILE.exr", value_parser = render::parse_aov)]
+    pub aov: Vec<(String, PathBuf)>,
+    /// The graphics API.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: sdfc::gpu::Backend,
+    /// Print compile, pipeline, frame and readback times.
+    #[arg(long)]
+    pub timings: bool,
 }
 
 #[derive(clap::Args)]
@@ -119,6 +154,16 @@ pub fn base_dir(path: &Path) -> PathBuf {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     }
+}
+
+/// Reads and checks a scene without printing anything (it was checked already).
+pub fn load_quiet(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
+    let source = read_source(path).map_err(|_| std::process::ExitCode::from(2))?;
+    let analysis = sdfc::driver::analyze(&source, Some(&base_dir(path)));
+    if analysis.has_errors() {
+        return Err(std::process::ExitCode::from(1));
+    }
+    Ok((source, analysis))
 }
 
 /// Reads and checks a scene for the commands that need a valid one: prints its

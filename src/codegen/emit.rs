@@ -167,7 +167,10 @@ impl Writer {
                     let l = self.fresh("l");
                     self.line(&format!("let {l} = length({p});"));
                     self.line(&format!("var {d}: vec2<f32>;"));
-                    self.line(&format!("if ({l} > {}) {{", lit(*radius)));
+                    self.line(&format!(
+                        "if ({l} > {}) {{",
+                        lit(crate::ir::warp_outer(*radius))
+                    ));
                     self.indent += 1;
                     self.line(&format!("{d} = vec2<f32>({l} - {}, 0.0);", lit(*radius)));
                     self.indent -= 1;

@@ -247,7 +247,11 @@ impl Lowerer<'_> {
                 // A point at distance R from the axis moves sideways by up to |rate|·R per unit
                 // along it; the field's gradient grows to at most √(1 + (rate·R)²).
                 let bounded = b.radius_from_origin();
-                let r = if bounded.is_finite() { bounded } else { 10.0 };
+                let r = if bounded.is_finite() {
+                    warp_outer(bounded)
+                } else {
+                    10.0
+                };
                 let radius = bounded;
                 let stretch = (1.0 + (rate * r).powi(2)).sqrt();
                 let bounds = Aabb::centered(DVec3::splat(r));

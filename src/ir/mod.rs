@@ -117,8 +117,10 @@ pub enum Op {
     },
     /// Twist about `axis` (through the origin) by `rate` radians per unit length.
     /// `frame` maps world to a frame whose y is the axis. Warps are rotations about the
-    /// origin, so the result lies within `radius` (the child's bound) of the origin; beyond
-    /// it the distance is `|p| - radius`, which keeps the Lipschitz bound valid everywhere.
+    /// origin, so the result lies within `radius` (the child's bound) of the origin.
+    /// Beyond [`warp_outer`]`(radius)` the distance is the lower bound `|p| - radius`,
+    /// which keeps the Lipschitz bound valid everywhere without stopping rays on the
+    /// bounding sphere itself.
     Twist {
         frame: DMat3,
         rate: f64,
@@ -160,6 +162,12 @@ pub enum Op {
         material: u32,
         child: NodeId,
     },
+}
+
+/// Where a twist or bend switches to the bounding-sphere distance: a margin
+/// beyond its bound, so that a ray stepping onto the bound lands inside the warp.
+pub fn warp_outer(radius: f64) -> f64 {
+    radius * 1.05 + 1e-3
 }
 
 /// An axis-aligned bound; infinite for unbounded shapes (planes, repetition).

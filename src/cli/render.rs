@@ -1,0 +1,180 @@
+//! `sdfc render`: a scene → PNG (and float EXR AOVs), headless, through wgpu.
+
+use super::{compile, RenderArgs};
+use sdfc::fsutil::write_atomic;
+use sdfc::gpu::{self, Frame, Gpu};
+use sdfc::ir;
+use sdfc::view::View;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Exit status when no GPU can be used.
+pub const GPU_EXIT: u8 = 4;
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, found {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!("size {s:?} must be between 1x1 and 16384x16384"));
+    }
+    Ok((w, h))
+}
+
+/// Parses `NAME=FILE.exr`.
+pub fn parse_aov(s: &str) -> Result<(String, PathBuf), String> {
+    let (name, file) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=FILE.exr, found {s:?}"))?;
+    if !["depth", "normal", "position", "steps"].contains(&name) {
+        return Err(format!(
+            "unknown AOV {name:?}: choose depth, normal, position or steps"
+        ));
+    }
+    Ok((name.to_string(), PathBuf::from(file)))
+}
+
+fn write_exr(path: &Path, frame: &Frame, name: &str) -> Result<(), String> {
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let texel = |x: usize, y: usize| -> (f32, f32, f32) {
+        let i = y * w + x;
+        let (p, n) = (frame.position[i], frame.normal[i]);
+        match name {
+            "depth" => (p[3], p[3], p[3]),
+            "position" => (p[0], p[1], p[2]),
+            "normal" => (n[0], n[1], n[2]),
+            _ => (n[3], n[3], n[3]),
+        }
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let tmp = tempfile::Builder::new()
+        .suffix(".exr")
+        .tempfile_in(dir)
+        .map_err(|e| e.to_string())?;
+    exr::prelude::write_rgb_file(tmp.path(), w, h, texel).map_err(|e| e.to_string())?;
+    tmp.persist(path).map_err(|e| e.error.to_string())?;
+    Ok(())
+}
+
+fn encode_png(frame: &Frame) -> Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    let img = image::RgbaImage::from_raw(frame.width, frame.height, frame.color.clone())
+        .ok_or("frame size mismatch")?;
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+pub fn run(args: RenderArgs) -> ExitCode {
+    let compile_start = Instant::now();
+    let (module, _) = match compile::build(&args.scene, args.shape.as_deref()) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let compile_time = compile_start.elapsed();
+    // The same analysis again is cheap; it gives the render settings and the shape.
+    let (_, analysis) = match super::load_quiet(&args.scene) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let scene = ir::lower(&analysis.program);
+    let shape = match super::eval::pick_shape(&scene, args.shape.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let render_item = if args.shape.is_some() {
+        None
+    } else {
+        analysis.program.render.as_ref()
+    };
+    let mut view = View::new(render_item, &shape);
+    if let Some((w, h)) = args.size {
+        view.width = w;
+        view.height = h;
+    }
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(GPU_EXIT);
+        }
+    };
+    let frame = match gpu::render(
+        &gpu,
+        &module.wgsl,
+        &module.manifest,
+        &view,
+        args.view,
+        &super::base_dir(&args.scene),
+    ) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(GPU_EXIT);
+        }
+    };
+    let png = match encode_png(&frame) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: cannot encode the image: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if let Err(e) = write_atomic(&args.output, &png) {
+        eprintln!("error: cannot write {}: {e}", args.output.display());
+        return ExitCode::from(2);
+    }
+    for (name, path) in &args.aov {
+        if let Err(e) = write_exr(path, &frame, name) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(2);
+        }
+    }
+    if args.timings {
+        let t = &frame.timings;
+        eprintln!("adapter:   {}", gpu.describe());
+        eprintln!(
+            "compile:   {:.2} ms (parse → validated WGSL)",
+            compile_time.as_secs_f64() * 1e3
+        );
+        eprintln!("pipeline:  {:.2} ms", t.pipeline.as_secs_f64() * 1e3);
+        eprintln!(
+            "frame:     {:.2} ms ({}, {}x{})",
+            t.frame.as_secs_f64() * 1e3,
+            if t.frame_from_timestamps {
+                "GPU timestamps"
+            } else {
+                "submit to complete"
+            },
+            frame.width,
+            frame.height
+        );
+        eprintln!("readback:  {:.2} ms", t.readback.as_secs_f64() * 1e3);
+    }
+    eprintln!(
+        "wrote {} ({}x{})",
+        args.output.display(),
+        frame.width,
+        frame.height
+    );
+    ExitCode::SUCCESS
+}

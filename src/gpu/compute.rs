@@ -1,0 +1,132 @@
+//! GPU queries through the generated `cs_points` entry point.
+
+use super::{Gpu, GpuError};
+use glam::DVec3;
+
+/// Distance and gradient at each point, from the generated compute shader:
+/// `(distance, gradient.x, gradient.y, gradient.z)` per point.
+pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 4]>, GpuError> {
+    if points.is_empty() {
+        return Ok(Vec::new());
+    }
+    let d = &gpu.device;
+    let data: Vec<[f32; 4]> = points
+        .iter()
+        .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
+        .collect();
+    let size = (data.len() * 16) as u64;
+    let (pipeline, group0, group1, input, output, readback) = gpu.scoped(|| {
+        use wgpu::util::DeviceExt;
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene"),
+            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let storage = |read_only| wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let empty = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("empty"),
+            entries: &[],
+        });
+        let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("queries"),
+            entries: &[
+                entry(0, uniform),
+                entry(1, storage(true)),
+                entry(2, storage(false)),
+            ],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("queries"),
+            bind_group_layouts: &[Some(&empty), Some(&layout1)],
+            immediate_size: 0,
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("cs_points"),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some("cs_points"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grid"),
+            contents: &[0u8; 48],
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let input = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("points"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let output = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("results"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("empty"),
+            layout: &empty,
+            entries: &[],
+        });
+        let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("queries"),
+            layout: &layout1,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: grid.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: input.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: output.as_entire_binding(),
+                },
+            ],
+        });
+        (pipeline, group0, group1, input, output, readback)
+    })?;
+    let _keep = &input;
+    gpu.scoped(|| {
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("queries"),
+        });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("queries"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &group0, &[]);
+            pass.set_bind_group(1, &group1, &[]);
+            pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
+        }
+        enc.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
+        gpu.queue.submit([enc.finish()]);
+    })?;
+    let bytes = gpu.read_buffer(&readback)?;
+    Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec())
+}

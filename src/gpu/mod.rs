@@ -1,0 +1,164 @@
+//! The wgpu runtime: adapters, headless rendering with readback, and compute
+//! queries. Every fallible wgpu call runs inside an error scope, so a device
+//! error becomes a [`GpuError`], never a panic.
+
+mod compute;
+mod render;
+
+pub use compute::eval_points;
+pub use render::{render, Frame, Timings, ViewMode};
+
+use std::fmt;
+use std::sync::Arc;
+
+/// Which graphics API to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The best available adapter.
+    Auto,
+    Vulkan,
+    Gl,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum GpuError {
+    /// No adapter at all.
+    NoAdapter(String),
+    /// The adapter would not give a device.
+    Device(String),
+    /// wgpu reported a validation or out-of-memory error.
+    Validation(String),
+    /// A texture file could not be read.
+    Texture(String),
+}
+
+impl fmt::Display for GpuError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            GpuError::NoAdapter(why) => write!(
+                f,
+                "no GPU adapter is available ({why}).\n  On Debian or Ubuntu, install Mesa's drivers, which include software adapters:\n      apt-get install mesa-vulkan-drivers libgl1-mesa-dri"
+            ),
+            GpuError::Device(e) => write!(f, "the GPU adapter could not open a device: {e}"),
+            GpuError::Validation(e) => write!(f, "the GPU rejected a command: {e}"),
+            GpuError::Texture(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for GpuError {}
+
+/// An open device.
+pub struct Gpu {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Whether GPU timestamps are available for frame timing.
+    pub timestamps: bool,
+}
+
+impl Gpu {
+    /// Opens the best adapter of the requested kind.
+    pub fn new(backend: Backend) -> Result<Gpu, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+        match backend {
+            Backend::Auto => {}
+            Backend::Vulkan => desc.backends = wgpu::Backends::VULKAN,
+            Backend::Gl => desc.backends = wgpu::Backends::GL,
+        }
+        let instance = wgpu::Instance::new(desc);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let required_features = if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("sdfc"),
+            required_features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        // Errors outside a scope are reported, not turned into panics.
+        device.on_uncaptured_error(Arc::new(|e| eprintln!("wgpu: {e}")));
+        let info = adapter.get_info();
+        Ok(Gpu {
+            adapter,
+            device,
+            queue,
+            info,
+            timestamps,
+        })
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes.
+    pub fn scoped<T>(&self, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match v.or(o) {
+            Some(e) => Err(GpuError::Validation(e.to_string())),
+            None => Ok(out),
+        }
+    }
+
+    /// Waits for all submitted work.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device(e.to_string()))
+    }
+
+    /// Maps a readback buffer and copies its bytes out.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Device(e.to_string()))?
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        let bytes = buffer
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Device(e.to_string()))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+
+    /// A one-line description of the adapter.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+}
+
+/// For tests: an open GPU, or `None` after saying loudly why the test is skipped.
+/// With `SDFC_REQUIRE_GPU=1` a missing adapter is a failure instead.
+pub fn gpu_for_tests() -> Option<Gpu> {
+    match Gpu::new(Backend::Auto) {
+        Ok(g) => Some(g),
+        Err(e) => {
+            if std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+                panic!("SDFC_REQUIRE_GPU=1 but {e}");
+            }
+            eprintln!("SKIPPING GPU TEST: {e}");
+            None
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! What a render sees: the camera, the sun and the tracing limits, resolved
+//! from the scene's `render` item (or framed automatically), plus the f64 CPU
+//! sphere trace that the GPU renderer is tested against.
+
+use crate::ir::{eval, Shape};
+use crate::sema::{RenderDef, Value};
+use glam::DVec3;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub eye: DVec3,
+    pub forward: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view in radians.
+    pub fov: f64,
+}
+
+impl Camera {
+    pub fn look_at(eye: DVec3, target: DVec3, fov: f64) -> Camera {
+        let forward = (target - eye).try_normalize().unwrap_or(DVec3::NEG_Z);
+        let helper = if forward.cross(DVec3::Y).length() < 1e-6 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
+        let right = forward.cross(helper).normalize();
+        let up = right.cross(forward);
+        Camera {
+            eye,
+            forward,
+            right,
+            up,
+            fov,
+        }
+    }
+
+    /// `orbit(target, distance, yaw, pitch, fov)`: yaw 0 looks along -z from +z.
+    pub fn orbit(target: DVec3, distance: f64, yaw: f64, pitch: f64, fov: f64) -> Camera {
+        let dir = DVec3::new(
+            pitch.cos() * yaw.sin(),
+            pitch.sin(),
+            pitch.cos() * yaw.cos(),
+        );
+        Camera::look_at(target + dir * distance, target, fov)
+    }
+
+    /// Frames a shape's bounds from a three-quarter view.
+    pub fn frame(shape: &Shape) -> Camera {
+        let b = shape.framing_bounds();
+        let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
+        let fov = 45f64.to_radians();
+        Camera::orbit(
+            b.center(),
+            radius / (fov * 0.5).sin() * 1.1,
+            30f64.to_radians(),
+            20f64.to_radians(),
+            fov,
+        )
+    }
+
+    /// The ray direction through a pixel position (pixel centres at +0.5; y grows downwards),
+    /// exactly as `camera_ray` in shaders/render.wgsl computes it.
+    pub fn ray(&self, px: f64, py: f64, width: f64, height: f64) -> DVec3 {
+        let ndc_x = 2.0 * px / width - 1.0;
+        let ndc_y = 1.0 - 2.0 * py / height;
+        let t = (self.fov * 0.5).tan();
+        (self.forward + ndc_x * (width / height) * t * self.right + ndc_y * t * self.up).normalize()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    /// Unit direction towards the sun.
+    pub direction: DVec3,
+    pub color: DVec3,
+    pub intensity: f64,
+}
+
+impl Default for Sun {
+    fn default() -> Self {
+        Sun {
+            direction: DVec3::new(0.5, 1.0, 0.3).normalize(),
+            color: DVec3::ONE,
+            intensity: 3.0,
+        }
+    }
+}
+
+/// Everything a render needs besides the shader.
+#[derive(Debug, Clone, PartialEq)]
+pub struct View {
+    pub camera: Camera,
+    pub sun: Sun,
+    pub width: u32,
+    pub height: u32,
+    pub background: DVec3,
+    pub ambient: f64,
+    /// Rays stop at this distance.
+    pub far: f64,
+    /// A hit is |d| < epsilon · max(t, 1).
+    pub epsilon: f64,
+    pub max_steps: u32,
+    /// The size of the scene, for normal and shadow offsets.
+    pub scale: f64,
+}
+
+fn vec3(v: &Value) -> Option<DVec3> {
+    v.as_vec3().map(DVec3::from_array)
+}
+
+impl View {
+    /// Resolves the view from the render item (when there is one) for a shape.
+    pub fn new(render: Option<&RenderDef>, shape: &Shape) -> View {
+        let camera = render
+            .and_then(|r| r.camera.as_ref())
+            .and_then(|c| match c {
+                Value::Camera(n) if n.builtin == "orbit" => {
+                    let f = |i: usize| n.args[i].as_float();
+                    Some(Camera::orbit(vec3(&n.args[0])?, f(1)?, f(2)?, f(3)?, f(4)?))
+                }
+                Value::Camera(n) if n.builtin == "look_at" => Some(Camera::look_at(
+                    vec3(&n.args[0])?,
+                    vec3(&n.args[1])?,
+                    n.args[2].as_float()?,
+                )),
+                _ => None,
+            });
+        let camera = camera.unwrap_or_else(|| Camera::frame(shape));
+        let sun = render
+            .and_then(|r| r.light.as_ref())
+            .and_then(|l| match l {
+                Value::Light(n) => Some(Sun {
+                    direction: vec3(&n.args[0])?.normalize(),
+                    color: vec3(&n.args[1])?,
+                    intensity: n.args[2].as_float()?,
+                }),
+                _ => None,
+            })
+            .unwrap_or_default();
+        let b = shape.framing_bounds();
+        let scale = (b.max - b.min).max_element().max(1e-3);
+        let far = ((camera.eye - b.center()).length() + (b.max - b.min).length()) * 2.0;
+        let far = if shape.root_node().bounds.is_finite() {
+            far
+        } else {
+            far.max(100.0 * scale)
+        };
+        let (width, height) = render.map(|r| (r.size[0], r.size[1])).unwrap_or((960, 540));
+        View {
+            camera,
+            sun,
+            width,
+            height,
+            background: render
+                .map(|r| DVec3::from_array(r.background))
+                .unwrap_or(DVec3::new(0.05, 0.06, 0.08)),
+            ambient: render.map(|r| r.ambient).unwrap_or(0.15),
+            far,
+            epsilon: 1e-4,
+            max_steps: 256,
+            scale,
+        }
+    }
+}
+
+/// A CPU sphere-trace hit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    pub t: f64,
+    pub position: DVec3,
+    pub normal: DVec3,
+    pub material: u32,
+}
+
+/// Sphere tracing in f64 with the same rule as the shader; `step_scale` ≤ 1 makes it
+/// more conservative than the shader (the coverage reference for warps).
+pub fn trace_cpu(
+    shape: &Shape,
+    view: &View,
+    dir: DVec3,
+    step_scale: f64,
+    max_steps: u32,
+) -> Option<Hit> {
+    let l = shape.lipschitz().max(1.0);
+    let mut t = 0.0;
+    for _ in 0..max_steps {
+        let p = view.camera.eye + dir * t;
+        let (d, material) = eval::eval(shape, p);
+        if d.abs() < view.epsilon * t.max(1.0) {
+            return Some(Hit {
+                t,
+                position: p,
+                normal: eval::gradient(shape, p).normalize(),
+                material,
+            });
+        }
+        t += d / l * step_scale;
+        if t > view.far {
+            return None;
+        }
+    }
+    None
+}

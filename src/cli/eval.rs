@@ -88,7 +88,32 @@ pub fn run(args: EvalArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let results = eval::query_all(&shape, &points);
+    let mut results = eval::query_all(&shape, &points);
+    if args.gpu {
+        let module = match super::compile::build(&args.scene, args.shape.as_deref()) {
+            Ok((m, _)) => m,
+            Err(code) => return code,
+        };
+        let gpu = match sdfc::gpu::Gpu::new(args.backend) {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(super::render::GPU_EXIT);
+            }
+        };
+        match sdfc::gpu::eval_points(&gpu, &module.wgsl, &points) {
+            Ok(values) => {
+                for (q, v) in results.iter_mut().zip(values) {
+                    q.distance = v[0] as f64;
+                    q.gradient = DVec3::new(v[1] as f64, v[2] as f64, v[3] as f64);
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(super::render::GPU_EXIT);
+            }
+        }
+    }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for q in results {

@@ -133,6 +133,13 @@ pub struct EvalArgs {
     /// A JSON file of points `[[x, y, z], …]`; `-` reads standard input.
     #[arg(long, default_value = "-")]
     pub points: PathBuf,
+    /// Evaluate on the GPU through the generated compute shader (f32) instead of the
+    /// CPU reference (f64); `surface` is then the CPU projection of the point.
+    #[arg(long)]
+    pub gpu: bool,
+    /// The graphics API for --gpu.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: sdfc::gpu::Backend,
 }
 
 pub fn read_source(path: &Path) -> std::io::Result<String> {

@@ -170,7 +170,7 @@ fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
             let (d, m) = eval_node(shape, *child, p / *factor);
             (d * factor.min_element(), m)
         }
-        Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > *radius => {
+        Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > warp_outer(*radius) => {
             (p.length() - radius, 0)
         }
         Op::Twist {

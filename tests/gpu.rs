@@ -1,0 +1,358 @@
+//! GPU tests on whatever adapter is present (lavapipe or llvmpipe in CI). Each test
+//! skips loudly without an adapter, and fails instead when SDFC_REQUIRE_GPU=1.
+
+use glam::DVec3;
+use sdfc::codegen;
+use sdfc::driver::analyze;
+use sdfc::gpu::{self, gpu_for_tests, Frame, ViewMode};
+use sdfc::ir::{self, eval};
+use sdfc::view::{trace_cpu, View};
+use std::path::Path;
+
+struct Compiled {
+    module: codegen::Module,
+    shape: ir::Shape,
+    view: View,
+}
+
+fn compile(src: &str, size: (u32, u32)) -> Compiled {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let a = analyze(src, Some(&dir));
+    assert!(!a.has_errors(), "{:?}", a.diagnostics);
+    let scene = ir::lower(&a.program);
+    let module = codegen::generate(&a.program, &scene, None).unwrap();
+    codegen::validate(&module.wgsl).unwrap();
+    let shape = scene.render.clone().unwrap();
+    let mut view = View::new(a.program.render.as_ref(), &shape);
+    view.width = size.0;
+    view.height = size.1;
+    Compiled {
+        module,
+        shape,
+        view,
+    }
+}
+
+fn render(gpu: &gpu::Gpu, c: &Compiled, mode: ViewMode) -> Frame {
+    gpu::render(
+        gpu,
+        &c.module.wgsl,
+        &c.module.manifest,
+        &c.view,
+        mode,
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+    )
+    .unwrap()
+}
+
+fn random_points(n: usize, half: f64, seed: u64) -> Vec<DVec3> {
+    let mut s = seed;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    (0..n)
+        .map(|_| DVec3::new(next(), next(), next()) * half)
+        .collect()
+}
+
+#[test]
+fn gpu_eval_agrees_with_cpu() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let scenes = [
+        "render sphere(0.8);",
+        "render box([1, 0.6, 0.8]).rotate(axis: [1, 1, 0], angle: 30deg);",
+        "render torus(0.7, 0.2) | capsule([0, -0.8, 0], [0, 0.8, 0], 0.15);",
+        "render smooth_union(sphere(0.5).translate([0.3, 0, 0]), box(0.6), 0.2) - cylinder(0.2, 2);",
+        "render box([0.6, 1.5, 0.6]).twist(rate: 1.2);",
+        "render octahedron(0.7).scale([1, 0.5, 1.5]);",
+    ];
+    for src in scenes {
+        let c = compile(src, (16, 16));
+        let points = random_points(4000, 1.5, 0x1234_5678_9ABC_DEF1);
+        let gpu_values = gpu::eval_points(&gpu, &c.module.wgsl, &points).unwrap();
+        assert_eq!(gpu_values.len(), points.len());
+        let mut worst = 0.0f64;
+        let b = c.shape.framing_bounds();
+        let scale = ((b.max - b.min).max_element().max(1e-3) as f32) as f64;
+        for (p, g) in points.iter().zip(&gpu_values) {
+            let cpu = eval::distance(&c.shape, *p);
+            let err = (cpu - g[0] as f64).abs();
+            worst = worst.max(err);
+            assert!(err <= 1e-5, "{src}: at {p}: GPU {} vs CPU {cpu}", g[0]);
+            // The GPU gradient is a central difference with step 1e-3 · scale, in f32;
+            // compare it with the same difference in f64.
+            let h = 1e-3 * scale;
+            let fd = |e: DVec3| {
+                (eval::distance(&c.shape, *p + e * h) - eval::distance(&c.shape, *p - e * h))
+                    / (2.0 * h)
+            };
+            let cpu_grad = DVec3::new(fd(DVec3::X), fd(DVec3::Y), fd(DVec3::Z));
+            let gg = DVec3::new(g[1] as f64, g[2] as f64, g[3] as f64);
+            assert!(
+                (cpu_grad - gg).length() < 2e-3,
+                "{src}: gradient at {p}: GPU {gg} vs CPU {cpu_grad}"
+            );
+        }
+        eprintln!(
+            "{src}: max |GPU − CPU| distance over {} points = {worst:.2e}",
+            points.len()
+        );
+    }
+}
+
+#[test]
+fn depth_and_normals_match_the_cpu_trace() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let c = compile(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/primitives.sdf"),
+        )
+        .unwrap(),
+        (160, 90),
+    );
+    let frame = render(&gpu, &c, ViewMode::Color);
+    let (mut compared, mut silhouette) = (0, 0);
+    for y in (0..c.view.height).step_by(3) {
+        for x in (0..c.view.width).step_by(3) {
+            let i = (y * c.view.width + x) as usize;
+            let dir = c.view.camera.ray(
+                x as f64 + 0.5,
+                y as f64 + 0.5,
+                c.view.width as f64,
+                c.view.height as f64,
+            );
+            let cpu = trace_cpu(&c.shape, &c.view, dir, 1.0, c.view.max_steps);
+            let gpu_t = frame.position[i][3];
+            match cpu {
+                Some(hit) if gpu_t >= 0.0 => {
+                    compared += 1;
+                    let dt = (hit.t - gpu_t as f64).abs();
+                    let n = DVec3::new(
+                        frame.normal[i][0] as f64,
+                        frame.normal[i][1] as f64,
+                        frame.normal[i][2] as f64,
+                    );
+                    let angle = hit.normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees();
+                    // Tolerances: depth within 1e-3 of the scene size, normals within 3 degrees,
+                    // except near edges where neighbouring rays see different faces.
+                    if dt > 1e-3 * c.view.scale || angle > 3.0 {
+                        silhouette += 1;
+                    }
+                }
+                None if gpu_t < 0.0 => {}
+                _ => silhouette += 1,
+            }
+        }
+    }
+    let total = (c.view.width.div_ceil(3) * c.view.height.div_ceil(3)) as f64;
+    assert!(compared > 500, "only {compared} pixels hit");
+    assert!(
+        (silhouette as f64) / total < 0.02,
+        "{silhouette} of {total} sampled pixels disagree with the CPU trace"
+    );
+}
+
+#[test]
+fn warped_boxes_render_without_holes() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    for src in [
+        "render box([0.8, 2.5, 0.8]).twist(rate: 1.5);",
+        "render box([3, 0.4, 0.8]).bend(rate: 0.7);",
+    ] {
+        let c = compile(src, (128, 128));
+        let frame = render(&gpu, &c, ViewMode::Color);
+        let (mut reference_hits, mut holes) = (0, 0);
+        for y in 0..c.view.height {
+            for x in 0..c.view.width {
+                let dir = c.view.camera.ray(
+                    x as f64 + 0.5,
+                    y as f64 + 0.5,
+                    c.view.width as f64,
+                    c.view.height as f64,
+                );
+                // Conservative reference: half steps, four times as many.
+                if trace_cpu(&c.shape, &c.view, dir, 0.5, c.view.max_steps * 4).is_some() {
+                    reference_hits += 1;
+                    if frame.position[(y * c.view.width + x) as usize][3] < 0.0 {
+                        holes += 1;
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "{src}: {holes} holes in {reference_hits} pixels the conservative CPU trace covers"
+        );
+        assert!(
+            reference_hits > 300,
+            "{src}: the reference saw only {reference_hits} pixels"
+        );
+        // Anti-aliasing-free edges may differ by a pixel; holes inside would be many more.
+        assert!(
+            holes as f64 <= 0.01 * reference_hits as f64,
+            "{src}: {holes} holes in {reference_hits} covered pixels"
+        );
+    }
+}
+
+/// Mean absolute difference per channel (0–255) and the share of pixels that differ
+/// by more than 16 in any channel.
+fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
+    let mut sum = 0u64;
+    let mut bad = 0usize;
+    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+        let mut worst = 0;
+        for k in 0..3 {
+            let d = (pa[k] as i32 - pb[k] as i32).unsigned_abs();
+            sum += d as u64;
+            worst = worst.max(d);
+        }
+        if worst > 16 {
+            bad += 1;
+        }
+    }
+    let n = (a.len() / 4) as f64;
+    (sum as f64 / (n * 3.0), bad as f64 / n)
+}
+
+#[test]
+fn primitives_match_the_reference_image() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/primitives.sdf"),
+    )
+    .unwrap();
+    let c = compile(&src, (320, 180));
+    let frame = render(&gpu, &c, ViewMode::Color);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/primitives.png");
+    if std::env::var("SDFC_BLESS").is_ok_and(|v| v == "1") {
+        image::RgbaImage::from_raw(frame.width, frame.height, frame.color.clone())
+            .unwrap()
+            .save(&path)
+            .unwrap();
+    }
+    let reference = image::open(&path)
+        .expect("tests/reference/primitives.png (SDFC_BLESS=1 writes it)")
+        .to_rgba8();
+    assert_eq!(reference.dimensions(), (frame.width, frame.height));
+    let (mean, share) = image_difference(reference.as_raw(), &frame.color);
+    eprintln!(
+        "primitives vs reference: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16",
+        share * 100.0
+    );
+    // Metric and threshold: mean absolute difference ≤ 1.5/255 and at most 0.5% of pixels
+    // off by more than 16/255 (software rasterizers differ slightly in transcendentals).
+    assert!(mean <= 1.5 && share <= 0.005, "mean {mean}, share {share}");
+}
+
+#[test]
+fn render_command_writes_png_and_exr() {
+    if gpu_for_tests().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("w.png");
+    let depth = dir.path().join("depth.exr");
+    let normal = dir.path().join("normal.exr");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args([
+            "render",
+            "examples/warps.sdf",
+            "-o",
+            png.to_str().unwrap(),
+            "--size",
+            "64x36",
+            "--timings",
+        ])
+        .args([
+            "--aov",
+            &format!("depth={}", depth.display()),
+            "--aov",
+            &format!("normal={}", normal.display()),
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    for line in ["compile:", "pipeline:", "frame:", "readback:"] {
+        assert!(err.contains(line), "--timings lacks {line}: {err}");
+    }
+    assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (64, 36));
+    let exr = exr::prelude::read_first_rgba_layer_from_file(
+        &depth,
+        |res, _| vec![vec![0.0f32; res.width()]; res.height()],
+        |px: &mut Vec<Vec<f32>>, pos, (r, _g, _b, _a): (f32, f32, f32, f32)| {
+            px[pos.y()][pos.x()] = r
+        },
+    )
+    .unwrap();
+    let depths: Vec<f32> = exr
+        .layer_data
+        .channel_data
+        .pixels
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    assert_eq!(depths.len(), 64 * 36);
+    assert!(
+        depths.iter().any(|d| *d > 0.0) && depths.iter().any(|d| *d < 0.0),
+        "depth AOV has hits and misses"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        3,
+        "stray temporary files"
+    );
+}
+
+#[test]
+fn eval_command_on_the_gpu_matches_the_cpu() {
+    if gpu_for_tests().is_none() {
+        return;
+    }
+    use std::io::Write;
+    let run = |gpu: bool| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"));
+        cmd.args(["eval", "examples/warps.sdf", "--shape", "twisted"]);
+        if gpu {
+            cmd.arg("--gpu");
+        }
+        let mut child = cmd
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(b"[[-3, 0, 0.2], [-2.5, 0.5, 0], [0, 0, 0], [-3, 1.2, 0.4]]")
+            .unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .map(|l| {
+                serde_json::from_str::<serde_json::Value>(l).unwrap()["distance"]
+                    .as_f64()
+                    .unwrap()
+            })
+            .collect::<Vec<f64>>()
+    };
+    let (cpu, gpu) = (run(false), run(true));
+    assert_eq!(cpu.len(), 4);
+    for (c, g) in cpu.iter().zip(&gpu) {
+        assert!((c - g).abs() < 1e-5, "CPU {c} vs GPU {g}");
+    }
+}

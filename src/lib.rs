@@ -27,6 +27,7 @@ pub mod ir;
 pub mod sema;
 pub mod span;
 pub mod syntax;
+pub mod uv;
 pub mod view;
 
 pub use diagnostic::{Diagnostic, Severity};

@@ -373,7 +373,7 @@ const fn set(
 pub static ATLAS_SETTINGS: &[SettingSpec] = &[
     set("steps", Float, Some(F(20.0)), Check::None, false, "N: the number of steps of every geodesic walk, a whole number in 1..=64."),
     set("max_distance", Float, Some(F(3.0)), Check::Positive, false, "D: points farther than this (Euclidean, then geodesic) from a seed get status too_far."),
-    set("heuristic_tolerance", Float, Some(F(1e-3)), Check::Positive, false, "ε1: the walk fails (heuristic_failed) when the tangent direction to the seed is shorter than this."),
+    set("heuristic_tolerance", Float, Some(F(1e-3)), Check::Positive, false, "ε1: the walk fails (heuristic_failed) when the tangent part of the direction to the seed is shorter than ε1 times its length."),
     set("sharp_tolerance", Float, Some(F(0.015)), Check::Positive, false, "ε2: the walk stops at a sharp feature when consecutive normals satisfy n_i·n_{i+1} < 1 - ε2."),
     set("min_reach", Float, Some(F(0.01)), Check::Positive, false, "r_min: the walk fails (not_reached) when it ends farther than this from the seed."),
     set("reproject", Bool, Some(Dflt::B(false)), Check::None, false, "Project every step back onto the surface (Eq. 18)."),

@@ -46,6 +46,7 @@ codes! {
     E_IMAGE_FORMAT = "E0304": "a texture file in a format sdfc cannot read";
     E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
     E_CODEGEN = "E0400": "a scene the code generator cannot compile yet";
+    E_SEED_PROJECTION = "E0401": "a seed that cannot be projected onto its atlas's surface";
     E_INTERNAL = "E0900": "an internal compiler error: naga rejected generated code";
     W_UNUSED = "W0001": "a `let` binding that is never used";
     W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";

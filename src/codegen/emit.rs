@@ -3,7 +3,7 @@
 //! functions it calls live in `shaders/*.wgsl`.
 
 use crate::ir::{Csg, NodeId, Op, Prim, Shape};
-use crate::sema::{FieldExpr, SurfaceInput, Ty, Value};
+use crate::sema::{AtlasAttr, FieldExpr, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use glam::{DMat3, DVec3};
 use std::fmt::Write;
@@ -245,26 +245,31 @@ pub struct TextureUse {
     pub wrap: String,
 }
 
-/// Textures in binding order; texture `i` binds at 1 + 2i, its sampler at 2 + 2i.
+/// What surface fields need from the module: textures in binding order (texture `i`
+/// binds at 1 + 2i, its sampler at 2 + 2i) and the atlases they sample.
 #[derive(Debug, Default)]
-pub struct Textures(pub Vec<TextureUse>);
+pub struct Uses {
+    pub textures: Vec<TextureUse>,
+    /// Atlas indices read by the expressions generated since the last reset.
+    pub atlases: std::collections::BTreeSet<usize>,
+}
 
-impl Textures {
+impl Uses {
     fn index(&mut self, path: &str, wrap: &str) -> usize {
         let u = TextureUse {
             path: path.to_string(),
             wrap: wrap.to_string(),
         };
-        if let Some(i) = self.0.iter().position(|x| *x == u) {
+        if let Some(i) = self.textures.iter().position(|x| *x == u) {
             return i;
         }
-        self.0.push(u);
-        self.0.len() - 1
+        self.textures.push(u);
+        self.textures.len() - 1
     }
 }
 
 /// A surface field (or constant) as a WGSL expression over `p` (position) and `n` (normal).
-pub fn field(v: &Value, tex: &mut Textures) -> Result<String, Unsupported> {
+pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
     Ok(match v {
         Value::Float(x) => lit(*x),
         Value::Bool(b) => b.to_string(),
@@ -276,10 +281,16 @@ pub fn field(v: &Value, tex: &mut Textures) -> Result<String, Unsupported> {
         Value::Field(expr, ty) => match &**expr {
             FieldExpr::Input(SurfaceInput::Position) => String::from("p"),
             FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
-            FieldExpr::Atlas { .. } => {
-                return Err(Unsupported(String::from(
-                    "Implicit UV fields (`ATLAS.uv`, …) are not generated yet",
-                )))
+            FieldExpr::Atlas { atlas, attr } => {
+                tex.atlases.insert(*atlas);
+                let name = match attr {
+                    AtlasAttr::Uv => "uv",
+                    AtlasAttr::Distance => "distance",
+                    AtlasAttr::Status => "status",
+                    AtlasAttr::Transport => "transport",
+                    AtlasAttr::Seed => "seed",
+                };
+                format!("atlas_sample_{atlas}.{name}")
             }
             FieldExpr::Unary { op, operand } => {
                 let o = field(operand, tex)?;
@@ -308,7 +319,7 @@ pub fn field(v: &Value, tex: &mut Textures) -> Result<String, Unsupported> {
 }
 
 /// Broadcasts a float operand to the vector type of the result where WGSL needs it.
-fn widen(v: &Value, to: &Ty, tex: &mut Textures) -> Result<String, Unsupported> {
+fn widen(v: &Value, to: &Ty, tex: &mut Uses) -> Result<String, Unsupported> {
     let e = field(v, tex)?;
     Ok(match (v.ty().base(), to) {
         (Ty::Float, Ty::Vec(n)) => format!("vec{n}<f32>({e})"),
@@ -321,7 +332,7 @@ fn binary(
     l: &Value,
     r: &Value,
     ty: &Ty,
-    tex: &mut Textures,
+    tex: &mut Uses,
 ) -> Result<String, Unsupported> {
     let numeric = match (l.ty().base(), r.ty().base()) {
         (Ty::Vec(n), _) | (_, Ty::Vec(n)) => Ty::Vec(*n),
@@ -339,7 +350,7 @@ fn binary(
     })
 }
 
-fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Textures) -> Result<String, Unsupported> {
+fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Uses) -> Result<String, Unsupported> {
     let t_ty = args
         .iter()
         .map(|a| a.ty().base().clone())

@@ -7,9 +7,11 @@
 //! and two compute entry points (points and grids). Its header documents the
 //! bind groups; [`Manifest`] describes them as JSON.
 
+mod atlas;
 mod emit;
 pub mod targets;
 
+pub use atlas::WalkForm;
 pub use emit::{lit, TextureUse};
 pub use targets::{translate, validate, Target, Validated};
 
@@ -17,13 +19,14 @@ use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::ir::{self, Scene};
 use crate::sema::{Program, Value};
-use emit::{field, Textures, Writer};
+use emit::{field, Uses, Writer};
 use serde::Serialize;
 use std::fmt::Write;
 
 /// The shared WGSL library, included into every module.
 pub const SDF_LIBRARY: &str = include_str!("../../shaders/sdf.wgsl");
 pub const RENDER_LIBRARY: &str = include_str!("../../shaders/render.wgsl");
+pub const UV_LIBRARY: &str = include_str!("../../shaders/uv.wgsl");
 
 /// A generated module with its description.
 #[derive(Debug, Clone)]
@@ -79,6 +82,16 @@ pub fn generate(
     scene: &Scene,
     shape: Option<&str>,
 ) -> Result<Module, Vec<Diagnostic>> {
+    generate_with(program, scene, shape, WalkForm::default())
+}
+
+/// [`generate`] with a choice of walk form.
+pub fn generate_with(
+    program: &Program,
+    scene: &Scene,
+    shape: Option<&str>,
+    form: WalkForm,
+) -> Result<Module, Vec<Diagnostic>> {
     let target = match shape {
         Some(n) => scene.shape(n).cloned().ok_or_else(|| {
             vec![Diagnostic::error(
@@ -102,7 +115,7 @@ pub fn generate(
         },
     };
     let mut out = String::new();
-    let mut textures = Textures::default();
+    let mut textures = Uses::default();
     let mut problems = Vec::new();
 
     let _ = writeln!(out, "// ---- scene ----");
@@ -127,19 +140,39 @@ pub fn generate(
     }
     map_fn(&mut out, "scene_map", &target);
 
+    // Atlases: seeds are projected and framed here, at compile time, on the CPU.
+    for (k, def) in program.atlases.iter().enumerate() {
+        let Some(shape) = ir::lower_shape(&def.shape) else {
+            continue;
+        };
+        match crate::uv::Atlas::prepare(def, &shape) {
+            Ok(a) => atlas::emit(&mut out, k, &a, form),
+            Err(crate::uv::atlas::PrepareError::SeedOffSurface { seed }) => problems.push(
+                Diagnostic::error(codes::E_SEED_PROJECTION, format!("seed `{}` cannot be projected onto the surface of atlas `{}`", def.seeds[seed].name, def.name), def.seeds[seed].position_span, "projection does not converge here")
+                    .with_note("seeds are moved onto the surface by Newton steps along the gradient; place this one nearer the shape"),
+            ),
+        }
+    }
+
     // Materials: id 0 is the default; id i + 1 is program.materials[i].
     let _ = writeln!(
         out,
         "fn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>) -> Material {{\n    switch id {{"
     );
     for (i, m) in program.materials.iter().enumerate() {
+        textures.atlases.clear();
         let mut attr = |v: &Value, what: &str| match field(v, &mut textures) {
             Ok(e) => e,
             Err(e) => {
-                problems.push(
-                    Diagnostic::error(codes::E_CODEGEN, format!("cannot generate the {what} of material `{}`: {}", m.name, e.0), program.defs[m.def].span, "in this material")
-                        .with_note("Implicit UVs land with the log map (Alg. 1); until then materials cannot use atlas fields in generated code"),
-                );
+                problems.push(Diagnostic::error(
+                    codes::E_CODEGEN,
+                    format!(
+                        "cannot generate the {what} of material `{}`: {}",
+                        m.name, e.0
+                    ),
+                    program.defs[m.def].span,
+                    "in this material",
+                ));
                 String::from("0.0")
             }
         };
@@ -153,7 +186,17 @@ pub fn generate(
             attr(&m.metallic, "metallic"),
             attr(&m.emission, "emission"),
         );
-        let _ = writeln!(out, "        case {}: {{\n            return Material({color}, {r}, {mt}, {e});\n        }}", i + 1);
+        let samples: String = textures
+            .atlases
+            .iter()
+            .map(|k| {
+                format!(
+                    "            let atlas_sample_{k} = atlas_{}(p);\n",
+                    program.atlases[*k].name
+                )
+            })
+            .collect();
+        let _ = writeln!(out, "        case {}: {{\n{samples}            return Material({color}, {r}, {mt}, {e});\n        }}", i + 1);
     }
     let _ = writeln!(out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
     if !problems.is_empty() {
@@ -168,7 +211,7 @@ pub fn generate(
         detail: "Globals".into(),
         used_by: vec!["vs_main", "fs_main"],
     }];
-    for (i, t) in textures.0.iter().enumerate() {
+    for (i, t) in textures.textures.iter().enumerate() {
         let _ = writeln!(
             out,
             "@group(0) @binding({}) var texture_{i}: texture_2d<f32>;",
@@ -248,7 +291,7 @@ pub fn generate(
         GLOBALS_LAYOUT.join(", ")
     );
     let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
-    let wgsl = format!("{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{out}");
+    let wgsl = format!("{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{UV_LIBRARY}\n{out}");
     let manifest = Manifest {
         entry_points: vec![
             ("vs_main", "vertex"),
@@ -260,7 +303,7 @@ pub fn generate(
         globals_layout: GLOBALS_LAYOUT.to_vec(),
         lipschitz: target.lipschitz(),
         shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
-        textures: textures.0,
+        textures: textures.textures,
     };
     Ok(Module { wgsl, manifest })
 }

@@ -84,3 +84,24 @@ fn uv_quaternion(m: mat3x3<f32>) -> vec4<f32> {
 fn uv_failed(status: u32, seed: f32) -> AtlasSample {
     return AtlasSample(vec2<f32>(0.0), 3.0e38, f32(status), vec4<f32>(0.0, 0.0, 0.0, 1.0), seed);
 }
+
+// Debug colours of the statuses: ok, too_far, heuristic_failed, sharp_feature, not_reached.
+fn uv_status_color(status: u32) -> vec3<f32> {
+    switch status {
+        case 0u: {
+            return vec3<f32>(0.3, 0.8, 0.35);
+        }
+        case 1u: {
+            return vec3<f32>(0.25, 0.35, 0.9);
+        }
+        case 2u: {
+            return vec3<f32>(0.95, 0.85, 0.2);
+        }
+        case 3u: {
+            return vec3<f32>(0.9, 0.2, 0.2);
+        }
+        default: {
+            return vec3<f32>(0.8, 0.3, 0.85);
+        }
+    }
+}

@@ -14,11 +14,11 @@ pub const ICE_EXIT: u8 = 3;
 /// for the bug report and says where.
 pub fn build(
     args_scene: &std::path::Path,
-    shape: Option<&str>,
+    options: &codegen::Options,
 ) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
     let (source, analysis) = load(args_scene)?;
     let scene = ir::lower(&analysis.program);
-    let module = codegen::generate(&analysis.program, &scene, shape).map_err(|diags| {
+    let module = codegen::generate_with(&analysis.program, &scene, options).map_err(|diags| {
         let name = args_scene.display().to_string();
         eprint!(
             "{}",
@@ -48,7 +48,12 @@ pub fn build(
 }
 
 pub fn run(args: CompileArgs) -> ExitCode {
-    let (module, validated) = match build(&args.scene, args.shape.as_deref()) {
+    let options = codegen::Options {
+        shape: args.shape.clone(),
+        walk: args.walk,
+        atlas: args.atlas.clone(),
+    };
+    let (module, validated) = match build(&args.scene, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };

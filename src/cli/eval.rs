@@ -63,6 +63,40 @@ struct Line {
     distance: f64,
     gradient: [f64; 3],
     surface: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    atlas: Option<AtlasLine>,
+}
+
+/// The atlas at the point's projection onto the atlas's surface.
+#[derive(serde::Serialize)]
+struct AtlasLine {
+    name: String,
+    status: &'static str,
+    uv: [f64; 2],
+    seed: Option<String>,
+    geodesic_distance: Option<f64>,
+}
+
+/// The atlas to report: the named one, or the only one.
+fn pick_atlas<'a>(
+    program: &'a sdfc::sema::Program,
+    name: Option<&str>,
+) -> Result<Option<&'a sdfc::sema::AtlasDef>, String> {
+    match name {
+        Some(n) => program
+            .atlases
+            .iter()
+            .find(|a| a.name == n)
+            .map(Some)
+            .ok_or_else(|| format!("the scene has no atlas `{n}`")),
+        None => match program.atlases.as_slice() {
+            [] => Ok(None),
+            [only] => Ok(Some(only)),
+            _ => Err(String::from(
+                "the scene has several atlases; choose one with --atlas",
+            )),
+        },
+    }
 }
 
 pub fn run(args: EvalArgs) -> ExitCode {
@@ -88,9 +122,60 @@ pub fn run(args: EvalArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let atlas_def = match pick_atlas(&analysis.program, args.atlas.as_deref()) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let atlas = match atlas_def.map(|def| (def, ir::lower_shape(&def.shape))) {
+        Some((def, Some(s))) => match sdfc::uv::Atlas::prepare(def, &s) {
+            Ok(a) => Some(a),
+            Err(_) => {
+                eprintln!(
+                    "error: a seed of atlas `{}` cannot be projected onto its surface",
+                    def.name
+                );
+                return ExitCode::from(1);
+            }
+        },
+        _ => None,
+    };
+    // Atlas queries happen at each point's projection onto the atlas's own surface.
+    let atlas_points: Vec<Option<DVec3>> = match &atlas {
+        Some(a) => points
+            .iter()
+            .map(|p| eval::project(&a.shape, *p, 1e-6 * sdfc::uv::atlas::scale(&a.shape)))
+            .collect(),
+        None => Vec::new(),
+    };
+    let mut atlas_results: Vec<Option<AtlasLine>> = match &atlas {
+        Some(a) => atlas_points
+            .iter()
+            .map(|x| {
+                x.map(|x| {
+                    let s = a.nearest(x, false);
+                    atlas_line(
+                        a,
+                        s.status,
+                        s.uv.to_array(),
+                        s.seed.map(|i| i as i32).unwrap_or(-1),
+                        s.distance,
+                    )
+                })
+            })
+            .collect(),
+        None => Vec::new(),
+    };
     let mut results = eval::query_all(&shape, &points);
     if args.gpu {
-        let module = match super::compile::build(&args.scene, args.shape.as_deref()) {
+        let options = sdfc::codegen::Options {
+            shape: args.shape.clone(),
+            atlas: args.atlas.clone(),
+            ..Default::default()
+        };
+        let module = match super::compile::build(&args.scene, &options) {
             Ok((m, _)) => m,
             Err(code) => return code,
         };
@@ -113,15 +198,53 @@ pub fn run(args: EvalArgs) -> ExitCode {
                 return ExitCode::from(super::render::GPU_EXIT);
             }
         }
+        if let Some(a) = &atlas {
+            let on_surface: Vec<DVec3> = atlas_points
+                .iter()
+                .map(|x| x.unwrap_or(DVec3::ZERO))
+                .collect();
+            match sdfc::gpu::eval_atlas(&gpu, &module.wgsl, &on_surface) {
+                Ok(values) => {
+                    for ((slot, v), x) in atlas_results.iter_mut().zip(values).zip(&atlas_points) {
+                        if x.is_some() {
+                            *slot = Some(atlas_line(
+                                a,
+                                sdfc::uv::Status::from_code(v.status),
+                                [v.uv[0] as f64, v.uv[1] as f64],
+                                v.seed,
+                                v.distance as f64,
+                            ));
+                        }
+                    }
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(super::render::GPU_EXIT);
+                }
+            }
+        }
     }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
+    let mut atlas_results = atlas_results.into_iter();
     for q in results {
+        let atlas_line = if atlas.is_some() {
+            Some(atlas_results.next().flatten().unwrap_or_else(|| AtlasLine {
+                name: String::new(),
+                status: "no_surface",
+                uv: [0.0; 2],
+                seed: None,
+                geodesic_distance: None,
+            }))
+        } else {
+            None
+        };
         let line = Line {
             point: q.point.to_array(),
             distance: q.distance,
             gradient: q.gradient.to_array(),
             surface: q.surface.map(|s| s.to_array()),
+            atlas: atlas_line,
         };
         let text = serde_json::to_string(&line).unwrap_or_default();
         if writeln!(out, "{text}").is_err() {
@@ -129,4 +252,23 @@ pub fn run(args: EvalArgs) -> ExitCode {
         }
     }
     ExitCode::SUCCESS
+}
+
+fn atlas_line(
+    a: &sdfc::uv::Atlas,
+    status: sdfc::uv::Status,
+    uv: [f64; 2],
+    seed: i32,
+    distance: f64,
+) -> AtlasLine {
+    let ok = status == sdfc::uv::Status::Ok;
+    AtlasLine {
+        name: a.name.clone(),
+        status: status.name(),
+        uv,
+        seed: usize::try_from(seed)
+            .ok()
+            .and_then(|i| a.seed_names.get(i).cloned()),
+        geodesic_distance: ok.then_some(distance),
+    }
 }

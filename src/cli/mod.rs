@@ -28,7 +28,9 @@ pub enum Command {
     ///
     /// Reads a JSON array of points `[[x, y, z], …]` and prints one JSON object per point, in
     /// order: `{"point", "distance", "gradient", "surface"}`, where `surface` is the point
-    /// projected onto the zero set (null when the projection does not converge).
+    /// projected onto the zero set (null when the projection does not converge). When the
+    /// scene has atlases, `"atlas": {"name", "status", "uv", "seed", "geodesic_distance"}`
+    /// gives the Implicit UVs at that projection.
     Eval(EvalArgs),
     /// Compile a scene to one standalone shader module, validated by naga.
     ///
@@ -69,6 +71,12 @@ pub struct RenderArgs {
     /// The graphics API.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
+    /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
+    #[arg(long, value_enum, default_value = "unrolled")]
+    pub walk: sdfc::codegen::WalkForm,
+    /// The atlas of the atlas views and of `cs_atlas` (default: the first).
+    #[arg(long)]
+    pub atlas: Option<String>,
     /// Print compile, pipeline, frame and readback times.
     #[arg(long)]
     pub timings: bool,
@@ -90,6 +98,12 @@ pub struct CompileArgs {
     /// Render this named shape instead of the `render` item's target.
     #[arg(long)]
     pub shape: Option<String>,
+    /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
+    #[arg(long, value_enum, default_value = "unrolled")]
+    pub walk: sdfc::codegen::WalkForm,
+    /// The atlas of the atlas views and of `cs_atlas` (default: the first).
+    #[arg(long)]
+    pub atlas: Option<String>,
     /// The entry point to translate for GLSL (one per file).
     #[arg(long, default_value = "fs_main")]
     pub entry: String,
@@ -137,6 +151,9 @@ pub struct EvalArgs {
     /// CPU reference (f64); `surface` is then the CPU projection of the point.
     #[arg(long)]
     pub gpu: bool,
+    /// The atlas to evaluate at each point's projection (optional when the scene has one).
+    #[arg(long)]
+    pub atlas: Option<String>,
     /// The graphics API for --gpu.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: sdfc::gpu::Backend,

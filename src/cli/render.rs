@@ -83,7 +83,12 @@ fn encode_png(frame: &Frame) -> Result<Vec<u8>, String> {
 
 pub fn run(args: RenderArgs) -> ExitCode {
     let compile_start = Instant::now();
-    let (module, _) = match compile::build(&args.scene, args.shape.as_deref()) {
+    let options = sdfc::codegen::Options {
+        shape: args.shape.clone(),
+        walk: args.walk,
+        atlas: args.atlas.clone(),
+    };
+    let (module, _) = match compile::build(&args.scene, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };

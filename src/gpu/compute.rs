@@ -6,6 +6,44 @@ use glam::DVec3;
 /// Distance and gradient at each point, from the generated compute shader:
 /// `(distance, gradient.x, gradient.y, gradient.z)` per point.
 pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 4]>, GpuError> {
+    run(gpu, wgsl, "cs_points", points, 1)
+}
+
+/// An atlas evaluated on the GPU (`cs_atlas`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtlasValue {
+    pub uv: [f32; 2],
+    pub distance: f32,
+    pub status: u32,
+    /// Unit quaternion (x, y, z, w).
+    pub transport: [f32; 4],
+    /// The chosen seed, or -1.
+    pub seed: i32,
+}
+
+/// The scene's atlas (the module's `scene_atlas`) at each point.
+pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasValue>, GpuError> {
+    let raw = run(gpu, wgsl, "cs_atlas", points, 3)?;
+    Ok(raw
+        .chunks(3)
+        .map(|c| AtlasValue {
+            uv: [c[0][0], c[0][1]],
+            distance: c[0][2],
+            status: c[0][3].round() as u32,
+            transport: c[1],
+            seed: c[2][0].round() as i32,
+        })
+        .collect())
+}
+
+/// Runs a compute entry point over points; it writes `per_point` vec4s per point.
+fn run(
+    gpu: &Gpu,
+    wgsl: &str,
+    entry_name: &str,
+    points: &[DVec3],
+    per_point: usize,
+) -> Result<Vec<[f32; 4]>, GpuError> {
     if points.is_empty() {
         return Ok(Vec::new());
     }
@@ -14,7 +52,7 @@ pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 
         .iter()
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
-    let size = (data.len() * 16) as u64;
+    let size = (data.len() * 16 * per_point) as u64;
     let (pipeline, group0, group1, input, output, readback) = gpu.scoped(|| {
         use wgpu::util::DeviceExt;
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -55,10 +93,10 @@ pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 
             immediate_size: 0,
         });
         let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("cs_points"),
+            label: Some(entry_name),
             layout: Some(&layout),
             module: &module,
-            entry_point: Some("cs_points"),
+            entry_point: Some(entry_name),
             compilation_options: Default::default(),
             cache: None,
         });

@@ -5,7 +5,7 @@
 mod compute;
 mod render;
 
-pub use compute::eval_points;
+pub use compute::{eval_atlas, eval_points, AtlasValue};
 pub use render::{render, Frame, Timings, ViewMode};
 
 use std::fmt;

@@ -13,7 +13,16 @@ pub enum ViewMode {
     Color,
     Normal,
     Depth,
+    /// Sphere-tracing steps.
     Steps,
+    /// The atlas's uv (fract, red-green).
+    Uv,
+    /// A checkerboard on the atlas's uv.
+    Checker,
+    /// The walk's status: ok green, too_far blue, heuristic_failed yellow, sharp_feature red, not_reached purple.
+    Status,
+    /// Isolines of the geodesic distance.
+    Distance,
 }
 
 impl ViewMode {
@@ -23,6 +32,10 @@ impl ViewMode {
             ViewMode::Normal => 1.0,
             ViewMode::Depth => 2.0,
             ViewMode::Steps => 3.0,
+            ViewMode::Uv => 4.0,
+            ViewMode::Checker => 5.0,
+            ViewMode::Status => 6.0,
+            ViewMode::Distance => 7.0,
         }
     }
 }

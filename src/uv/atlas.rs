@@ -21,6 +21,8 @@ pub struct PreparedSeed {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Atlas {
     pub name: String,
+    /// Seed names, in declaration order.
+    pub seed_names: Vec<String>,
     pub shape: Shape,
     pub seeds: Vec<PreparedSeed>,
     pub params: Params,
@@ -83,6 +85,7 @@ impl Atlas {
         };
         Ok(Atlas {
             name: def.name.clone(),
+            seed_names: def.seeds.iter().map(|s| s.name.clone()).collect(),
             shape: shape.clone(),
             seeds,
             params,

@@ -356,3 +356,106 @@ fn eval_command_on_the_gpu_matches_the_cpu() {
         assert!((c - g).abs() < 1e-5, "CPU {c} vs GPU {g}");
     }
 }
+
+/// Points on an atlas's surface, by projecting random points.
+fn surface_points(atlas: &sdfc::uv::Atlas, n: usize, half: f64) -> Vec<DVec3> {
+    random_points(n * 2, half, 0xA71A5)
+        .into_iter()
+        .filter_map(|p| eval::project(&atlas.shape, p, 1e-7))
+        .take(n)
+        .collect()
+}
+
+fn prepared(src: &str) -> (Compiled, sdfc::uv::Atlas, codegen::Module) {
+    let c = compile(src, (16, 16));
+    let a = analyze(src, None);
+    let def = &a.program.atlases[0];
+    let atlas = sdfc::uv::Atlas::prepare(def, &ir::lower_shape(&def.shape).unwrap()).unwrap();
+    let loop_module = codegen::generate_with(
+        &a.program,
+        &ir::lower(&a.program),
+        &codegen::Options {
+            walk: codegen::WalkForm::Loop,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    codegen::validate(&loop_module.wgsl).unwrap();
+    (c, atlas, loop_module)
+}
+
+#[test]
+fn gpu_log_map_agrees_with_the_cpu_reference() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let scenes = [
+        "let ball = sphere(1);\natlas skin on ball { seed a = [0, 0, 1] tangent [1, 0, 0]; seed b = [0, 1, 0]; }\nmaterial m { color = [skin.uv, 0]; }\nrender ball.paint(m);",
+        "let blob = smooth_union(sphere(0.7), sphere(0.5).translate([0.8, 0.3, 0]), 0.3);\natlas skin on blob { steps = 12; seed a = [0, 0, 1]; seed b = [1, 0.5, 0.3]; }\nmaterial m { color = [skin.uv, 0]; }\nrender blob.paint(m);",
+        "let cube = round_box(1.6, 0.1);\natlas skin on cube { seed a = [0, 0, 1]; seed b = [0.8, 0, 0]; }\nmaterial m { color = [skin.uv, 0]; }\nrender cube.paint(m);",
+    ];
+    for src in scenes {
+        let (c, atlas, loop_module) = prepared(src);
+        let points = surface_points(&atlas, 1500, 1.5);
+        let unrolled = gpu::eval_atlas(&gpu, &c.module.wgsl, &points).unwrap();
+        let rolled = gpu::eval_atlas(&gpu, &loop_module.wgsl, &points).unwrap();
+        let (mut same_status, mut worst) = (0, 0.0f64);
+        for ((x, g), l) in points.iter().zip(&unrolled).zip(&rolled) {
+            assert_eq!(g.status, l.status, "unrolled and loop walks differ at {x}");
+            assert!(
+                (g.uv[0] - l.uv[0]).abs() < 1e-5 && (g.uv[1] - l.uv[1]).abs() < 1e-5,
+                "unrolled {:?} vs loop {:?}",
+                g.uv,
+                l.uv
+            );
+            let cpu = atlas.nearest(*x, false);
+            if cpu.status.code() == g.status {
+                same_status += 1;
+            }
+            if cpu.status == sdfc::uv::Status::Ok
+                && g.status == 0
+                && cpu.seed.map(|s| s as i32) == Some(g.seed)
+            {
+                let err = (cpu.uv - glam::DVec2::new(g.uv[0] as f64, g.uv[1] as f64)).length();
+                worst = worst.max(err);
+                assert!(
+                    err < 2e-3,
+                    "{src}: at {x}: CPU {} vs GPU {:?}",
+                    cpu.uv,
+                    g.uv
+                );
+                assert!((cpu.distance - g.distance as f64).abs() < 2e-3);
+            }
+        }
+        let share = same_status as f64 / points.len() as f64;
+        eprintln!(
+            "{}: statuses agree on {:.2}% of {} points; max |uv_GPU − uv_CPU| = {worst:.2e}",
+            src.lines().next().unwrap(),
+            share * 100.0,
+            points.len()
+        );
+        // Points exactly on a status boundary (a sharp threshold, a tie between seeds) may
+        // fall either way in f32.
+        assert!(share > 0.99, "statuses agree on only {share}");
+    }
+}
+
+#[test]
+fn atlas_views_render() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let src =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf"))
+            .unwrap();
+    let c = compile(&src, (64, 48));
+    let status = render(&gpu, &c, ViewMode::Status);
+    // The front of the sphere, where the seed is, is ok (green); misses keep the background.
+    let centre = ((24 * 64 + 32) * 4) as usize;
+    let px = &status.color[centre..centre + 4];
+    assert!(
+        px[1] > px[0] && px[1] > px[2],
+        "the centre should be ok/green, got {px:?}"
+    );
+    let uv = render(&gpu, &c, ViewMode::Uv);
+    let checker = render(&gpu, &c, ViewMode::Checker);
+    assert_ne!(uv.color, checker.color);
+    let distance = render(&gpu, &c, ViewMode::Distance);
+    assert_ne!(distance.color, uv.color);
+}

@@ -24,5 +24,6 @@ fn main() -> ExitCode {
         Command::Eval(args) => cli::eval::run(args),
         Command::Compile(args) => cli::compile::run(args),
         Command::Render(args) => cli::render::run(args),
+        Command::Bench(args) => cli::bench::run(args),
     }
 }

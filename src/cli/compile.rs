@@ -52,6 +52,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         shape: args.shape.clone(),
         walk: args.walk,
         atlas: args.atlas.clone(),
+        plain: false,
     };
     let (module, validated) = match build(&args.scene, &options) {
         Ok(x) => x,

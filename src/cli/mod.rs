@@ -1,5 +1,6 @@
 //! The command line's definition and the commands.
 
+pub mod bench;
 pub mod check;
 pub mod compile;
 pub mod eval;
@@ -47,6 +48,27 @@ pub enum Command {
     /// Exit status: 0 on success, 1 when the scene has errors, 2 on usage or I/O
     /// problems, 3 on an internal compiler error, 4 when no GPU adapter can be used.
     Render(RenderArgs),
+    /// Measure frame times on the GPU and print ratios from one run: the shaded scene
+    /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = render::parse_size, default_value = "1920x1080")]
+    pub size: (u32, u32),
+    /// Frames per measurement (the median is reported).
+    #[arg(long, default_value = "5")]
+    pub frames: u32,
+    /// Measure this named shape instead of the `render` item.
+    #[arg(long)]
+    pub shape: Option<String>,
+    /// The graphics API.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: sdfc::gpu::Backend,
 }
 
 #[derive(clap::Args)]

@@ -87,6 +87,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         shape: args.shape.clone(),
         walk: args.walk,
         atlas: args.atlas.clone(),
+        plain: false,
     };
     let (module, _) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

@@ -100,6 +100,8 @@ pub struct Options {
     pub walk: WalkForm,
     /// The atlas of the atlas views and `cs_atlas` (default: the first).
     pub atlas: Option<String>,
+    /// Leave out atlases and materials: the plain sphere-trace baseline of benchmarks.
+    pub plain: bool,
 }
 
 /// [`generate`] with a choice of walk form.
@@ -158,7 +160,13 @@ pub fn generate_with(
     map_fn(&mut out, "scene_map", &target);
 
     // Atlases: seeds are projected and framed here, at compile time, on the CPU.
-    for (k, def) in program.atlases.iter().enumerate() {
+    let atlases: &[crate::sema::AtlasDef] = if options.plain { &[] } else { &program.atlases };
+    let materials: &[crate::sema::MaterialDef] = if options.plain {
+        &[]
+    } else {
+        &program.materials
+    };
+    for (k, def) in atlases.iter().enumerate() {
         let Some(shape) = ir::lower_shape(&def.shape) else {
             continue;
         };
@@ -184,7 +192,7 @@ pub fn generate_with(
                 )])
             }
         },
-        None => program.atlases.first().map(|a| a.name.clone()),
+        None => atlases.first().map(|a| a.name.clone()),
     };
     let _ = match chosen {
         Some(name) => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return atlas_{name}(p);\n}}\n"),
@@ -196,7 +204,7 @@ pub fn generate_with(
         out,
         "fn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>) -> Material {{\n    switch id {{"
     );
-    for (i, m) in program.materials.iter().enumerate() {
+    for (i, m) in materials.iter().enumerate() {
         textures.atlases.clear();
         let mut attr = |v: &Value, what: &str| match field(v, &mut textures) {
             Ok(e) => e,

@@ -170,6 +170,19 @@ pub fn render(
     mode: ViewMode,
     base_dir: &Path,
 ) -> Result<Frame, GpuError> {
+    render_timed(gpu, wgsl, manifest, view, mode, base_dir, 0)
+}
+
+/// [`render`] after `warmup` untimed frames (drivers may compile shaders at first use).
+pub fn render_timed(
+    gpu: &Gpu,
+    wgsl: &str,
+    manifest: &Manifest,
+    view: &View,
+    mode: ViewMode,
+    base_dir: &Path,
+    warmup: u32,
+) -> Result<Frame, GpuError> {
     let d = &gpu.device;
     let (w, h) = (view.width.max(1), view.height.max(1));
     let textures: Vec<(wgpu::Texture, wgpu::Sampler)> = manifest
@@ -317,6 +330,42 @@ pub fn render(
         (targets, target_views, readbacks, bind_group, queries)
     })?;
 
+    for _ in 0..warmup {
+        gpu.scoped(|| {
+            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("warm-up"),
+            });
+            {
+                let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+                    .iter()
+                    .map(|v| {
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: v,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })
+                    })
+                    .collect();
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("warm-up"),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        gpu.wait()?;
+    }
     let submitted = Instant::now();
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {

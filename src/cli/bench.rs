@@ -1,0 +1,144 @@
+//! `sdfc bench`: frame-time ratios measured in one run on one adapter.
+
+use super::{compile, BenchArgs};
+use sdfc::codegen::{Options, WalkForm};
+use sdfc::gpu::{self, Gpu, ViewMode};
+use sdfc::ir;
+use sdfc::view::View;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+fn median(mut v: Vec<Duration>) -> Duration {
+    v.sort();
+    v[v.len() / 2]
+}
+
+pub fn run(args: BenchArgs) -> ExitCode {
+    let t = Instant::now();
+    let base = Options {
+        shape: args.shape.clone(),
+        ..Default::default()
+    };
+    let (unrolled, _) = match compile::build(&args.scene, &base) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let compile_time = t.elapsed();
+    let (rolled, _) = match compile::build(
+        &args.scene,
+        &Options {
+            walk: WalkForm::Loop,
+            ..base.clone()
+        },
+    ) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let (plain, _) = match compile::build(
+        &args.scene,
+        &Options {
+            plain: true,
+            ..base.clone()
+        },
+    ) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let (_, analysis) = match super::load_quiet(&args.scene) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let scene = ir::lower(&analysis.program);
+    let shape = match super::eval::pick_shape(&scene, args.shape.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut view = View::new(
+        if args.shape.is_some() {
+            None
+        } else {
+            analysis.program.render.as_ref()
+        },
+        &shape,
+    );
+    (view.width, view.height) = args.size;
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(super::render::GPU_EXIT);
+        }
+    };
+    let dir = super::base_dir(&args.scene);
+    let measure = |module: &sdfc::codegen::Module,
+                   mode: ViewMode|
+     -> Result<(Duration, Duration), String> {
+        let mut frames = Vec::new();
+        let mut pipeline = Duration::ZERO;
+        for i in 0..args.frames.max(1) {
+            let f = gpu::render_timed(&gpu, &module.wgsl, &module.manifest, &view, mode, &dir, 1)
+                .map_err(|e| e.to_string())?;
+            if i == 0 {
+                pipeline = f.timings.pipeline;
+            }
+            frames.push(f.timings.frame);
+        }
+        Ok((pipeline, median(frames)))
+    };
+    let rows = [
+        ("plain sphere trace (no materials)", &plain, ViewMode::Color),
+        ("shaded, unrolled walk", &unrolled, ViewMode::Color),
+        ("shaded, loop walk", &rolled, ViewMode::Color),
+    ];
+    let mut results = Vec::new();
+    for (name, module, mode) in rows {
+        match measure(module, mode) {
+            Ok(r) => results.push((name, r)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(super::render::GPU_EXIT);
+            }
+        }
+    }
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    println!("scene:     {}", args.scene.display());
+    println!("adapter:   {}", gpu.describe());
+    println!(
+        "size:      {}x{}, median of {} frames",
+        view.width,
+        view.height,
+        args.frames.max(1)
+    );
+    println!(
+        "compile:   {:.2} ms (parse → validated WGSL)",
+        ms(compile_time)
+    );
+    for (name, (pipeline, frame)) in &results {
+        println!(
+            "{name:34} pipeline {:9.2} ms   frame {:9.2} ms",
+            ms(*pipeline),
+            ms(*frame)
+        );
+    }
+    let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
+    println!(
+        "ratio shaded ÷ plain, unrolled:      {:.2}",
+        ms(unrolled_r.1) / ms(plain.1)
+    );
+    println!(
+        "ratio shaded ÷ plain, loop:          {:.2}",
+        ms(loop_r.1) / ms(plain.1)
+    );
+    println!(
+        "ratio unrolled ÷ loop, frame:        {:.2}",
+        ms(unrolled_r.1) / ms(loop_r.1)
+    );
+    println!(
+        "ratio unrolled ÷ loop, pipeline:     {:.2}",
+        ms(unrolled_r.0) / ms(loop_r.0)
+    );
+    ExitCode::SUCCESS
+}

@@ -64,6 +64,7 @@ fn write_exr(path: &Path, frame: &Frame, name: &str) -> Result<(), String> {
         .suffix(".exr")
         .tempfile_in(dir)
         .map_err(|e| e.to_string())?;
+    sdfc::fsutil::readable(tmp.as_file()).map_err(|e| e.to_string())?;
     exr::prelude::write_rgb_file(tmp.path(), w, h, texel).map_err(|e| e.to_string())?;
     tmp.persist(path).map_err(|e| e.error.to_string())?;
     Ok(())

@@ -103,6 +103,8 @@ pub struct View {
     pub max_steps: u32,
     /// The size of the scene, for normal and shadow offsets.
     pub scale: f64,
+    /// Whether the fragment shader fills the atlas AOV (one more walk per pixel).
+    pub atlas_aov: bool,
 }
 
 fn vec3(v: &Value) -> Option<DVec3> {
@@ -160,6 +162,7 @@ impl View {
             epsilon: 1e-4,
             max_steps: 256,
             scale,
+            atlas_aov: false,
         }
     }
 }

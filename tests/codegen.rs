@@ -201,3 +201,27 @@ fn compile_command_writes_every_target() {
         "{err}"
     );
 }
+
+#[test]
+fn naga_rejection_is_an_internal_compiler_error_with_the_wgsl_saved() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(["compile", "examples/warps.sdf"])
+        .env("SDFC_TEST_CORRUPT_WGSL", "1")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("error[E0900]: internal compiler error: naga rejected the generated WGSL"),
+        "{err}"
+    );
+    let saved = err
+        .lines()
+        .find_map(|l| l.strip_prefix("note: the generated WGSL is saved at "))
+        .and_then(|l| l.split(';').next())
+        .expect("the path of the saved WGSL");
+    let text = std::fs::read_to_string(saved).unwrap();
+    assert!(text.contains("fn sdf_twisted") && text.contains("fn corrupted( {"));
+    let _ = std::fs::remove_file(saved);
+}

@@ -248,6 +248,41 @@ fn primitives_match_the_reference_image() {
 }
 
 #[test]
+fn the_gl_backend_renders_the_same_picture() {
+    // llvmpipe's GL cannot render to 32-bit float targets; the AOVs fall back to 16-bit.
+    let gpu = match gpu::Gpu::new(gpu::Backend::Gl) {
+        Ok(g) => g,
+        Err(e) => {
+            if std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+                panic!("SDFC_REQUIRE_GPU=1 but the GL backend is missing: {e}");
+            }
+            eprintln!("SKIPPING GPU TEST: {e}");
+            return;
+        }
+    };
+    let src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/primitives.sdf"),
+    )
+    .unwrap();
+    let c = compile(&src, (320, 180));
+    let frame = render(&gpu, &c, ViewMode::Color);
+    let reference =
+        image::open(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/primitives.png"))
+            .unwrap()
+            .to_rgba8();
+    let (mean, share) = image_difference(reference.as_raw(), &frame.color);
+    eprintln!(
+        "GL ({}) vs reference: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16",
+        gpu.describe(),
+        share * 100.0
+    );
+    assert!(mean <= 1.5 && share <= 0.005, "mean {mean}, share {share}");
+    // Depth survives the 16-bit AOVs to about three significant digits.
+    let hits = frame.position.iter().filter(|p| p[3] > 0.0).count();
+    assert!(hits > 10_000, "{hits}");
+}
+
+#[test]
 fn render_command_writes_png_and_exr() {
     if gpu_for_tests().is_none() {
         return;
@@ -458,4 +493,41 @@ fn atlas_views_render() {
     assert_ne!(uv.color, checker.color);
     let distance = render(&gpu, &c, ViewMode::Distance);
     assert_ne!(distance.color, uv.color);
+}
+
+#[test]
+fn uv_aov_agrees_with_the_cpu_at_the_rendered_points() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let src =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf"))
+            .unwrap();
+    let mut c = compile(&src, (48, 36));
+    c.view.atlas_aov = true;
+    let frame = render(&gpu, &c, ViewMode::Color);
+    let a = analyze(&src, None);
+    let def = &a.program.atlases[0];
+    let atlas = sdfc::uv::Atlas::prepare(def, &ir::lower_shape(&def.shape).unwrap()).unwrap();
+    let (mut ok, mut compared) = (0, 0);
+    for (pos, aov) in frame.position.iter().zip(&frame.atlas) {
+        if pos[3] < 0.0 {
+            assert_eq!(aov[3], -1.0, "misses have no atlas value");
+            continue;
+        }
+        let x = DVec3::new(pos[0] as f64, pos[1] as f64, pos[2] as f64);
+        let cpu = atlas.nearest(x, false);
+        if cpu.status.code() == aov[3] as u32 {
+            ok += 1;
+        }
+        if cpu.status == sdfc::uv::Status::Ok && aov[3] == 0.0 {
+            compared += 1;
+            assert!(
+                (cpu.uv.x - aov[0] as f64).abs() < 2e-3 && (cpu.uv.y - aov[1] as f64).abs() < 2e-3,
+                "at {x}: CPU {} vs AOV {:?}",
+                cpu.uv,
+                aov
+            );
+        }
+    }
+    assert!(compared > 200, "only {compared} pixels compared");
+    assert!(ok as f64 >= 0.99 * frame.position.iter().filter(|p| p[3] >= 0.0).count() as f64);
 }

@@ -26,6 +26,12 @@ pub fn build(
         );
         ExitCode::from(1)
     })?;
+    // Test hook: corrupts the module so that the internal-compiler-error path can be tested
+    // end to end (tests/codegen.rs). Never set outside tests.
+    let mut module = module;
+    if std::env::var_os("SDFC_TEST_CORRUPT_WGSL").is_some() {
+        module.wgsl.push_str("\nfn corrupted( {\n");
+    }
     match codegen::validate(&module.wgsl) {
         Ok(v) => Ok((module, v)),
         Err(e) => {

@@ -87,7 +87,7 @@ pub struct RenderArgs {
     /// What to show.
     #[arg(long, value_enum, default_value = "color")]
     pub view: sdfc::gpu::ViewMode,
-    /// Also write a 32-bit float EXR: depth, normal, position or steps (repeatable).
+    /// Also write a 32-bit float EXR: depth, normal, position, steps, or uv (u, v, status) (repeatable).
     #[arg(long, value_name = "NAME=FILE.exr", value_parser = render::parse_aov)]
     pub aov: Vec<(String, PathBuf)>,
     /// The graphics API.

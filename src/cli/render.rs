@@ -48,8 +48,10 @@ fn write_exr(path: &Path, frame: &Frame, name: &str) -> Result<(), String> {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let texel = |x: usize, y: usize| -> (f32, f32, f32) {
         let i = y * w + x;
-        let (p, n) = (frame.position[i], frame.normal[i]);
+        let (p, n, a) = (frame.position[i], frame.normal[i], frame.atlas[i]);
         match name {
+            // u, v and the status (0 ok, 1-4 the failures, -1 no surface).
+            "uv" => (a[0], a[1], a[3]),
             "depth" => (p[3], p[3], p[3]),
             "position" => (p[0], p[1], p[2]),
             "normal" => (n[0], n[1], n[2]),
@@ -114,6 +116,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         analysis.program.render.as_ref()
     };
     let mut view = View::new(render_item, &shape);
+    view.atlas_aov = args.aov.iter().any(|(n, _)| n == "uv");
     if let Some((w, h)) = args.size {
         view.width = w;
         view.height = h;

@@ -60,6 +60,8 @@ pub struct Frame {
     pub position: Vec<[f32; 4]>,
     /// World normal (xyz) and the sphere-tracing step count (w).
     pub normal: Vec<[f32; 4]>,
+    /// The atlas AOV (u, v, geodesic distance, status); filled when `View::atlas_aov`.
+    pub atlas: Vec<[f32; 4]>,
     pub timings: Timings,
 }
 
@@ -69,7 +71,7 @@ fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
     let v3 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
     [
         v3(c.eye, (c.fov * 0.5).tan()),
-        v3(c.forward, 0.0),
+        v3(c.forward, if view.atlas_aov { 1.0 } else { 0.0 }),
         v3(c.right, 0.0),
         v3(c.up, 0.0),
         v3(view.sun.direction, view.sun.intensity),
@@ -155,11 +157,39 @@ fn sampler(gpu: &Gpu, wrap: &str) -> wgpu::Sampler {
     })
 }
 
-const FORMATS: [wgpu::TextureFormat; 3] = [
-    wgpu::TextureFormat::Rgba8UnormSrgb,
-    wgpu::TextureFormat::Rgba32Float,
-    wgpu::TextureFormat::Rgba32Float,
-];
+/// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
+/// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
+fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
+    let f32_ok = gpu
+        .adapter
+        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
+        .allowed_usages
+        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let aov = if f32_ok {
+        wgpu::TextureFormat::Rgba32Float
+    } else {
+        wgpu::TextureFormat::Rgba16Float
+    };
+    [wgpu::TextureFormat::Rgba8UnormSrgb, aov, aov, aov]
+}
+
+/// IEEE half to single precision.
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = ((h >> 15) as u32) << 31;
+    let exp = ((h >> 10) & 0x1f) as u32;
+    let man = (h & 0x3ff) as u32;
+    let bits = match (exp, man) {
+        (0, 0) => sign,
+        (0, m) => {
+            // Subnormal: normalise.
+            let shift = m.leading_zeros() - 21;
+            sign | ((113 - shift) << 23) | (((m << shift) & 0x3ff) << 13)
+        }
+        (31, m) => sign | 0x7f80_0000 | (m << 13),
+        (e, m) => sign | ((e + 112) << 23) | (m << 13),
+    };
+    f32::from_bits(bits)
+}
 
 /// Renders a generated module. Texture paths in the manifest are relative to `base_dir`.
 pub fn render(
@@ -185,6 +215,7 @@ pub fn render_timed(
 ) -> Result<Frame, GpuError> {
     let d = &gpu.device;
     let (w, h) = (view.width.max(1), view.height.max(1));
+    let formats = formats(gpu);
     let textures: Vec<(wgpu::Texture, wgpu::Sampler)> = manifest
         .textures
         .iter()
@@ -201,7 +232,7 @@ pub fn render_timed(
             label: Some("scene"),
             source: wgpu::ShaderSource::Wgsl(wgsl.into()),
         });
-        let targets: Vec<Option<wgpu::ColorTargetState>> = FORMATS
+        let targets: Vec<Option<wgpu::ColorTargetState>> = formats
             .iter()
             .map(|f| {
                 Some(wgpu::ColorTargetState {
@@ -267,7 +298,7 @@ pub fn render_timed(
             layout: &pipeline.get_bind_group_layout(0),
             entries: &entries,
         });
-        let targets: Vec<wgpu::Texture> = FORMATS
+        let targets: Vec<wgpu::Texture> = formats
             .iter()
             .map(|f| {
                 d.create_texture(&wgpu::TextureDescriptor {
@@ -290,7 +321,7 @@ pub fn render_timed(
             .iter()
             .map(|t| t.create_view(&Default::default()))
             .collect();
-        let readbacks: Vec<(wgpu::Buffer, u32)> = FORMATS
+        let readbacks: Vec<(wgpu::Buffer, u32)> = formats
             .iter()
             .map(|f| {
                 let bpp = f.block_copy_size(None).unwrap_or(4);
@@ -438,7 +469,7 @@ pub fn render_timed(
 
     let read_start = Instant::now();
     let mut planes = Vec::new();
-    for (f, (b, row)) in FORMATS.iter().zip(&readbacks) {
+    for (f, (b, row)) in formats.iter().zip(&readbacks) {
         let bytes = gpu.read_buffer(b)?;
         let bpp = f.block_copy_size(None).unwrap_or(4) as usize;
         let mut out = Vec::with_capacity(w as usize * h as usize * bpp);
@@ -462,12 +493,34 @@ pub fn render_timed(
         }
         None => (wall, false),
     };
-    let floats = |bytes: &[u8]| bytemuck::cast_slice::<u8, [f32; 4]>(bytes).to_vec();
+    let half = formats[1] == wgpu::TextureFormat::Rgba16Float;
+    let floats = |bytes: &[u8]| -> Vec<[f32; 4]> {
+        if half {
+            bytes
+                .chunks_exact(8)
+                .map(|c| {
+                    std::array::from_fn(|k| {
+                        f16_to_f32(u16::from_le_bytes([c[2 * k], c[2 * k + 1]]))
+                    })
+                })
+                .collect()
+        } else {
+            bytes
+                .chunks_exact(16)
+                .map(|c| {
+                    std::array::from_fn(|k| {
+                        f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]])
+                    })
+                })
+                .collect()
+        }
+    };
     Ok(Frame {
         width: w,
         height: h,
         position: floats(&planes[1]),
         normal: floats(&planes[2]),
+        atlas: floats(&planes[3]),
         color: std::mem::take(&mut planes[0]),
         timings: Timings {
             pipeline: pipeline_time,
@@ -476,4 +529,27 @@ pub fn render_timed(
             readback,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f16_to_f32;
+
+    #[test]
+    fn half_floats_convert_exactly() {
+        for (bits, value) in [
+            (0x3C00u16, 1.0f32),
+            (0xC000, -2.0),
+            (0x3800, 0.5),
+            (0x7BFF, 65504.0),
+            (0x0000, 0.0),
+            (0x0001, 5.960_464_5e-8),
+            (0x0400, 6.103_515_6e-5),
+            (0x3555, 0.333_251_95),
+        ] {
+            assert_eq!(f16_to_f32(bits), value, "{bits:#06x}");
+        }
+        assert!(f16_to_f32(0x7C00).is_infinite());
+        assert!(f16_to_f32(0x7E00).is_nan());
+    }
 }

@@ -243,6 +243,8 @@ fn wgsl_ty(t: &Ty) -> String {
 pub struct TextureUse {
     pub path: String,
     pub wrap: String,
+    /// Colour (decoded from sRGB) or data (linear).
+    pub srgb: bool,
 }
 
 /// What surface fields need from the module: textures in binding order (texture `i`
@@ -252,6 +254,11 @@ pub struct Uses {
     pub textures: Vec<TextureUse>,
     /// Atlas indices read by the expressions generated since the last reset.
     pub atlases: std::collections::BTreeSet<usize>,
+    /// While set, atlas uv and position are generated displaced by these WGSL
+    /// expressions: the footprint of a pixel, for texture derivatives.
+    pub offset: Option<(String, String)>,
+    /// Whether textures sampled now hold colour (sRGB) rather than data (linear).
+    pub srgb: bool,
 }
 
 impl Uses {
@@ -259,6 +266,7 @@ impl Uses {
         let u = TextureUse {
             path: path.to_string(),
             wrap: wrap.to_string(),
+            srgb: self.srgb,
         };
         if let Some(i) = self.textures.iter().position(|x| *x == u) {
             return i;
@@ -279,7 +287,10 @@ pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
             c.iter().map(|x| lit(*x)).collect::<Vec<_>>().join(", ")
         ),
         Value::Field(expr, ty) => match &**expr {
-            FieldExpr::Input(SurfaceInput::Position) => String::from("p"),
+            FieldExpr::Input(SurfaceInput::Position) => match &tex.offset {
+                Some((_, dp)) => format!("(p + {dp})"),
+                None => String::from("p"),
+            },
             FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
             FieldExpr::Atlas { atlas, attr } => {
                 tex.atlases.insert(*atlas);
@@ -290,7 +301,10 @@ pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
                     AtlasAttr::Transport => "transport",
                     AtlasAttr::Seed => "seed",
                 };
-                format!("atlas_sample_{atlas}.{name}")
+                match (&tex.offset, attr) {
+                    (Some((du, _)), AtlasAttr::Uv) => format!("(atlas_sample_{atlas}.uv + {du})"),
+                    _ => format!("atlas_sample_{atlas}.{name}"),
+                }
             }
             FieldExpr::Unary { op, operand } => {
                 let o = field(operand, tex)?;
@@ -382,9 +396,26 @@ fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Uses) -> Result<String, U
             let Some(Value::Str(path)) = node.args.first() else {
                 return Err(Unsupported(String::from("a texture sample needs an image")));
             };
-            let uv = f(&args[1])?;
+            // Texture derivatives from the pixel's footprint, analytically: the uv
+            // expression at the point and displaced by one footprint along two tangent
+            // directions (atlas uv moves isometrically, position along the surface). Unlike
+            // screen-space derivatives they cannot explode at uv seams, and they are valid
+            // in the non-uniform control flow after sphere tracing.
+            let uv = field(&args[1], tex)?;
+            let saved = tex.offset.take();
+            tex.offset = Some((
+                String::from("vec2<f32>(footprint, 0.0)"),
+                String::from("tangent_u * footprint"),
+            ));
+            let ux = field(&args[1], tex)?;
+            tex.offset = Some((
+                String::from("vec2<f32>(0.0, footprint)"),
+                String::from("tangent_v * footprint"),
+            ));
+            let uy = field(&args[1], tex)?;
+            tex.offset = saved;
             let i = tex.index(path, wrap);
-            format!("textureSampleLevel(texture_{i}, sampler_{i}, {uv}, 0.0)")
+            format!("textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})")
         }
         "cross" => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
         "length" | "normalize" => format!("{name}({})", f(&args[0])?),

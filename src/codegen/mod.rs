@@ -202,23 +202,26 @@ pub fn generate_with(
     // Materials: id 0 is the default; id i + 1 is program.materials[i].
     let _ = writeln!(
         out,
-        "fn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>) -> Material {{\n    switch id {{"
+        "// `footprint` is the pixel's size on the surface; tangent_u and tangent_v span the tangent plane.\nfn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {{\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n    switch id {{"
     );
     for (i, m) in materials.iter().enumerate() {
         textures.atlases.clear();
-        let mut attr = |v: &Value, what: &str| match field(v, &mut textures) {
-            Ok(e) => e,
-            Err(e) => {
-                problems.push(Diagnostic::error(
-                    codes::E_CODEGEN,
-                    format!(
-                        "cannot generate the {what} of material `{}`: {}",
-                        m.name, e.0
-                    ),
-                    program.defs[m.def].span,
-                    "in this material",
-                ));
-                String::from("0.0")
+        let mut attr = |v: &Value, what: &str| {
+            textures.srgb = matches!(what, "color" | "emission");
+            match field(v, &mut textures) {
+                Ok(e) => e,
+                Err(e) => {
+                    problems.push(Diagnostic::error(
+                        codes::E_CODEGEN,
+                        format!(
+                            "cannot generate the {what} of material `{}`: {}",
+                            m.name, e.0
+                        ),
+                        program.defs[m.def].span,
+                        "in this material",
+                    ));
+                    String::from("0.0")
+                }
             }
         };
         let color = match m.color.ty().base() {

@@ -88,7 +88,7 @@ fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
 }
 
 /// Loads an image with an sRGB mip chain.
-fn load_texture(gpu: &Gpu, path: &Path) -> Result<wgpu::Texture, GpuError> {
+fn load_texture(gpu: &Gpu, path: &Path, srgb: bool) -> Result<wgpu::Texture, GpuError> {
     let img = image::open(path)
         .map_err(|e| GpuError::Texture(format!("cannot read texture {}: {e}", path.display())))?
         .to_rgba8();
@@ -104,7 +104,11 @@ fn load_texture(gpu: &Gpu, path: &Path) -> Result<wgpu::Texture, GpuError> {
         mip_level_count: levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        format: if srgb {
+            wgpu::TextureFormat::Rgba8UnormSrgb
+        } else {
+            wgpu::TextureFormat::Rgba8Unorm
+        },
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
@@ -221,7 +225,7 @@ pub fn render_timed(
         .iter()
         .map(|t| {
             Ok((
-                load_texture(gpu, &base_dir.join(&t.path))?,
+                load_texture(gpu, &base_dir.join(&t.path), t.srgb)?,
                 sampler(gpu, &t.wrap),
             ))
         })

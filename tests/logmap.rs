@@ -173,3 +173,35 @@ fn early_out_search_equals_brute_force() {
     }
     assert!(checked > 300);
 }
+
+#[test]
+fn reprojection_agrees_with_the_plain_walk_on_a_torus() {
+    // On a torus (curvature varies), with and without projecting every step (Eq. 18).
+    let a = atlas("let ring = torus(major: 1, minor: 0.4);\natlas skin on ring { reproject = true; seed s = [1.4, 0, 0] tangent [0, 1, 0]; }\nrender ring;");
+    assert!(a.params.reproject);
+    let plain = atlas("let ring = torus(major: 1, minor: 0.4);\natlas skin on ring { seed s = [1.4, 0, 0] tangent [0, 1, 0]; }\nrender ring;");
+    let mut rng = Rng(5);
+    let mut compared = 0;
+    for _ in 0..300 {
+        let p = DVec3::new(
+            rng.unit() * 3.0 - 1.5,
+            rng.unit() - 0.5,
+            rng.unit() * 3.0 - 1.5,
+        );
+        let Some(x) = eval::project(&a.shape, p, 1e-10) else {
+            continue;
+        };
+        let (m, q) = (a.walk(x, 0, 3.0), plain.walk(x, 0, 3.0));
+        if m.status == Status::Ok && q.status == Status::Ok {
+            compared += 1;
+            // Both approximate the same geodesic; they agree closely on a smooth surface.
+            assert!(
+                (m.distance - q.distance).abs() < 1e-2 * q.distance.max(0.1),
+                "{} vs {}",
+                m.distance,
+                q.distance
+            );
+        }
+    }
+    assert!(compared > 50, "{compared}");
+}

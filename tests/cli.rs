@@ -1,20 +1,9 @@
 //! The `sdfc` binary: exit codes, human and JSON output.
 
 use std::path::Path;
-use std::process::Command;
 
-fn sdfc(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::{sdfc, sdfc_with_input};
 
 #[test]
 fn clean_file_exits_zero() {
@@ -130,50 +119,18 @@ fn json_columns_count_characters_not_bytes() {
 
 #[test]
 fn reads_standard_input() {
-    use std::io::Write;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(["check", "--format", "json", "-"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"render spher(1);")
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("E0103"));
+    let (code, out, _) = sdfc_with_input(&["check", "--format", "json", "-"], b"render spher(1);");
+    assert_eq!(code, 1);
+    assert!(out.contains("E0103"));
 }
 
 #[test]
 fn eval_prints_one_object_per_point_in_order() {
-    use std::io::Write;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(["eval", "examples/sphere.sdf", "--points", "-"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"[[0, 0, 2], [0, 0.5, 0], [3, 4, 0]]")
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let (code, text, err) = sdfc_with_input(
+        &["eval", "examples/sphere.sdf", "--points", "-"],
+        b"[[0, 0, 2], [0, 0.5, 0], [3, 4, 0]]",
     );
-    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(code, 0, "{err}");
     assert!(
         text.starts_with("{\"point\":[0.0,0.0,2.0],\"distance\":1.0,"),
         "{text}"

@@ -9,6 +9,8 @@ use sdfc::ir::{self, eval};
 use sdfc::view::{trace_cpu, View};
 use std::path::Path;
 
+mod common;
+
 struct Compiled {
     module: codegen::Module,
     shape: ir::Shape,
@@ -349,34 +351,17 @@ fn eval_command_on_the_gpu_matches_the_cpu() {
     if gpu_for_tests().is_none() {
         return;
     }
-    use std::io::Write;
     let run = |gpu: bool| {
-        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"));
-        cmd.args(["eval", "examples/warps.sdf", "--shape", "twisted"]);
+        let mut args = vec!["eval", "examples/warps.sdf", "--shape", "twisted"];
         if gpu {
-            cmd.arg("--gpu");
+            args.push("--gpu");
         }
-        let mut child = cmd
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .stdin(std::process::Stdio::piped())
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        child
-            .stdin
-            .take()
-            .unwrap()
-            .write_all(b"[[-3, 0, 0.2], [-2.5, 0.5, 0], [0, 0, 0], [-3, 1.2, 0.4]]")
-            .unwrap();
-        let out = child.wait_with_output().unwrap();
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let (code, stdout, err) = common::sdfc_with_input(
+            &args,
+            b"[[-3, 0, 0.2], [-2.5, 0.5, 0], [0, 0, 0], [-3, 1.2, 0.4]]",
         );
-        String::from_utf8_lossy(&out.stdout)
+        assert_eq!(code, 0, "{err}");
+        stdout
             .lines()
             .map(|l| {
                 serde_json::from_str::<serde_json::Value>(l).unwrap()["distance"]

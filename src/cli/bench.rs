@@ -3,8 +3,6 @@
 use super::{compile, BenchArgs};
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::gpu::{self, Gpu, ViewMode};
-use sdfc::ir;
-use sdfc::view::View;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -44,26 +42,10 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let (_, analysis) = match super::load_quiet(&args.scene) {
-        Ok(x) => x,
+    let mut view = match super::view_for(&args.scene, args.shape.as_deref()) {
+        Ok(v) => v,
         Err(code) => return code,
     };
-    let scene = ir::lower(&analysis.program);
-    let shape = match super::eval::pick_shape(&scene, args.shape.as_deref()) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let mut view = View::new(
-        if args.shape.is_some() {
-            None
-        } else {
-            analysis.program.render.as_ref()
-        },
-        &shape,
-    );
     (view.width, view.height) = args.size;
     let gpu = match Gpu::new(args.backend) {
         Ok(g) => g,

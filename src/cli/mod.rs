@@ -232,3 +232,22 @@ pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::proces
     }
     Ok((source, analysis))
 }
+
+/// The view of a checked scene: the render item's, or framed on `--shape`.
+pub fn view_for(
+    path: &Path,
+    shape: Option<&str>,
+) -> Result<sdfc::view::View, std::process::ExitCode> {
+    let (_, analysis) = load_quiet(path)?;
+    let scene = sdfc::ir::lower(&analysis.program);
+    let target = eval::pick_shape(&scene, shape).map_err(|e| {
+        eprintln!("error: {e}");
+        std::process::ExitCode::from(2)
+    })?;
+    let render_item = if shape.is_some() {
+        None
+    } else {
+        analysis.program.render.as_ref()
+    };
+    Ok(sdfc::view::View::new(render_item, &target))
+}

@@ -3,8 +3,6 @@
 use super::{compile, RenderArgs};
 use sdfc::fsutil::write_atomic;
 use sdfc::gpu::{self, Frame, Gpu};
-use sdfc::ir;
-use sdfc::view::View;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -97,25 +95,10 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Err(code) => return code,
     };
     let compile_time = compile_start.elapsed();
-    // The same analysis again is cheap; it gives the render settings and the shape.
-    let (_, analysis) = match super::load_quiet(&args.scene) {
-        Ok(x) => x,
+    let mut view = match super::view_for(&args.scene, args.shape.as_deref()) {
+        Ok(v) => v,
         Err(code) => return code,
     };
-    let scene = ir::lower(&analysis.program);
-    let shape = match super::eval::pick_shape(&scene, args.shape.as_deref()) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let render_item = if args.shape.is_some() {
-        None
-    } else {
-        analysis.program.render.as_ref()
-    };
-    let mut view = View::new(render_item, &shape);
     view.atlas_aov = args.aov.iter().any(|(n, _)| n == "uv");
     if let Some((w, h)) = args.size {
         view.width = w;

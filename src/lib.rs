@@ -23,6 +23,7 @@ pub mod diagnostic;
 pub mod driver;
 pub mod fsutil;
 pub mod gpu;
+pub mod ide;
 pub mod ir;
 pub mod sema;
 pub mod span;

@@ -113,7 +113,7 @@ impl AtlasAttr {
             AtlasAttr::Uv,
             "uv",
             Ty::Vec(2),
-            "texture coordinates from the geodesic walk (blended across merges)",
+            "texture coordinates: the log map (Alg. 1) of the geodesic-nearest seed",
         ),
         (
             AtlasAttr::Distance,

@@ -1,0 +1,293 @@
+//! Protocol-free editor queries over one analysed document: hover, go to
+//! definition, references and document symbols. The language server (`src/lsp`)
+//! only converts these to and from the protocol.
+
+use crate::driver::{analyze, Analysis};
+use crate::sema::builtins::{self, CONSTANTS};
+use crate::sema::{AtlasAttr, DefKind, Value};
+use crate::span::Span;
+use crate::syntax::ast::{AtlasStmt, Expr, ExprKind, Ident, ItemKind};
+use std::path::Path;
+
+/// One analysed document.
+pub struct Document {
+    pub text: String,
+    pub analysis: Analysis,
+}
+
+impl Document {
+    pub fn new(text: impl Into<String>, base_dir: Option<&Path>) -> Document {
+        let text = text.into();
+        let analysis = analyze(&text, base_dir);
+        Document { text, analysis }
+    }
+}
+
+/// Markdown for the editor, and the span it describes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hover {
+    pub span: Span,
+    pub markdown: String,
+}
+
+/// What names the identifier at a position refer to, besides definitions.
+enum Named<'a> {
+    /// A call or method call of a builtin function.
+    Function(&'a Ident),
+    /// `.name` after an expression.
+    Field(&'a Ident),
+    /// A bare name (a constant such as `pi`, or a definition).
+    Name(&'a str, Span),
+}
+
+fn find_in_expr<'a>(e: &'a Expr, offset: usize, out: &mut Option<Named<'a>>) {
+    if !e.span.contains(offset) {
+        return;
+    }
+    match &e.kind {
+        ExprKind::Name(n) => *out = Some(Named::Name(n, e.span)),
+        ExprKind::Call { callee, args } => {
+            if callee.span.contains(offset) {
+                *out = Some(Named::Function(callee));
+            }
+            args.iter()
+                .for_each(|a| find_in_expr(&a.value, offset, out));
+        }
+        ExprKind::Method {
+            receiver,
+            method,
+            args,
+        } => {
+            if method.span.contains(offset) {
+                *out = Some(Named::Function(method));
+            }
+            find_in_expr(receiver, offset, out);
+            args.iter()
+                .for_each(|a| find_in_expr(&a.value, offset, out));
+        }
+        ExprKind::Field { receiver, field } => {
+            if field.span.contains(offset) {
+                *out = Some(Named::Field(field));
+            }
+            find_in_expr(receiver, offset, out);
+        }
+        ExprKind::Vector(items) => items.iter().for_each(|i| find_in_expr(i, offset, out)),
+        ExprKind::Paren(inner) | ExprKind::Unary { expr: inner, .. } => {
+            find_in_expr(inner, offset, out)
+        }
+        ExprKind::Binary { lhs, rhs, .. } => {
+            find_in_expr(lhs, offset, out);
+            find_in_expr(rhs, offset, out);
+        }
+        _ => {}
+    }
+}
+
+fn named_at(doc: &Document, offset: usize) -> Option<Named<'_>> {
+    let mut out = None;
+    for item in &doc.analysis.parsed.file.items {
+        if !item.span.contains(offset) {
+            continue;
+        }
+        let exprs: Vec<&Expr> = match &item.kind {
+            ItemKind::Let { value, .. } => vec![value],
+            ItemKind::Atlas { shape, body, .. } => {
+                let mut v = vec![shape];
+                for s in body {
+                    match s {
+                        AtlasStmt::Setting(s) => v.push(&s.value),
+                        AtlasStmt::Seed {
+                            position, tangent, ..
+                        } => {
+                            v.push(position);
+                            v.extend(tangent.iter());
+                        }
+                        _ => {}
+                    }
+                }
+                v
+            }
+            ItemKind::Material { body, .. } => body.iter().map(|s| &s.value).collect(),
+            ItemKind::Render { target, body } => std::iter::once(target)
+                .chain(body.iter().map(|s| &s.value))
+                .collect(),
+            ItemKind::Error { .. } => Vec::new(),
+        };
+        exprs
+            .into_iter()
+            .for_each(|e| find_in_expr(e, offset, &mut out));
+    }
+    out
+}
+
+/// Hover at a byte offset.
+pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
+    let program = &doc.analysis.program;
+    if let Some(id) = program.def_at(offset) {
+        let def = &program.defs[id];
+        let span = program
+            .references
+            .iter()
+            .find(|r| r.span.contains(offset))
+            .map(|r| r.span)
+            .unwrap_or(def.span);
+        let markdown = match def.kind {
+            DefKind::Let => match &def.value {
+                Value::Float(_) | Value::Vec(_) | Value::Bool(_) | Value::Str(_) => format!(
+                    "```sdf\nlet {}: {} = {}\n```",
+                    def.name,
+                    def.ty,
+                    def.value.display()
+                ),
+                _ => format!("```sdf\nlet {}: {}\n```", def.name, def.ty),
+            },
+            DefKind::Atlas => {
+                let a = program.atlases.iter().find(|a| a.def == id)?;
+                let p = &a.params;
+                format!("```sdf\natlas {}\n```\n{} seeds, {} merges; N = {}, D = {}, ε1 = {}, ε2 = {}, r_min = {}", a.name, a.seeds.len(), a.merges.len(), p.steps, p.max_distance, p.heuristic_tolerance, p.sharp_tolerance, p.min_reach)
+            }
+            DefKind::Material => format!("```sdf\nmaterial {}\n```", def.name),
+            DefKind::Seed { atlas } => {
+                let a = &program.atlases[atlas];
+                let s = a.seeds.iter().find(|s| s.def == id)?;
+                let tangent = s
+                    .tangent
+                    .map(|t| format!("tangent {}", Value::Vec(t.to_vec()).display()))
+                    .unwrap_or_else(|| String::from("default tangent"));
+                format!(
+                    "```sdf\nseed {} = {} {tangent}\n```\nin atlas `{}`",
+                    s.name,
+                    Value::Vec(s.position.to_vec()).display(),
+                    a.name
+                )
+            }
+        };
+        return Some(Hover { span, markdown });
+    }
+    match named_at(doc, offset)? {
+        Named::Function(ident) => {
+            let b = builtins::lookup(&ident.name)?;
+            Some(Hover {
+                span: ident.span,
+                markdown: format!(
+                    "```sdf\n{}\n```\n{} — {}",
+                    b.signature(),
+                    b.kind.title(),
+                    b.doc
+                ),
+            })
+        }
+        Named::Field(ident) => {
+            let (_, name, ty, doc_text) = AtlasAttr::ALL.iter().find(|a| a.1 == ident.name)?;
+            Some(Hover {
+                span: ident.span,
+                markdown: format!("```sdf\nATLAS.{name}: field<{ty}>\n```\n{doc_text}"),
+            })
+        }
+        Named::Name(n, span) => {
+            let c = CONSTANTS.iter().find(|c| c.name == n)?;
+            Some(Hover {
+                span,
+                markdown: format!("```sdf\n{}\n```\n{}", c.name, c.doc),
+            })
+        }
+    }
+}
+
+/// The definition of the name at an offset.
+pub fn definition(doc: &Document, offset: usize) -> Option<Span> {
+    let program = &doc.analysis.program;
+    program.def_at(offset).map(|id| program.defs[id].span)
+}
+
+/// Every use of the name at an offset, with its definition first when asked.
+pub fn references(doc: &Document, offset: usize, include_definition: bool) -> Vec<Span> {
+    let program = &doc.analysis.program;
+    let Some(id) = program.def_at(offset) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    if include_definition {
+        out.push(program.defs[id].span);
+    }
+    out.extend(program.references_to(id).map(|r| r.span));
+    out
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SymbolKind {
+    Let,
+    Atlas,
+    Material,
+    Render,
+    Seed,
+    Merge,
+}
+
+/// An outline entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Symbol {
+    pub name: String,
+    pub kind: SymbolKind,
+    /// The whole item or statement.
+    pub span: Span,
+    /// The name, where there is one.
+    pub selection: Span,
+    pub children: Vec<Symbol>,
+}
+
+/// The document's outline: items, with seeds and merges under their atlas.
+pub fn symbols(doc: &Document) -> Vec<Symbol> {
+    let mut out = Vec::new();
+    for item in &doc.analysis.parsed.file.items {
+        let leaf = |name: &Ident, kind| Symbol {
+            name: name.name.clone(),
+            kind,
+            span: item.span,
+            selection: name.span,
+            children: Vec::new(),
+        };
+        match &item.kind {
+            ItemKind::Let { name, .. } => out.push(leaf(name, SymbolKind::Let)),
+            ItemKind::Material { name, .. } => out.push(leaf(name, SymbolKind::Material)),
+            ItemKind::Render { target, .. } => out.push(Symbol {
+                name: String::from("render"),
+                kind: SymbolKind::Render,
+                span: item.span,
+                selection: target.span,
+                children: Vec::new(),
+            }),
+            ItemKind::Atlas { name, body, .. } => {
+                let mut atlas = leaf(name, SymbolKind::Atlas);
+                for s in body {
+                    match s {
+                        AtlasStmt::Seed { name, span, .. } => atlas.children.push(Symbol {
+                            name: name.name.clone(),
+                            kind: SymbolKind::Seed,
+                            span: *span,
+                            selection: name.span,
+                            children: Vec::new(),
+                        }),
+                        AtlasStmt::Merge { seeds, span } if !seeds.is_empty() => {
+                            atlas.children.push(Symbol {
+                                name: seeds
+                                    .iter()
+                                    .map(|s| s.name.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(" – "),
+                                kind: SymbolKind::Merge,
+                                span: *span,
+                                selection: seeds[0].span.to(seeds[seeds.len() - 1].span),
+                                children: Vec::new(),
+                            })
+                        }
+                        _ => {}
+                    }
+                }
+                out.push(atlas);
+            }
+            ItemKind::Error { .. } => {}
+        }
+    }
+    out
+}

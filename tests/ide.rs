@@ -1,0 +1,108 @@
+//! The protocol-free editor queries, with the cursor marked `$0` in each case.
+
+use sdfc::ide::{self, Document, SymbolKind};
+
+const SCENE: &str = "let radius = 0.5;
+let ball = sphere(radius).translate([0, 1, 0]);
+atlas skin on ball {
+    steps = 12;
+    seed front = [0, 1, 0.5] tangent [1, 0, 0];
+    seed top = [0, 1.5, 0];
+    merge front top;
+}
+material m { color = [skin.uv, 0]; roughness = 0.3 * pi; }
+render ball.paint(m);
+";
+
+/// The document and the offset of `$0`, which is removed.
+fn at(marked: &str) -> (Document, usize) {
+    let offset = marked.find("$0").expect("a $0 cursor");
+    let text = marked.replacen("$0", "", 1);
+    (Document::new(text, None), offset)
+}
+
+/// The scene with `$0` inserted before the n-th occurrence of `needle`.
+fn cursor(needle: &str, n: usize) -> String {
+    let start = SCENE
+        .match_indices(needle)
+        .nth(n)
+        .unwrap_or_else(|| panic!("{needle} #{n}"))
+        .0;
+    format!("{}$0{}", &SCENE[..start], &SCENE[start..])
+}
+
+fn hover_snapshot(needle: &str, n: usize) -> String {
+    let marked = cursor(needle, n);
+    let (doc, offset) = at(&marked);
+    let h = ide::hover(&doc, offset + 1).unwrap_or_else(|| panic!("no hover at {needle}"));
+    let line = marked.lines().find(|l| l.contains("$0")).unwrap();
+    format!("{line}\n{}\n--\n{}", &doc.text[h.span.range()], h.markdown)
+}
+
+#[test]
+fn hovers() {
+    let cases = [
+        ("radius", 1, "let_constant"),
+        ("sphere", 0, "builtin_function"),
+        ("translate", 0, "builtin_method"),
+        ("skin", 1, "atlas"),
+        ("front", 1, "seed"),
+        ("uv", 0, "atlas_field"),
+        ("pi", 0, "constant"),
+        ("ball", 2, "let_shape"),
+    ];
+    for (needle, n, name) in cases {
+        insta::with_settings!({ snapshot_path => "snapshots", prepend_module_to_snapshot => false, omit_expression => true }, {
+            insta::assert_snapshot!(format!("hover_{name}"), hover_snapshot(needle, n));
+        });
+    }
+    // Nothing to say about punctuation or numbers.
+    let (doc, offset) = at(&SCENE.replacen("0.5;", "0$0.5;", 1));
+    assert_eq!(ide::hover(&doc, offset), None);
+}
+
+#[test]
+fn definition_and_references() {
+    let (doc, offset) = at(&cursor("ball", 2));
+    let def = ide::definition(&doc, offset + 1).unwrap();
+    assert_eq!(&doc.text[def.range()], "ball");
+    assert_eq!(def.start, SCENE.find("ball").unwrap());
+    let refs = ide::references(&doc, offset + 1, true);
+    assert_eq!(refs.len(), 3, "{refs:?}");
+    assert!(refs.iter().all(|r| &doc.text[r.range()] == "ball"));
+    assert_eq!(ide::references(&doc, offset + 1, false).len(), 2);
+    // Seeds resolve through merges.
+    let (doc, offset) = at(&cursor("top", 1));
+    let def = ide::definition(&doc, offset + 1).unwrap();
+    assert_eq!(def.start, SCENE.find("top =").unwrap());
+}
+
+#[test]
+fn outline() {
+    let doc = Document::new(SCENE, None);
+    let symbols = ide::symbols(&doc);
+    let top: Vec<(&str, SymbolKind)> = symbols.iter().map(|s| (s.name.as_str(), s.kind)).collect();
+    assert_eq!(
+        top,
+        vec![
+            ("radius", SymbolKind::Let),
+            ("ball", SymbolKind::Let),
+            ("skin", SymbolKind::Atlas),
+            ("m", SymbolKind::Material),
+            ("render", SymbolKind::Render)
+        ]
+    );
+    let children: Vec<(&str, SymbolKind)> = symbols[2]
+        .children
+        .iter()
+        .map(|s| (s.name.as_str(), s.kind))
+        .collect();
+    assert_eq!(
+        children,
+        vec![
+            ("front", SymbolKind::Seed),
+            ("top", SymbolKind::Seed),
+            ("front – top", SymbolKind::Merge)
+        ]
+    );
+}

@@ -25,6 +25,7 @@ pub mod fsutil;
 pub mod gpu;
 pub mod ide;
 pub mod ir;
+pub mod lsp;
 pub mod sema;
 pub mod span;
 pub mod syntax;

@@ -51,6 +51,9 @@ pub enum Command {
     /// Measure frame times on the GPU and print ratios from one run: the shaded scene
     /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
     Bench(BenchArgs),
+    /// Run the language server on standard input and output (LSP, full-document sync):
+    /// diagnostics, hover, go to definition, find references and document symbols.
+    Lsp,
 }
 
 #[derive(clap::Args)]

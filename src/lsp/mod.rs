@@ -1,0 +1,339 @@
+//! `sdfc lsp`: a thin Language Server Protocol layer over [`crate::ide`].
+//!
+//! Full-document sync; every change re-analyses the document and publishes its
+//! diagnostics tagged with the document version. Requests are answered against
+//! the latest text. Positions are UTF-16, converted with `line-index`.
+
+use crate::diagnostic::{Diagnostic, Severity};
+use crate::ide::{self, Document, SymbolKind};
+use crate::span::Span;
+use line_index::{LineCol, LineIndex, TextSize, WideEncoding, WideLineCol};
+use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
+use lsp_types as lsp;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::str::FromStr;
+
+type Error = Box<dyn std::error::Error + Send + Sync>;
+
+struct Open {
+    version: i32,
+    doc: Document,
+    index: LineIndex,
+}
+
+fn to_position(index: &LineIndex, text: &str, offset: usize) -> lsp::Position {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let lc = index.line_col(TextSize::from(offset as u32));
+    let wide = index
+        .to_wide(WideEncoding::Utf16, lc)
+        .unwrap_or(WideLineCol {
+            line: lc.line,
+            col: lc.col,
+        });
+    lsp::Position {
+        line: wide.line,
+        character: wide.col,
+    }
+}
+
+fn to_range(index: &LineIndex, text: &str, span: Span) -> lsp::Range {
+    lsp::Range {
+        start: to_position(index, text, span.start),
+        end: to_position(index, text, span.end),
+    }
+}
+
+fn to_offset(index: &LineIndex, p: lsp::Position) -> Option<usize> {
+    let lc: LineCol = index.to_utf8(
+        WideEncoding::Utf16,
+        WideLineCol {
+            line: p.line,
+            col: p.character,
+        },
+    )?;
+    index.offset(lc).map(|o| u32::from(o) as usize)
+}
+
+/// The folder of a `file:` URI, for texture paths.
+fn base_dir(uri: &lsp::Uri) -> Option<PathBuf> {
+    let path = uri.as_str().strip_prefix("file://")?;
+    PathBuf::from(path).parent().map(PathBuf::from)
+}
+
+fn convert(uri: &lsp::Uri, o: &Open, d: &Diagnostic) -> lsp::Diagnostic {
+    let text = &o.doc.text;
+    let mut message = d.message.clone();
+    for n in &d.notes {
+        message.push_str(&format!("\nnote: {n}"));
+    }
+    if let Some(h) = &d.help {
+        message.push_str(&format!("\nhelp: {h}"));
+    }
+    let related: Vec<lsp::DiagnosticRelatedInformation> = d
+        .secondary
+        .iter()
+        .map(|l| lsp::DiagnosticRelatedInformation {
+            location: lsp::Location {
+                uri: uri.clone(),
+                range: to_range(&o.index, text, l.span),
+            },
+            message: l.message.clone(),
+        })
+        .collect();
+    lsp::Diagnostic {
+        range: to_range(&o.index, text, d.primary.span),
+        severity: Some(match d.severity {
+            Severity::Error => lsp::DiagnosticSeverity::ERROR,
+            Severity::Warning => lsp::DiagnosticSeverity::WARNING,
+            Severity::Note => lsp::DiagnosticSeverity::INFORMATION,
+        }),
+        code: Some(lsp::NumberOrString::String(d.code.to_string())),
+        source: Some(String::from("sdfc")),
+        message,
+        related_information: (!related.is_empty()).then_some(related),
+        ..Default::default()
+    }
+}
+
+fn publish(conn: &Connection, uri: &lsp::Uri, o: Option<&Open>) -> Result<(), Error> {
+    let (diagnostics, version) = match o {
+        Some(o) => (
+            o.doc
+                .analysis
+                .diagnostics
+                .iter()
+                .map(|d| convert(uri, o, d))
+                .collect(),
+            Some(o.version),
+        ),
+        None => (Vec::new(), None),
+    };
+    let params = lsp::PublishDiagnosticsParams {
+        uri: uri.clone(),
+        diagnostics,
+        version,
+    };
+    conn.sender.send(Message::Notification(Notification::new(
+        String::from("textDocument/publishDiagnostics"),
+        params,
+    )))?;
+    Ok(())
+}
+
+fn capabilities() -> lsp::ServerCapabilities {
+    lsp::ServerCapabilities {
+        text_document_sync: Some(lsp::TextDocumentSyncCapability::Kind(
+            lsp::TextDocumentSyncKind::FULL,
+        )),
+        hover_provider: Some(lsp::HoverProviderCapability::Simple(true)),
+        definition_provider: Some(lsp::OneOf::Left(true)),
+        references_provider: Some(lsp::OneOf::Left(true)),
+        document_symbol_provider: Some(lsp::OneOf::Left(true)),
+        ..Default::default()
+    }
+}
+
+/// Serves one client on a connection until it exits.
+pub fn serve(conn: Connection) -> Result<(), Error> {
+    let caps = serde_json::to_value(capabilities())?;
+    conn.initialize(caps)?;
+    let mut docs: HashMap<String, Open> = HashMap::new();
+    for msg in &conn.receiver {
+        match msg {
+            Message::Request(req) => {
+                if conn.handle_shutdown(&req)? {
+                    return Ok(());
+                }
+                let resp = answer(&docs, req);
+                conn.sender.send(Message::Response(resp))?;
+            }
+            Message::Notification(n) => notify(&conn, &mut docs, n)?,
+            Message::Response(_) => {}
+        }
+    }
+    Ok(())
+}
+
+fn open(uri: &lsp::Uri, text: String, version: i32) -> Open {
+    let doc = Document::new(text, base_dir(uri).as_deref());
+    let index = LineIndex::new(&doc.text);
+    Open {
+        version,
+        doc,
+        index,
+    }
+}
+
+fn notify(
+    conn: &Connection,
+    docs: &mut HashMap<String, Open>,
+    n: Notification,
+) -> Result<(), Error> {
+    match n.method.as_str() {
+        "textDocument/didOpen" => {
+            let p: lsp::DidOpenTextDocumentParams = serde_json::from_value(n.params)?;
+            let o = open(
+                &p.text_document.uri,
+                p.text_document.text,
+                p.text_document.version,
+            );
+            publish(conn, &p.text_document.uri, Some(&o))?;
+            docs.insert(p.text_document.uri.as_str().to_string(), o);
+        }
+        "textDocument/didChange" => {
+            let p: lsp::DidChangeTextDocumentParams = serde_json::from_value(n.params)?;
+            // Full sync: the last change holds the whole text.
+            if let Some(change) = p.content_changes.into_iter().last() {
+                let o = open(&p.text_document.uri, change.text, p.text_document.version);
+                publish(conn, &p.text_document.uri, Some(&o))?;
+                docs.insert(p.text_document.uri.as_str().to_string(), o);
+            }
+        }
+        "textDocument/didClose" => {
+            let p: lsp::DidCloseTextDocumentParams = serde_json::from_value(n.params)?;
+            docs.remove(p.text_document.uri.as_str());
+            publish(conn, &p.text_document.uri, None)?;
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+fn respond<T: serde::Serialize>(id: lsp_server::RequestId, value: T) -> Response {
+    Response::new_ok(id, value)
+}
+
+/// Answers a request against the latest text; malformed or unknown requests get errors.
+fn answer(docs: &HashMap<String, Open>, req: Request) -> Response {
+    let id = req.id.clone();
+    let at = |params: &lsp::TextDocumentPositionParams| -> Option<(&Open, usize)> {
+        let o = docs.get(params.text_document.uri.as_str())?;
+        let offset = to_offset(&o.index, params.position)?;
+        Some((o, offset))
+    };
+    let bad = |e: serde_json::Error| {
+        Response::new_err(
+            req.id.clone(),
+            ErrorCode::InvalidParams as i32,
+            e.to_string(),
+        )
+    };
+    match req.method.as_str() {
+        "textDocument/hover" => {
+            match serde_json::from_value::<lsp::HoverParams>(req.params.clone()) {
+                Ok(p) => {
+                    let h = at(&p.text_document_position_params).and_then(|(o, offset)| {
+                        let h = ide::hover(&o.doc, offset)?;
+                        Some(lsp::Hover {
+                            contents: lsp::HoverContents::Markup(lsp::MarkupContent {
+                                kind: lsp::MarkupKind::Markdown,
+                                value: h.markdown,
+                            }),
+                            range: Some(to_range(&o.index, &o.doc.text, h.span)),
+                        })
+                    });
+                    respond(id, h)
+                }
+                Err(e) => bad(e),
+            }
+        }
+        "textDocument/definition" => {
+            match serde_json::from_value::<lsp::GotoDefinitionParams>(req.params.clone()) {
+                Ok(p) => {
+                    let uri = p.text_document_position_params.text_document.uri.clone();
+                    let loc = at(&p.text_document_position_params).and_then(|(o, offset)| {
+                        let span = ide::definition(&o.doc, offset)?;
+                        Some(lsp::GotoDefinitionResponse::Scalar(lsp::Location {
+                            uri,
+                            range: to_range(&o.index, &o.doc.text, span),
+                        }))
+                    });
+                    respond(id, loc)
+                }
+                Err(e) => bad(e),
+            }
+        }
+        "textDocument/references" => {
+            match serde_json::from_value::<lsp::ReferenceParams>(req.params.clone()) {
+                Ok(p) => {
+                    let uri = p.text_document_position.text_document.uri.clone();
+                    let locs: Vec<lsp::Location> = at(&p.text_document_position)
+                        .map(|(o, offset)| {
+                            ide::references(&o.doc, offset, p.context.include_declaration)
+                                .into_iter()
+                                .map(|s| lsp::Location {
+                                    uri: uri.clone(),
+                                    range: to_range(&o.index, &o.doc.text, s),
+                                })
+                                .collect()
+                        })
+                        .unwrap_or_default();
+                    respond(id, locs)
+                }
+                Err(e) => bad(e),
+            }
+        }
+        "textDocument/documentSymbol" => {
+            match serde_json::from_value::<lsp::DocumentSymbolParams>(req.params.clone()) {
+                Ok(p) => {
+                    let symbols = docs
+                        .get(p.text_document.uri.as_str())
+                        .map(|o| {
+                            ide::symbols(&o.doc)
+                                .iter()
+                                .map(|s| symbol(o, s))
+                                .collect::<Vec<_>>()
+                        })
+                        .unwrap_or_default();
+                    respond(id, lsp::DocumentSymbolResponse::Nested(symbols))
+                }
+                Err(e) => bad(e),
+            }
+        }
+        other => Response::new_err(
+            id,
+            ErrorCode::MethodNotFound as i32,
+            format!("sdfc does not handle {other}"),
+        ),
+    }
+}
+
+#[allow(deprecated)]
+fn symbol(o: &Open, s: &ide::Symbol) -> lsp::DocumentSymbol {
+    let kind = match s.kind {
+        SymbolKind::Let => lsp::SymbolKind::VARIABLE,
+        SymbolKind::Atlas => lsp::SymbolKind::NAMESPACE,
+        SymbolKind::Material => lsp::SymbolKind::STRUCT,
+        SymbolKind::Render => lsp::SymbolKind::EVENT,
+        SymbolKind::Seed => lsp::SymbolKind::CONSTANT,
+        SymbolKind::Merge => lsp::SymbolKind::OPERATOR,
+    };
+    lsp::DocumentSymbol {
+        name: s.name.clone(),
+        detail: None,
+        kind,
+        tags: None,
+        deprecated: None,
+        range: to_range(&o.index, &o.doc.text, s.span),
+        selection_range: to_range(&o.index, &o.doc.text, s.selection),
+        children: (!s.children.is_empty())
+            .then(|| s.children.iter().map(|c| symbol(o, c)).collect()),
+    }
+}
+
+/// Serves on standard input and output.
+pub fn run_stdio() -> Result<(), Error> {
+    let (conn, io) = Connection::stdio();
+    serve(conn)?;
+    io.join()?;
+    Ok(())
+}
+
+/// Parses a URI (for tests and clients of this module).
+pub fn uri(s: &str) -> Option<lsp::Uri> {
+    lsp::Uri::from_str(s).ok()
+}

@@ -33,6 +33,8 @@ struct AtlasSample {
     // Parallel transport from the seed as a unit quaternion (x, y, z, w).
     transport: vec4<f32>,
     seed: f32,
+    // The nearest seed's normalized blend weight: 1 away from merged frontiers.
+    weight: f32,
 }
 
 // Notes, item 2: the step whose parabolic chord is s; stable as alpha -> 0.
@@ -82,7 +84,44 @@ fn uv_quaternion(m: mat3x3<f32>) -> vec4<f32> {
 
 // A failed sample with its status.
 fn uv_failed(status: u32, seed: f32) -> AtlasSample {
-    return AtlasSample(vec2<f32>(0.0), 3.0e38, f32(status), vec4<f32>(0.0, 0.0, 0.0, 1.0), seed);
+    return AtlasSample(vec2<f32>(0.0), 3.0e38, f32(status), vec4<f32>(0.0, 0.0, 0.0, 1.0), seed, 0.0);
+}
+
+// Eq. 40 with omega(t) = 3t^2 - 2t^3, of the approximate distance to the frontier (Eq. 39):
+// 1 deep on the nearest seed's side, 0 beyond the band on the neighbour's.
+fn uv_blend_weight(frontier: f32, sigma: f32) -> f32 {
+    if (frontier < -sigma) {
+        return 1.0;
+    }
+    if (frontier > sigma) {
+        return 0.0;
+    }
+    let t = 0.5 - frontier / (2.0 * sigma);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// The seed grid's list for a point: its cell, or the last list (every seed) outside.
+fn uv_grid_list(x: vec3<f32>, grid_min: vec3<f32>, inv_cell: vec3<f32>, dims: vec3<u32>) -> u32 {
+    let rel = (x - grid_min) * inv_cell;
+    let fd = vec3<f32>(dims);
+    if (any(rel < vec3<f32>(0.0)) || any(rel > fd)) {
+        return dims.x * dims.y * dims.z;
+    }
+    let c = min(vec3<u32>(floor(rel)), dims - vec3<u32>(1u));
+    return c.x + dims.x * (c.y + dims.y * c.z);
+}
+
+// A distinct colour per seed index, for the seed views.
+fn uv_seed_color(seed: f32) -> vec3<f32> {
+    let h = fract(seed * 0.618034 + 0.13);
+    let k = vec3<f32>(0.0, 2.0 / 3.0, 1.0 / 3.0);
+    return clamp(abs(fract(vec3<f32>(h) + k) * 6.0 - 3.0) - 1.0, vec3<f32>(0.0), vec3<f32>(1.0)) * 0.7 + 0.2;
+}
+
+// Black to red to yellow, for heat maps in [0, 1].
+fn uv_heat(x: f32) -> vec3<f32> {
+    let t = clamp(x, 0.0, 1.0);
+    return vec3<f32>(min(2.0 * t, 1.0), max(2.0 * t - 1.0, 0.0) * 0.8, 0.0);
 }
 
 // Debug colours of the statuses: ok, too_far, heuristic_failed, sharp_feature, not_reached.

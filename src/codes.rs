@@ -47,8 +47,13 @@ codes! {
     E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
     E_CODEGEN = "E0400": "a scene the code generator cannot compile yet";
     E_SEED_PROJECTION = "E0401": "a seed that cannot be projected onto its atlas's surface";
+    E_UNREACHABLE_MERGE = "E0402": "a merge whose seeds cannot reach each other by the geodesic walk";
     E_INTERNAL = "E0900": "an internal compiler error: naga rejected generated code";
     W_UNUSED = "W0001": "a `let` binding that is never used";
     W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";
     W_UNUSED_ITEM = "W0003": "a material that is never used";
+    W_COINCIDENT_SEEDS = "W0004": "two seeds of one atlas that project to the same point";
+    W_OBSTRUCTION = "W0005": "a cycle of merges that cannot close into one uv chart (a topological obstruction)";
+    W_SEED_JUMP = "W0006": "a seed that projection moved onto another part of the surface";
+    N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
 }

@@ -12,6 +12,9 @@ pub struct Analysis {
     pub program: Program,
     /// Every diagnostic, sorted by position.
     pub diagnostics: Vec<Diagnostic>,
+    /// The prepared atlases (projected seeds, solved merge graphs), one per atlas of the
+    /// program, when [`check`] ran the geometric analysis (None where one failed).
+    pub atlases: Vec<Option<crate::uv::Atlas>>,
 }
 
 impl Analysis {
@@ -30,5 +33,20 @@ pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
         parsed,
         program,
         diagnostics,
+        atlases: Vec::new(),
     }
+}
+
+/// The whole check, as `sdfc check` and the language server run it: the front end and,
+/// when it finds no errors, the compile-time geometry of the atlases (seed projection,
+/// merge walks, frame and offset solves, obstruction tests) with its diagnostics.
+pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
+    let mut analysis = analyze(source, base_dir);
+    if !analysis.has_errors() {
+        let (atlases, diags) = crate::uv::diagnose::prepare_all(&analysis.program);
+        analysis.atlases = atlases;
+        analysis.diagnostics.extend(diags);
+        diagnostic::sort(&mut analysis.diagnostics);
+    }
+    analysis
 }

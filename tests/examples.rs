@@ -1,7 +1,7 @@
 //! Every example scene checks with zero diagnostics.
 
 use sdfc::diagnostic::render;
-use sdfc::driver::analyze;
+use sdfc::driver::check as analyze;
 use std::path::Path;
 
 #[test]

@@ -2,7 +2,7 @@
 
 use super::{base_dir, read_source, CheckArgs, Color, Format};
 use sdfc::diagnostic;
-use sdfc::driver::analyze;
+
 use std::io::{IsTerminal, Write};
 use std::process::ExitCode;
 
@@ -27,7 +27,7 @@ pub fn run(args: CheckArgs) -> ExitCode {
                 continue;
             }
         };
-        let analysis = analyze(&source, Some(&base_dir(path)));
+        let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
         any_errors |= analysis.has_errors();
         errors += analysis
             .diagnostics

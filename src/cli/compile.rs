@@ -57,6 +57,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
     let options = codegen::Options {
         shape: args.shape.clone(),
         walk: args.walk,
+        seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
         plain: false,
     };

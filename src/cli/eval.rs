@@ -75,6 +75,20 @@ struct AtlasLine {
     uv: [f64; 2],
     seed: Option<String>,
     geodesic_distance: Option<f64>,
+    /// The chosen seed's normalized blend weight (1 away from merged frontiers).
+    weight: f64,
+    /// With --all-seeds: every seed's own log map (Alg. 1, full D), no offset.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seeds: Option<Vec<SeedLine>>,
+}
+
+#[derive(serde::Serialize)]
+struct SeedLine {
+    name: String,
+    status: &'static str,
+    uv: [f64; 2],
+    geodesic_distance: Option<f64>,
+    offset: [f64; 2],
 }
 
 /// The atlas to report: the named one, or the only one.
@@ -155,14 +169,24 @@ pub fn run(args: EvalArgs) -> ExitCode {
             .iter()
             .map(|x| {
                 x.map(|x| {
-                    let s = a.nearest(x, false);
-                    atlas_line(
+                    let s = a.sample_with(
+                        x,
+                        sdfc::uv::Search {
+                            brute_force: args.brute_force,
+                        },
+                    );
+                    let mut line = atlas_line(
                         a,
                         s.status,
                         s.uv.to_array(),
                         s.seed.map(|i| i as i32).unwrap_or(-1),
                         s.distance,
-                    )
+                        s.weight,
+                    );
+                    if args.all_seeds {
+                        line.seeds = Some(seed_lines(a, x));
+                    }
+                    line
                 })
             })
             .collect(),
@@ -206,14 +230,19 @@ pub fn run(args: EvalArgs) -> ExitCode {
             match sdfc::gpu::eval_atlas(&gpu, &module.wgsl, &on_surface) {
                 Ok(values) => {
                     for ((slot, v), x) in atlas_results.iter_mut().zip(values).zip(&atlas_points) {
-                        if x.is_some() {
-                            *slot = Some(atlas_line(
+                        if let Some(x) = x {
+                            let mut line = atlas_line(
                                 a,
                                 sdfc::uv::Status::from_code(v.status),
                                 [v.uv[0] as f64, v.uv[1] as f64],
                                 v.seed,
                                 v.distance as f64,
-                            ));
+                                v.weight as f64,
+                            );
+                            if args.all_seeds {
+                                line.seeds = Some(seed_lines(a, *x));
+                            }
+                            *slot = Some(line);
                         }
                     }
                 }
@@ -235,6 +264,8 @@ pub fn run(args: EvalArgs) -> ExitCode {
                 uv: [0.0; 2],
                 seed: None,
                 geodesic_distance: None,
+                weight: 0.0,
+                seeds: None,
             }))
         } else {
             None
@@ -260,6 +291,7 @@ fn atlas_line(
     uv: [f64; 2],
     seed: i32,
     distance: f64,
+    weight: f64,
 ) -> AtlasLine {
     let ok = status == sdfc::uv::Status::Ok;
     AtlasLine {
@@ -270,5 +302,23 @@ fn atlas_line(
             .ok()
             .and_then(|i| a.seed_names.get(i).cloned()),
         geodesic_distance: ok.then_some(distance),
+        weight,
+        seeds: None,
     }
+}
+
+/// Every seed's log map at x (CPU reference, f64).
+fn seed_lines(a: &sdfc::uv::Atlas, x: DVec3) -> Vec<SeedLine> {
+    a.all_seeds(x)
+        .iter()
+        .zip(&a.seeds)
+        .zip(&a.seed_names)
+        .map(|((m, s), name)| SeedLine {
+            name: name.clone(),
+            status: m.status.name(),
+            uv: m.uv.to_array(),
+            geodesic_distance: (m.status == sdfc::uv::Status::Ok).then_some(m.distance),
+            offset: s.offset.to_array(),
+        })
+        .collect()
 }

@@ -30,8 +30,10 @@ pub enum Command {
     /// Reads a JSON array of points `[[x, y, z], …]` and prints one JSON object per point, in
     /// order: `{"point", "distance", "gradient", "surface"}`, where `surface` is the point
     /// projected onto the zero set (null when the projection does not converge). When the
-    /// scene has atlases, `"atlas": {"name", "status", "uv", "seed", "geodesic_distance"}`
-    /// gives the Implicit UVs at that projection.
+    /// scene has atlases, `"atlas": {"name", "status", "uv", "seed", "geodesic_distance",
+    /// "weight"}` gives the Implicit UVs at that projection: Alg. 2's blended uv, the
+    /// geodesic-nearest seed and its blend weight; `--all-seeds` adds `"seeds"`, each seed's
+    /// own log map.
     Eval(EvalArgs),
     /// Compile a scene to one standalone shader module, validated by naga.
     ///
@@ -99,6 +101,9 @@ pub struct RenderArgs {
     /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
     #[arg(long, value_enum, default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
+    /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub seed_grid: sdfc::codegen::SeedGridChoice,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,
@@ -126,6 +131,9 @@ pub struct CompileArgs {
     /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
     #[arg(long, value_enum, default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
+    /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub seed_grid: sdfc::codegen::SeedGridChoice,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,
@@ -182,6 +190,13 @@ pub struct EvalArgs {
     /// The graphics API for --gpu.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
+    /// Also report every seed's own log map, status and offset (`"seeds"`, CPU reference).
+    #[arg(long)]
+    pub all_seeds: bool,
+    /// Search the nearest seed without the early-out of Eq. 35: every seed is walked
+    /// with the full D (CPU; for testing the early-out).
+    #[arg(long)]
+    pub brute_force: bool,
 }
 
 pub fn read_source(path: &Path) -> std::io::Result<String> {
@@ -208,7 +223,7 @@ pub fn base_dir(path: &Path) -> PathBuf {
 /// Reads and checks a scene without printing anything (it was checked already).
 pub fn load_quiet(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
     let source = read_source(path).map_err(|_| std::process::ExitCode::from(2))?;
-    let analysis = sdfc::driver::analyze(&source, Some(&base_dir(path)));
+    let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
     if analysis.has_errors() {
         return Err(std::process::ExitCode::from(1));
     }
@@ -223,7 +238,7 @@ pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::proces
         eprintln!("error: cannot read {name}: {e}");
         std::process::ExitCode::from(2)
     })?;
-    let analysis = sdfc::driver::analyze(&source, Some(&base_dir(path)));
+    let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
     let color = std::io::IsTerminal::is_terminal(&std::io::stderr())
         && std::env::var_os("NO_COLOR").is_none();
     eprint!(

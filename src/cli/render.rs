@@ -87,6 +87,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
     let options = sdfc::codegen::Options {
         shape: args.shape.clone(),
         walk: args.walk,
+        seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
         plain: false,
     };

@@ -1,10 +1,36 @@
 //! Atlas code: per atlas, its field, gradient, one Alg. 1 step, the walk (unrolled
-//! to exactly N steps with 1/(N − i) folded, or a rolled loop), and the search for
-//! the geodesic-nearest seed with the seeds' projected positions and frames as
-//! constants. The scene-independent pieces are in `shaders/uv.wgsl`.
+//! to exactly N steps with 1/(N − i) folded, or a rolled loop), the search for the
+//! geodesic-nearest seed over the seed grid, and Alg. 2's blend with the merged
+//! neighbours. Seeds (projected positions, solved frames and offsets), the merge
+//! graph, σ and the grid are constants. The scene-independent pieces are in
+//! `shaders/uv.wgsl`.
+
+/// Whether the nearest-seed search uses the seed grid ([`SeedGrid`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SeedGridChoice {
+    /// The grid for atlases of more than 4 seeds (the default).
+    #[default]
+    Auto,
+    On,
+    /// A plain scan of every seed.
+    Off,
+}
+
+impl SeedGridChoice {
+    pub fn grid(self, atlas: &Atlas) -> SeedGrid {
+        let n = atlas.seeds.len();
+        match self {
+            SeedGridChoice::Off => SeedGrid::single(n),
+            SeedGridChoice::Auto if n <= 4 => SeedGrid::single(n),
+            _ => atlas.seed_grid(),
+        }
+    }
+}
 
 use super::emit::{lit, vec3, Writer};
+use crate::uv::grid::SeedGrid;
 use crate::uv::Atlas;
+use glam::DVec3;
 use std::fmt::Write;
 
 /// How the walk's N steps are emitted.
@@ -18,7 +44,7 @@ pub enum WalkForm {
 }
 
 /// Emits the WGSL of atlas `k`; `atlas_NAME(p) -> AtlasSample` is its entry.
-pub fn emit(out: &mut String, k: usize, atlas: &Atlas, form: WalkForm) {
+pub fn emit(out: &mut String, k: usize, atlas: &Atlas, form: WalkForm, grid: &SeedGrid) {
     let p = &atlas.params;
     let mut w = Writer::new();
     let d = w.shape(&atlas.shape, atlas.shape.root(), "p");
@@ -101,10 +127,16 @@ fn atlas_{k}_step(st: WalkState, p: vec3<f32>, dmax: f32, inv_remaining: f32) ->
         WalkForm::Loop => format!("    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, 1.0 / f32({n}u - i));\n    }}\n"),
     };
     let rmin = lit(p.min_reach);
+    emit_tables(out, k, atlas, grid);
     let _ = writeln!(
         out,
-        "// Alg. 1 around one seed: exactly N = {n} steps.
-fn atlas_{k}_walk(x: vec3<f32>, p: vec3<f32>, np: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, dmax: f32, seed: f32) -> AtlasSample {{
+        "// Alg. 1 around seed j (the constants above): exactly N = {n} steps.
+fn atlas_{k}_walk(x: vec3<f32>, j: u32, dmax: f32) -> AtlasSample {{
+    let p = ATLAS_{k}_P[j];
+    let np = ATLAS_{k}_N[j];
+    let e1 = ATLAS_{k}_E1[j];
+    let e2 = cross(np, e1);
+    let seed = f32(j);
     let d0 = length(x - p);
     if (d0 > dmax) {{
         return uv_failed(UV_TOO_FAR, seed);
@@ -112,7 +144,7 @@ fn atlas_{k}_walk(x: vec3<f32>, p: vec3<f32>, np: vec3<f32>, e1: vec3<f32>, e2: 
     if (d0 < {rmin}) {{
         let t0 = (x - p) - np * dot(np, x - p);
         let t0l = max(length(t0), 1e-30);
-        return AtlasSample(vec2<f32>(dot(t0, e1), dot(t0, e2)) / t0l * d0, d0, 0.0, vec4<f32>(0.0, 0.0, 0.0, 1.0), seed);
+        return AtlasSample(vec2<f32>(dot(t0, e1), dot(t0, e2)) / t0l * d0, d0, 0.0, vec4<f32>(0.0, 0.0, 0.0, 1.0), seed, 1.0);
     }}
     let identity = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
     var st = WalkState(x, x, atlas_{k}_grad(x), 0.0, identity, UV_OK);
@@ -128,22 +160,41 @@ fn atlas_{k}_walk(x: vec3<f32>, p: vec3<f32>, np: vec3<f32>, e1: vec3<f32>, e2: 
     let t = dd - np * dot(np, dd);
     let tl = max(length(t), 1e-30);
     let rot = st.rot * uv_rotation_between(np, normalize(st.g));
-    return AtlasSample(vec2<f32>(dot(t, e1), dot(t, e2)) / tl * r, r, 0.0, uv_quaternion(rot), seed);
+    return AtlasSample(vec2<f32>(dot(t, e1), dot(t, e2)) / tl * r, r, 0.0, uv_quaternion(rot), seed, 1.0);
 }}
 "
     );
-    // The nearest seed: a seed farther (Euclidean) than the best geodesic distance so far
-    // cannot win (Eq. 35); the best so far is the next walk's D.
-    let _ = writeln!(out, "fn atlas_{}(x: vec3<f32>) -> AtlasSample {{\n    var best = uv_failed(UV_TOO_FAR, -1.0);\n    var found = false;\n    var fail_e = 3.0e38;", atlas.name);
-    for (j, s) in atlas.seeds.iter().enumerate() {
-        let s = &s.seed;
-        let _ = writeln!(
-            out,
-            "    {{
+    let dmax = lit(p.max_distance);
+    let cells = grid.cells();
+    let list = if cells == 0 {
+        String::from("0u")
+    } else {
+        let [dx, dy, dz] = grid.dims;
+        format!(
+            "uv_grid_list(x, {min}, {inv}, vec3<u32>({dx}u, {dy}u, {dz}u))",
+            min = vec3(grid.min),
+            inv = vec3(DVec3::ONE / grid.cell),
+        )
+    };
+    // The nearest seed (Alg. 2's search). A seed whose Euclidean lower bound is not below
+    // the best geodesic distance so far cannot win (Eq. 35), nor can any after it in the
+    // list; the best so far is the next walk's D.
+    let _ = writeln!(
+        out,
+        "fn atlas_{k}_nearest(x: vec3<f32>) -> AtlasSample {{
+    var best = uv_failed(UV_TOO_FAR, -1.0);
+    var found = false;
+    var fail_e = 3.0e38;
+    let list = {list};
+    for (var t = ATLAS_{k}_START[list]; t < ATLAS_{k}_START[list + 1u]; t = t + 1u) {{
         let bound = select({dmax}, best.distance, found);
-        let e = length(x - {p});
+        if (found && ATLAS_{k}_BOUND[t] >= bound) {{
+            break;
+        }}
+        let j = ATLAS_{k}_ITEMS[t];
+        let e = length(x - ATLAS_{k}_P[j]);
         if (e < bound) {{
-            let m = atlas_{k}_walk(x, {p}, {n}, {e1}, {e2}, bound, {j}.0);
+            let m = atlas_{k}_walk(x, j, bound);
             if (m.status == 0.0) {{
                 if (!found || m.distance < best.distance) {{
                     best = m;
@@ -154,13 +205,150 @@ fn atlas_{k}_walk(x: vec3<f32>, p: vec3<f32>, np: vec3<f32>, e1: vec3<f32>, e2: 
                 fail_e = e;
             }}
         }}
-    }}",
-            dmax = lit(p.max_distance),
-            p = vec3(s.p),
-            n = vec3(s.n),
-            e1 = vec3(s.e1),
-            e2 = vec3(s.e2),
-        );
+    }}
+    return best;
+}}
+"
+    );
+    // Alg. 2's blend with the merged neighbours of the nearest seed.
+    let sigma = lit(atlas.sigma);
+    let _ = writeln!(
+        out,
+        "// Alg. 2: the nearest seed, then the blend with its merged neighbours (Eqs. 39-44;
+// the last line as corrected by the notes). sigma = {sigma}.
+fn atlas_{name}(x: vec3<f32>) -> AtlasSample {{
+    var best = atlas_{k}_nearest(x);
+    if (best.status != 0.0) {{
+        return best;
+    }}
+    let i = u32(best.seed);
+    let own = best.uv + ATLAS_{k}_OFFSET[i];
+    let s = ATLAS_{k}_ADJ_START[i];
+    let e = ATLAS_{k}_ADJ_START[i + 1u];
+    if (s == e) {{
+        best.uv = own;
+        return best;
+    }}
+    let d = best.distance;
+    let sigma = {sigma};
+    var sum = vec2<f32>(0.0);
+    var total = 0.0;
+    var w_own = 1.0;
+    for (var t = s; t < e; t = t + 1u) {{
+        let j = ATLAS_{k}_ADJ[t];
+        let d_ij = ATLAS_{k}_ADJ_D[t];
+        let to_j = x - ATLAS_{k}_P[j];
+        // Eq. 44: beyond the band even in Euclidean distance, p_j does not contribute.
+        if (d * d + 2.0 * sigma * d_ij >= dot(to_j, to_j)) {{
+            let m = atlas_{k}_walk(x, j, d + 2.0 * sigma);
+            if (m.status == 0.0) {{
+                let w_ij = uv_blend_weight((d * d - m.distance * m.distance) / (2.0 * d_ij), sigma);
+                w_own = min(w_own, w_ij);
+                let w_j = 1.0 - w_ij;
+                sum = sum + w_j * (m.uv + ATLAS_{k}_OFFSET[j]);
+                total = total + w_j;
+            }}
+        }}
+    }}
+    best.uv = (sum + w_own * own) / (total + w_own);
+    best.weight = w_own / (total + w_own);
+    return best;
+}}
+
+// Whether seeds i and j of atlas `{name}` are merged.
+fn atlas_{name}_merged(i: u32, j: u32) -> bool {{
+    for (var t = ATLAS_{k}_ADJ_START[i]; t < ATLAS_{k}_ADJ_START[i + 1u]; t = t + 1u) {{
+        if (ATLAS_{k}_ADJ[t] == j) {{
+            return true;
+        }}
+    }}
+    return false;
+}}
+",
+        name = atlas.name
+    );
+}
+
+/// The atlas's constants: seeds (position, normal, e1, offset), the merge graph's
+/// adjacency (CSR, with edge lengths) and the seed grid's lists.
+fn emit_tables(out: &mut String, k: usize, atlas: &Atlas, grid: &SeedGrid) {
+    let n = atlas.seeds.len();
+    let arr = |name: &str, ty: &str, items: Vec<String>| {
+        // WGSL has no empty arrays: pad with one unused element.
+        let items = if items.is_empty() {
+            vec![match ty {
+                "u32" => "0u".to_string(),
+                "f32" => "0.0".to_string(),
+                _ => format!("{ty}()"),
+            }]
+        } else {
+            items
+        };
+        format!(
+            "const {name} = array<{ty}, {}>({});\n",
+            items.len(),
+            items.join(", ")
+        )
+    };
+    let seeds = &atlas.seeds;
+    let mut text = String::new();
+    text += &arr(
+        &format!("ATLAS_{k}_P"),
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.p)).collect(),
+    );
+    text += &arr(
+        &format!("ATLAS_{k}_N"),
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.n)).collect(),
+    );
+    text += &arr(
+        &format!("ATLAS_{k}_E1"),
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.e1)).collect(),
+    );
+    text += &arr(
+        &format!("ATLAS_{k}_OFFSET"),
+        "vec2<f32>",
+        seeds
+            .iter()
+            .map(|s| format!("vec2<f32>({}, {})", lit(s.offset.x), lit(s.offset.y)))
+            .collect(),
+    );
+    let mut adj_start = vec![0u32];
+    let (mut adj, mut adj_d) = (Vec::new(), Vec::new());
+    for i in 0..n {
+        for &(j, d) in &atlas.graph.neighbors[i] {
+            adj.push(format!("{j}u"));
+            adj_d.push(lit(d));
+        }
+        adj_start.push(adj.len() as u32);
     }
-    let _ = writeln!(out, "    return best;\n}}\n");
+    text += &arr(
+        &format!("ATLAS_{k}_ADJ_START"),
+        "u32",
+        adj_start.iter().map(|v| format!("{v}u")).collect(),
+    );
+    text += &arr(&format!("ATLAS_{k}_ADJ"), "u32", adj);
+    text += &arr(&format!("ATLAS_{k}_ADJ_D"), "f32", adj_d);
+    text += &arr(
+        &format!("ATLAS_{k}_START"),
+        "u32",
+        grid.start.iter().map(|v| format!("{v}u")).collect(),
+    );
+    text += &arr(
+        &format!("ATLAS_{k}_ITEMS"),
+        "u32",
+        grid.items.iter().map(|v| format!("{v}u")).collect(),
+    );
+    text += &arr(
+        &format!("ATLAS_{k}_BOUND"),
+        "f32",
+        grid.bound.iter().map(|&v| lit(v)).collect(),
+    );
+    let _ = writeln!(
+        out,
+        "// Seeds (projected, with solved frames and offsets), merge graph and seed grid ({} cells).\n{text}",
+        grid.cells()
+    );
 }

@@ -11,7 +11,7 @@ mod atlas;
 mod emit;
 pub mod targets;
 
-pub use atlas::WalkForm;
+pub use atlas::{SeedGridChoice, WalkForm};
 pub use emit::{lit, TextureUse};
 pub use targets::{translate, validate, Target, Validated};
 
@@ -102,6 +102,8 @@ pub struct Options {
     pub atlas: Option<String>,
     /// Leave out atlases and materials: the plain sphere-trace baseline of benchmarks.
     pub plain: bool,
+    /// Whether the nearest-seed search uses the seed grid.
+    pub seed_grid: SeedGridChoice,
 }
 
 /// [`generate`] with a choice of walk form.
@@ -166,16 +168,14 @@ pub fn generate_with(
     } else {
         &program.materials
     };
-    for (k, def) in atlases.iter().enumerate() {
-        let Some(shape) = ir::lower_shape(&def.shape) else {
-            continue;
-        };
-        match crate::uv::Atlas::prepare(def, &shape) {
-            Ok(a) => atlas::emit(&mut out, k, &a, form),
-            Err(crate::uv::atlas::PrepareError::SeedOffSurface { seed }) => problems.push(
-                Diagnostic::error(codes::E_SEED_PROJECTION, format!("seed `{}` cannot be projected onto the surface of atlas `{}`", def.seeds[seed].name, def.name), def.seeds[seed].position_span, "projection does not converge here")
-                    .with_note("seeds are moved onto the surface by Newton steps along the gradient; place this one nearer the shape"),
-            ),
+    if !atlases.is_empty() {
+        let (prepared, diags) = crate::uv::diagnose::prepare_all(program);
+        // Warnings and notes were reported by the check; errors stop generation.
+        problems.extend(diags.into_iter().filter(Diagnostic::is_error));
+        for (k, a) in prepared.iter().enumerate() {
+            if let Some(a) = a {
+                atlas::emit(&mut out, k, a, form, &options.seed_grid.grid(a));
+            }
         }
     }
 
@@ -195,8 +195,8 @@ pub fn generate_with(
         None => atlases.first().map(|a| a.name.clone()),
     };
     let _ = match chosen {
-        Some(name) => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return atlas_{name}(p);\n}}\n"),
-        None => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return uv_failed(UV_TOO_FAR, -1.0);\n}}\n"),
+        Some(name) => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return atlas_{name}(p);\n}}\n\nfn scene_atlas_merged(i: u32, j: u32) -> bool {{\n    return atlas_{name}_merged(i, j);\n}}\n"),
+        None => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return uv_failed(UV_TOO_FAR, -1.0);\n}}\n\nfn scene_atlas_merged(i: u32, j: u32) -> bool {{\n    return false;\n}}\n"),
     };
 
     // Materials: id 0 is the default; id i + 1 is program.materials[i].

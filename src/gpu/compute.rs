@@ -19,6 +19,8 @@ pub struct AtlasValue {
     pub transport: [f32; 4],
     /// The chosen seed, or -1.
     pub seed: i32,
+    /// The chosen seed's normalized blend weight.
+    pub weight: f32,
 }
 
 /// The scene's atlas (the module's `scene_atlas`) at each point.
@@ -32,6 +34,7 @@ pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasVa
             status: c[0][3].round() as u32,
             transport: c[1],
             seed: c[2][0].round() as i32,
+            weight: c[2][1],
         })
         .collect())
 }

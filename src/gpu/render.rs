@@ -23,6 +23,14 @@ pub enum ViewMode {
     Status,
     /// Isolines of the geodesic distance.
     Distance,
+    /// Geodesic Voronoi cells of the seeds in distinct colours.
+    Seeds,
+    /// Blend weights: black inside cells, red to yellow in the bands between merged seeds.
+    Blend,
+    /// Distortion: black (isometric) to red and yellow (stretched by 50% or more).
+    Distortion,
+    /// Seams: red on frontiers between seeds that are not merged.
+    Seams,
 }
 
 impl ViewMode {
@@ -36,6 +44,10 @@ impl ViewMode {
             ViewMode::Checker => 5.0,
             ViewMode::Status => 6.0,
             ViewMode::Distance => 7.0,
+            ViewMode::Seeds => 8.0,
+            ViewMode::Blend => 9.0,
+            ViewMode::Distortion => 10.0,
+            ViewMode::Seams => 11.0,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! definition, references and document symbols. The language server (`src/lsp`)
 //! only converts these to and from the protocol.
 
-use crate::driver::{analyze, Analysis};
+use crate::driver::Analysis;
 use crate::sema::builtins::{self, CONSTANTS};
 use crate::sema::{AtlasAttr, DefKind, Value};
 use crate::span::Span;
@@ -18,7 +18,7 @@ pub struct Document {
 impl Document {
     pub fn new(text: impl Into<String>, base_dir: Option<&Path>) -> Document {
         let text = text.into();
-        let analysis = analyze(&text, base_dir);
+        let analysis = crate::driver::check(&text, base_dir);
         Document { text, analysis }
     }
 }

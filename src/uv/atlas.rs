@@ -1,8 +1,11 @@
-//! Atlases on the CPU: seeds projected onto the surface with their frames
-//! (done at compile time), and the per-point search for the geodesic-nearest
-//! seed (Alg. 2's search with the exact early-out of Eq. 35).
+//! Atlases on the CPU: seeds projected onto the surface, the merge graph solved for
+//! frames and offsets (all at compile time), and Alg. 2 per point: the search for the
+//! geodesic-nearest seed with the exact early-out of Eq. 35, then the blend with the
+//! merged neighbours (Eqs. 39–44, with the corrected last line of the notes).
 
+use super::grid::SeedGrid;
 use super::logmap::{gradient, log_map, LogMap, Params, Seed, Status};
+use super::merge::{self, MergeGraph};
 use crate::ir::{eval, Shape};
 use crate::sema::AtlasDef;
 use glam::{DMat3, DVec2, DVec3};
@@ -15,6 +18,26 @@ pub struct PreparedSeed {
     pub moved: f64,
     /// Whether the frame's e1 came from a default rather than a `tangent`.
     pub default_tangent: bool,
+    /// The position as written.
+    pub written: DVec3,
+    /// f at the written position: how far (and on which side) a true distance field says
+    /// the surface is.
+    pub written_distance: f64,
+    /// The uv offset u_i of Eq. 37 (zero for an unmerged seed).
+    pub offset: DVec2,
+}
+
+impl PreparedSeed {
+    /// Whether projection probably landed on another part of the shape than the one
+    /// meant: it moved the seed much farther than |f| at its written position, or not
+    /// along the landing point's normal (the written point is not in front of it).
+    pub fn jumped(&self, scale: f64) -> bool {
+        if self.moved <= 1e-2 * scale {
+            return false;
+        }
+        let along = (self.written - self.seed.p).dot(self.seed.n) * self.written_distance.signum();
+        self.moved > 3.0 * self.written_distance.abs() + 1e-2 * scale || along < 0.5 * self.moved
+    }
 }
 
 /// An atlas ready to evaluate: its shape, projected seeds and parameters.
@@ -26,6 +49,19 @@ pub struct Atlas {
     pub shape: Shape,
     pub seeds: Vec<PreparedSeed>,
     pub params: Params,
+    /// The solved merge graph.
+    pub graph: MergeGraph,
+    /// σ, the half-width of the blend band (Eq. 40).
+    pub sigma: f64,
+    /// Pairs of seeds that project to the same point (within 1e-3 · scale).
+    pub coincident: Vec<(usize, usize)>,
+}
+
+/// Choices for [`Atlas::sample_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Search {
+    /// Walk every seed with the full D (no early-out): for testing the early-out.
+    pub brute_force: bool,
 }
 
 /// Why an atlas cannot be prepared.
@@ -70,7 +106,18 @@ impl Atlas {
                 seed: Seed { p, n, e1, e2 },
                 moved: (p - written).length(),
                 default_tangent,
+                written,
+                written_distance: eval::distance(shape, written),
+                offset: DVec2::ZERO,
             });
+        }
+        let mut coincident = Vec::new();
+        for i in 0..seeds.len() {
+            for j in i + 1..seeds.len() {
+                if (seeds[i].seed.p - seeds[j].seed.p).length() < 1e-3 * s {
+                    coincident.push((i, j));
+                }
+            }
         }
         let a = &def.params;
         let params = Params {
@@ -83,12 +130,45 @@ impl Atlas {
             h_gradient: 1e-3 * s,
             h_curvature: 1e-2 * s,
         };
+        // The merge graph, walked in f64 with the reference's fine difference steps.
+        let pairs: Vec<(usize, usize)> = def
+            .merges
+            .iter()
+            .map(|m| (m.a, m.b))
+            .filter(|&(a, b)| !coincident.contains(&(a.min(b), a.max(b))))
+            .collect();
+        let fixed: Vec<bool> = seeds.iter().map(|s| !s.default_tangent).collect();
+        let mut plain: Vec<Seed> = seeds.iter().map(|s| s.seed).collect();
+        let f = |q: DVec3| eval::distance(shape, q);
+        let fine = Params {
+            h_gradient: 1e-6 * s,
+            h_curvature: 1e-4 * s,
+            ..params
+        };
+        let (graph, offsets) = merge::solve(&f, &mut plain, &pairs, &fixed, &fine);
+        for ((ps, seed), offset) in seeds.iter_mut().zip(plain).zip(offsets) {
+            ps.seed = seed;
+            ps.offset = offset;
+        }
+        let shortest = graph
+            .edges
+            .iter()
+            .map(|e| e.length)
+            .fold(f64::INFINITY, f64::min);
+        let sigma = a.sigma.unwrap_or(if shortest.is_finite() {
+            shortest / 3.0
+        } else {
+            0.0
+        });
         Ok(Atlas {
             name: def.name.clone(),
             seed_names: def.seeds.iter().map(|s| s.name.clone()).collect(),
             shape: shape.clone(),
             seeds,
             params,
+            graph,
+            sigma,
+            coincident,
         })
     }
 
@@ -123,6 +203,39 @@ impl Atlas {
             .map(|(i, s)| ((x - s.seed.p).length(), i))
             .collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.search(x, order.into_iter(), brute_force)
+    }
+
+    /// The nearest-seed search over a [`SeedGrid`] cell's list, as the generated shader
+    /// runs it: a seed whose lower bound is not below the best distance so far ends it.
+    pub fn nearest_in_grid(&self, x: DVec3, grid: &SeedGrid) -> Sample {
+        let list = grid
+            .entries(grid.list(x))
+            .map(|(i, bound)| (bound, i))
+            .collect::<Vec<_>>();
+        self.search(x, list.into_iter(), false)
+    }
+
+    /// The seed acceleration grid the generated shader uses for this atlas.
+    pub fn seed_grid(&self) -> SeedGrid {
+        let b = self.shape.framing_bounds();
+        let pad = 1e-3 * scale(&self.shape);
+        let points: Vec<DVec3> = self.seeds.iter().map(|s| s.seed.p).collect();
+        SeedGrid::build(
+            &points,
+            b.min - DVec3::splat(pad),
+            b.max + DVec3::splat(pad),
+            self.params.max_distance,
+        )
+    }
+
+    /// Walks seeds in the given order of (lower bound of Euclidean distance, seed).
+    fn search(
+        &self,
+        x: DVec3,
+        order: impl Iterator<Item = (f64, usize)>,
+        brute_force: bool,
+    ) -> Sample {
         let mut best: Option<(usize, LogMap)> = None;
         let mut first_failure = None;
         for (euclid, i) in order {
@@ -157,6 +270,7 @@ impl Atlas {
                 distance: m.distance,
                 transport: m.transport,
                 seed: Some(seed),
+                weight: 1.0,
             },
             None => {
                 let (seed, status) = first_failure
@@ -168,9 +282,72 @@ impl Atlas {
                     distance: f64::INFINITY,
                     transport: DMat3::IDENTITY,
                     seed,
+                    weight: 0.0,
                 }
             }
         }
+    }
+
+    /// Alg. 2: the blended uv at a surface point, from the nearest seed and its merged
+    /// neighbours.
+    pub fn sample(&self, x: DVec3) -> Sample {
+        self.sample_with(x, Search::default())
+    }
+
+    pub fn sample_with(&self, x: DVec3, search: Search) -> Sample {
+        let nearest = self.nearest(x, search.brute_force);
+        self.blend(x, nearest)
+    }
+
+    /// The blend of Alg. 2 around an already found nearest seed. `uv` comes back in the
+    /// atlas's common uv space (the seed's offset added), `weight` is the nearest seed's
+    /// normalized weight w_{i*} / (W + w_{i*}).
+    pub fn blend(&self, x: DVec3, nearest: Sample) -> Sample {
+        let (Status::Ok, Some(i)) = (nearest.status, nearest.seed) else {
+            return nearest;
+        };
+        let mut out = nearest;
+        let own = nearest.uv + self.seeds[i].offset;
+        let neighbors = &self.graph.neighbors[i];
+        if neighbors.is_empty() {
+            out.uv = own;
+            return out;
+        }
+        let d = nearest.distance;
+        let sigma = self.sigma;
+        let (mut sum, mut total, mut w_own) = (DVec2::ZERO, 0.0, 1.0f64);
+        for &(j, d_ij) in neighbors {
+            // Eq. 44: when even the Euclidean distance to p_j puts x beyond the band,
+            // w_{i*,j} = 1 and p_j does not contribute.
+            if d * d + 2.0 * sigma * d_ij < (x - self.seeds[j].seed.p).length_squared() {
+                continue;
+            }
+            let m = self.walk(x, j, d + 2.0 * sigma);
+            if m.status != Status::Ok {
+                continue;
+            }
+            let w_ij = blend_weight(frontier_distance(d, m.distance, d_ij), sigma);
+            w_own = w_own.min(w_ij); // Eq. 41
+            let w_j = 1.0 - w_ij; // Eq. 42
+            sum += w_j * (m.uv + self.seeds[j].offset);
+            total += w_j;
+        }
+        // The corrected last line of Alg. 2 (notes, item 3).
+        out.uv = (sum + w_own * own) / (total + w_own);
+        out.weight = w_own / (total + w_own);
+        out
+    }
+
+    /// The log map of every seed at x (full D), for `sdfc eval --all-seeds`.
+    pub fn all_seeds(&self, x: DVec3) -> Vec<LogMap> {
+        (0..self.seeds.len())
+            .map(|i| self.walk(x, i, self.params.max_distance))
+            .collect()
+    }
+
+    /// Whether seeds i and j are merged.
+    pub fn merged(&self, i: usize, j: usize) -> bool {
+        self.graph.neighbors[i].iter().any(|&(k, _)| k == j)
     }
 
     /// The surface normal used at a point.
@@ -189,4 +366,24 @@ pub struct Sample {
     pub transport: DMat3,
     /// The chosen seed (or, on failure, the nearest seed that failed).
     pub seed: Option<usize>,
+    /// The chosen seed's normalized blend weight (1 away from merged frontiers).
+    pub weight: f64,
+}
+
+/// Eq. 39: the approximate signed distance from x to the Voronoi frontier between seeds
+/// i and j (negative on i's side), from the geodesic distances d_i, d_j and d_ij.
+pub fn frontier_distance(d_i: f64, d_j: f64, d_ij: f64) -> f64 {
+    (d_i * d_i - d_j * d_j) / (2.0 * d_ij)
+}
+
+/// Eq. 40 with ω(t) = 3t² − 2t³: 1 deep on i's side, 0 beyond the band on j's side.
+pub fn blend_weight(frontier: f64, sigma: f64) -> f64 {
+    if frontier < -sigma {
+        1.0
+    } else if frontier > sigma {
+        0.0
+    } else {
+        let t = 0.5 - frontier / (2.0 * sigma);
+        t * t * (3.0 - 2.0 * t)
+    }
 }

@@ -90,16 +90,25 @@ pub struct LogMap {
     pub distance: f64,
     /// Parallel transport T_pM → T_xM.
     pub transport: DMat3,
+    /// Where the walk stopped: the seed on success, else the point where it failed
+    /// (for diagnostics such as "sharp feature at (x, y, z)").
+    pub at: DVec3,
 }
 
 impl LogMap {
-    fn fail(status: Status) -> LogMap {
+    fn fail(status: Status, at: DVec3) -> LogMap {
         LogMap {
             status,
             uv: DVec2::ZERO,
             distance: f64::INFINITY,
             transport: DMat3::IDENTITY,
+            at,
         }
+    }
+
+    /// The log map as a tangent vector at the seed: u·e1 + v·e2.
+    pub fn tangent(&self, seed: &Seed) -> DVec3 {
+        seed.e1 * self.uv.x + seed.e2 * self.uv.y
     }
 
     /// The transport as a unit quaternion (x, y, z, w), as `ATLAS.transport` gives it.
@@ -158,7 +167,7 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
     let n_steps = params.steps.max(1);
     let p = seed.p;
     if (x - p).length() > params.max_distance {
-        return LogMap::fail(Status::TooFar);
+        return LogMap::fail(Status::TooFar, x);
     }
     // Within r_min of the seed the walk has nothing left to do: the answer is the
     // tangent projection of x − p itself (the limit of the last step below).
@@ -171,6 +180,7 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
             uv: DVec2::new(t.dot(seed.e1), t.dot(seed.e2)) * d0,
             distance: d0,
             transport: DMat3::IDENTITY,
+            at: p,
         };
     }
     let mut xi = x;
@@ -189,7 +199,7 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         // (nearly) along the normal. An absolute test would fail every walk that starts
         // within N·ε1 of the seed, whose last steps are shorter than ε1.
         if vl < params.heuristic_tolerance * to_p.length() {
-            return LogMap::fail(Status::HeuristicFailed);
+            return LogMap::fail(Status::HeuristicFailed, xi);
         }
         let vh = v / vl;
         // Normal curvature along v̂ by the three-point second difference (Eq. 17).
@@ -205,7 +215,7 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         let g_next = gradient(f, next, params.h_gradient);
         let n_next = g_next.normalize_or_zero();
         if n_next.dot(ni) < 1.0 - params.sharp_tolerance {
-            return LogMap::fail(Status::SharpFeature);
+            return LogMap::fail(Status::SharpFeature, next);
         }
         rot *= rotation_between(n_next, ni);
         r += arc_length(tau, kappa);
@@ -214,12 +224,12 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         gi = g_next;
         ni = n_next;
         if r + (xi - p).length() > params.max_distance {
-            return LogMap::fail(Status::TooFar);
+            return LogMap::fail(Status::TooFar, xi);
         }
     }
     let rest = (xi - p).length();
     if rest >= params.min_reach {
-        return LogMap::fail(Status::NotReached);
+        return LogMap::fail(Status::NotReached, xi);
     }
     let r = r + rest;
     // x_{N−1} − p rather than x_{N−1} − x_N, for robustness.
@@ -231,5 +241,6 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         uv: DVec2::new(t.dot(seed.e1), t.dot(seed.e2)) * r,
         distance: r,
         transport: rot * rotation_between(seed.n, ni),
+        at: p,
     }
 }

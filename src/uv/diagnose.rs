@@ -1,0 +1,213 @@
+//! The compile-time geometry of atlases as diagnostics on the scene's spans: seeds that
+//! cannot be projected, moved far or jumped; seeds that coincide; merges whose seeds
+//! cannot reach each other; cycles of merges with a topological obstruction.
+
+use super::atlas::{scale, Atlas, PrepareError};
+use super::merge::{HOLONOMY_LIMIT_DEG, RESIDUAL_LIMIT};
+use super::Status;
+use crate::codes;
+use crate::diagnostic::Diagnostic;
+use crate::ir;
+use crate::sema::{AtlasDef, Program};
+use glam::DVec3;
+
+/// Every atlas of a checked, error-free program prepared (None where it cannot be),
+/// with the diagnostics of their geometry.
+pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
+    let mut out = Vec::new();
+    let mut diags = Vec::new();
+    for def in &program.atlases {
+        let Some(shape) = ir::lower_shape(&def.shape) else {
+            out.push(None);
+            continue;
+        };
+        match Atlas::prepare(def, &shape) {
+            Ok(a) => {
+                diags.extend(diagnostics(def, &a));
+                out.push(Some(a));
+            }
+            Err(PrepareError::SeedOffSurface { seed }) => {
+                diags.push(
+                    Diagnostic::error(
+                        codes::E_SEED_PROJECTION,
+                        format!(
+                            "seed `{}` cannot be projected onto the surface of atlas `{}`",
+                            def.seeds[seed].name, def.name
+                        ),
+                        def.seeds[seed].position_span,
+                        "projection does not converge here",
+                    )
+                    .with_note("seeds are moved onto the surface by Newton steps along the gradient; place this one nearer the shape"),
+                );
+                out.push(None);
+            }
+        }
+    }
+    (out, diags)
+}
+
+pub fn fmt_point(p: DVec3) -> String {
+    format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
+}
+
+/// The diagnostics of one prepared atlas.
+pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    let s = scale(&atlas.shape);
+    for (i, seed) in atlas.seeds.iter().enumerate() {
+        let sd = &def.seeds[i];
+        if seed.jumped(s) {
+            out.push(
+                Diagnostic::warning(
+                    codes::W_SEED_JUMP,
+                    format!(
+                        "seed `{}` lands {:.3} away on another part of the surface",
+                        sd.name, seed.moved
+                    ),
+                    sd.position_span,
+                    format!("projected to {}", fmt_point(seed.seed.p)),
+                )
+                .with_note(format!(
+                    "the surface is {:.3} from the written position, but projection moved the seed {:.3}",
+                    seed.written_distance.abs(), seed.moved
+                ))
+                .with_help(format!(
+                    "write the position on the part you mean, or `{}`",
+                    fmt_vec(seed.seed.p)
+                )),
+            );
+        } else if seed.moved > 1e-3 * s {
+            out.push(
+                Diagnostic::note_diag(
+                    codes::N_SEED_MOVED,
+                    format!(
+                        "seed `{}` is {:.3} off the surface and was moved onto it",
+                        sd.name, seed.moved
+                    ),
+                    sd.position_span,
+                    format!("projected to {}", fmt_point(seed.seed.p)),
+                )
+                .with_help(format!(
+                    "write `{}` to place it on the surface",
+                    fmt_vec(seed.seed.p)
+                )),
+            );
+        }
+    }
+    for &(i, j) in &atlas.coincident {
+        let mut d = Diagnostic::warning(
+            codes::W_COINCIDENT_SEEDS,
+            format!(
+                "seeds `{}` and `{}` project to the same point",
+                def.seeds[i].name, def.seeds[j].name
+            ),
+            def.seeds[j].span,
+            format!("`{}` is never the nearest seed", def.seeds[j].name),
+        )
+        .with_label(
+            def.seeds[i].span,
+            format!("at {}", fmt_point(atlas.seeds[i].seed.p)),
+        );
+        if let Some(m) = def
+            .merges
+            .iter()
+            .find(|m| (m.a, m.b) == (i, j) || (m.a, m.b) == (j, i))
+        {
+            d = d
+                .with_label(m.span, "this merge is ignored")
+                .with_note("a merge needs two seeds some distance apart");
+        }
+        out.push(d);
+    }
+    for u in &atlas.graph.unreachable {
+        let m = &def.merges[u.merge];
+        let (a, b) = (&def.seeds[u.a].name, &def.seeds[u.b].name);
+        let reason = match u.status {
+            Status::SharpFeature => format!("the walk meets a sharp feature at {}", fmt_point(u.at)),
+            Status::TooFar => format!(
+                "the seeds are farther apart than max_distance = {}",
+                u.distance_limit
+            ),
+            Status::HeuristicFailed => format!(
+                "the walk's Euclidean heuristic fails at {} (the direction to the seed is along the normal)",
+                fmt_point(u.at)
+            ),
+            Status::NotReached => format!(
+                "the walk ends {} away without reaching the seed",
+                fmt_point(u.at)
+            ),
+            Status::Ok => String::from("the walk failed"),
+        };
+        out.push(
+            Diagnostic::error(
+                codes::E_UNREACHABLE_MERGE,
+                format!("seeds `{a}` and `{b}` cannot be merged: {reason}"),
+                m.span,
+                format!("Alg. 1 from `{b}` to `{a}` fails ({})", u.status.name()),
+            )
+            .with_note("merged seeds need a geodesic walk between them, in at least one direction")
+            .with_help(match u.status {
+                Status::TooFar => {
+                    String::from("raise `max_distance`, or merge through a seed in between")
+                }
+                Status::SharpFeature => String::from(
+                    "merge seeds on the same side of the edge, or raise `sharp_tolerance`",
+                ),
+                _ => String::from("merge through a seed in between"),
+            }),
+        );
+    }
+    for c in atlas.graph.cycles.iter().filter(|c| c.is_obstruction()) {
+        let edges: Vec<&crate::uv::merge::Edge> =
+            c.edges.iter().map(|&k| &atlas.graph.edges[k]).collect();
+        let mut names: Vec<&str> = c
+            .seeds
+            .iter()
+            .map(|&i| def.seeds[i].name.as_str())
+            .collect();
+        names.push(names[0]);
+        let closing = edges.last().expect("a cycle has edges");
+        let mut d = Diagnostic::warning(
+            codes::W_OBSTRUCTION,
+            format!(
+                "the merges around {} cannot close into one uv chart",
+                names.join(" → ")
+            ),
+            def.merges[closing.merge].span,
+            format!(
+                "holonomy {:.1}°, offset residual {:.0}% of an edge",
+                c.holonomy.to_degrees(),
+                100.0 * c.residual
+            ),
+        );
+        for e in &edges[..edges.len() - 1] {
+            d = d.with_label(
+                def.merges[e.merge].span,
+                format!("residual {:.0}%", 100.0 * e.residual),
+            );
+        }
+        d = d
+            .with_note(format!(
+                "around this cycle the transported frames turn by {:.1}° and the uv offsets miss by {:.0}% of the cycle's length; limits are {HOLONOMY_LIMIT_DEG}° and {:.0}% (a topological obstruction, e.g. seeds merged around a cylinder)",
+                c.holonomy.to_degrees(),
+                100.0 * c.closure,
+                100.0 * RESIDUAL_LIMIT
+            ))
+            .with_help("leave one merge of the cycle out: its frontier becomes a seam");
+        out.push(d);
+    }
+    out
+}
+
+fn fmt_vec(p: DVec3) -> String {
+    let t = |x: f64| {
+        let s = format!("{x:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        if s == "-0" {
+            String::from("0")
+        } else {
+            s
+        }
+    };
+    format!("[{}, {}, {}]", t(p.x), t(p.y), t(p.z))
+}

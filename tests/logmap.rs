@@ -13,15 +13,8 @@ fn atlas(src: &str) -> Atlas {
     Atlas::prepare(def, &shape).unwrap().with_reference_steps()
 }
 
-struct Rng(u64);
-impl Rng {
-    fn unit(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod common;
+use common::Rng;
 
 #[test]
 fn plane_log_map_is_exact() {

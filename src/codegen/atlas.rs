@@ -176,82 +176,90 @@ fn atlas_{k}_walk(x: vec3<f32>, j: u32, dmax: f32) -> AtlasSample {{
             inv = vec3(DVec3::ONE / grid.cell),
         )
     };
-    // The nearest seed (Alg. 2's search). A seed whose Euclidean lower bound is not below
-    // the best geodesic distance so far cannot win (Eq. 35), nor can any after it in the
-    // list; the best so far is the next walk's D.
-    let _ = writeln!(
-        out,
-        "fn atlas_{k}_nearest(x: vec3<f32>) -> AtlasSample {{
-    var best = uv_failed(UV_TOO_FAR, -1.0);
-    var found = false;
-    var fail_e = 3.0e38;
-    let list = {list};
-    for (var t = ATLAS_{k}_START[list]; t < ATLAS_{k}_START[list + 1u]; t = t + 1u) {{
-        let bound = select({dmax}, best.distance, found);
-        if (found && ATLAS_{k}_BOUND[t] >= bound) {{
-            break;
-        }}
-        let j = ATLAS_{k}_ITEMS[t];
-        let e = length(x - ATLAS_{k}_P[j]);
-        if (e < bound) {{
-            let m = atlas_{k}_walk(x, j, bound);
-            if (m.status == 0.0) {{
-                if (!found || m.distance < best.distance) {{
-                    best = m;
-                    found = true;
-                }}
-            }} else if (!found && e < fail_e) {{
-                best = m;
-                fail_e = e;
-            }}
-        }}
-    }}
-    return best;
-}}
-"
-    );
-    // Alg. 2's blend with the merged neighbours of the nearest seed.
+    // Alg. 2 as one loop with a single call site of the walk (so that drivers inline
+    // the unrolled walk once): phase 0 searches the nearest seed over the seed grid's
+    // list; a seed whose Euclidean lower bound is not below the best geodesic distance
+    // so far cannot win (Eq. 35), nor can any after it, and the best so far is the next
+    // walk's D. Phase 1 blends with the nearest seed's merged neighbours.
     let sigma = lit(atlas.sigma);
     let _ = writeln!(
         out,
         "// Alg. 2: the nearest seed, then the blend with its merged neighbours (Eqs. 39-44;
 // the last line as corrected by the notes). sigma = {sigma}.
 fn atlas_{name}(x: vec3<f32>) -> AtlasSample {{
-    var best = atlas_{k}_nearest(x);
-    if (best.status != 0.0) {{
-        return best;
-    }}
-    let i = u32(best.seed);
-    let own = best.uv + ATLAS_{k}_OFFSET[i];
-    let s = ATLAS_{k}_ADJ_START[i];
-    let e = ATLAS_{k}_ADJ_START[i + 1u];
-    if (s == e) {{
-        best.uv = own;
-        return best;
-    }}
-    let d = best.distance;
+    var best = uv_failed(UV_TOO_FAR, -1.0);
+    var found = false;
+    var fail_e = 3.0e38;
+    let list = {list};
+    var t = ATLAS_{k}_START[list];
+    var end = ATLAS_{k}_START[list + 1u];
+    var phase = 0u;
     let sigma = {sigma};
+    var own = vec2<f32>(0.0);
+    var d = 0.0;
     var sum = vec2<f32>(0.0);
     var total = 0.0;
     var w_own = 1.0;
-    for (var t = s; t < e; t = t + 1u) {{
-        let j = ATLAS_{k}_ADJ[t];
-        let d_ij = ATLAS_{k}_ADJ_D[t];
-        let to_j = x - ATLAS_{k}_P[j];
-        // Eq. 44: beyond the band even in Euclidean distance, p_j does not contribute.
-        if (d * d + 2.0 * sigma * d_ij >= dot(to_j, to_j)) {{
-            let m = atlas_{k}_walk(x, j, d + 2.0 * sigma);
-            if (m.status == 0.0) {{
-                let w_ij = uv_blend_weight((d * d - m.distance * m.distance) / (2.0 * d_ij), sigma);
+    loop {{
+        if (t >= end) {{
+            if (phase == 1u || !found) {{
+                break;
+            }}
+            let i = u32(best.seed);
+            own = best.uv + ATLAS_{k}_OFFSET[i];
+            d = best.distance;
+            t = ATLAS_{k}_ADJ_START[i];
+            end = ATLAS_{k}_ADJ_START[i + 1u];
+            phase = 1u;
+            continue;
+        }}
+        var j = 0u;
+        var dmax = 0.0;
+        var walk = false;
+        if (phase == 0u) {{
+            dmax = select({dmax}, best.distance, found);
+            if (found && ATLAS_{k}_BOUND[t] >= dmax) {{
+                t = end;
+                continue;
+            }}
+            j = ATLAS_{k}_ITEMS[t];
+            walk = length(x - ATLAS_{k}_P[j]) < dmax;
+        }} else {{
+            j = ATLAS_{k}_ADJ[t];
+            let to_j = x - ATLAS_{k}_P[j];
+            dmax = d + 2.0 * sigma;
+            // Eq. 44: beyond the band even in Euclidean distance, p_j does not contribute.
+            walk = d * d + 2.0 * sigma * ATLAS_{k}_ADJ_D[t] >= dot(to_j, to_j);
+        }}
+        if (walk) {{
+            let m = atlas_{k}_walk(x, j, dmax);
+            if (phase == 0u) {{
+                if (m.status == 0.0) {{
+                    if (!found || m.distance < best.distance) {{
+                        best = m;
+                        found = true;
+                    }}
+                }} else if (!found) {{
+                    let e = length(x - ATLAS_{k}_P[j]);
+                    if (e < fail_e) {{
+                        best = m;
+                        fail_e = e;
+                    }}
+                }}
+            }} else if (m.status == 0.0) {{
+                let w_ij = uv_blend_weight((d * d - m.distance * m.distance) / (2.0 * ATLAS_{k}_ADJ_D[t]), sigma);
                 w_own = min(w_own, w_ij);
                 let w_j = 1.0 - w_ij;
                 sum = sum + w_j * (m.uv + ATLAS_{k}_OFFSET[j]);
                 total = total + w_j;
             }}
         }}
+        t = t + 1u;
     }}
-    best.uv = (sum + w_own * own) / (total + w_own);
-    best.weight = w_own / (total + w_own);
+    if (found) {{
+        best.uv = (sum + w_own * own) / (total + w_own);
+        best.weight = w_own / (total + w_own);
+    }}
     return best;
 }}
 
@@ -285,7 +293,8 @@ fn emit_tables(out: &mut String, k: usize, atlas: &Atlas, grid: &SeedGrid) {
             items
         };
         format!(
-            "const {name} = array<{ty}, {}>({});\n",
+            "var<private> {name}: array<{ty}, {}> = array<{ty}, {}>({});\n",
+            items.len(),
             items.len(),
             items.join(", ")
         )

@@ -259,8 +259,13 @@ impl Atlas {
                 if best.as_ref().is_none_or(|(_, b)| m.distance < b.distance) {
                     best = Some((i, m));
                 }
-            } else if first_failure.is_none() {
-                first_failure = Some((i, m.status));
+            } else if best.is_none() {
+                // Report the Euclidean-nearest failure, whatever the visiting order (as
+                // the generated shader does).
+                let e = (x - self.seeds[i].seed.p).length();
+                if first_failure.is_none_or(|(_, _, f)| e < f) {
+                    first_failure = Some((i, m.status, e));
+                }
             }
         }
         match best {
@@ -274,7 +279,7 @@ impl Atlas {
             },
             None => {
                 let (seed, status) = first_failure
-                    .map(|(i, s)| (Some(i), s))
+                    .map(|(i, s, _)| (Some(i), s))
                     .unwrap_or((None, Status::TooFar));
                 Sample {
                     status,

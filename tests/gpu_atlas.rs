@@ -1,0 +1,204 @@
+//! Implicit UVs part 2 on the GPU (the software adapter in CI): Alg. 2's blended uv
+//! from the generated shader against the f64 CPU reference on every example, the seed
+//! grid against the plain scan, and the debug views.
+//!
+//! These modules use the rolled walk (`WalkForm::Loop`): on the software adapter the
+//! unrolled form takes tens of seconds per pipeline, and tests/gpu.rs already checks
+//! that the unrolled and rolled walks agree to 1e-5.
+
+use glam::{DVec2, DVec3};
+use sdfc::codegen::{self, Options, SeedGridChoice};
+use sdfc::driver::check;
+use sdfc::gpu::{self, gpu_for_tests, ViewMode};
+use sdfc::ir::{self, eval};
+use sdfc::uv::{Atlas, Status};
+use sdfc::view::View;
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::Rng;
+
+fn examples() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn surface_points(a: &Atlas, n: usize, seed: u64) -> Vec<DVec3> {
+    let b = a.shape.framing_bounds();
+    let mut rng = Rng(seed);
+    let mut out = Vec::new();
+    for _ in 0..n * 4 {
+        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
+        if let Some(x) = eval::project(&a.shape, b.min + (b.max - b.min) * r, 1e-7) {
+            out.push(x);
+            if out.len() == n {
+                break;
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut atlases_checked = 0;
+    for path in examples() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let src = std::fs::read_to_string(&path).unwrap();
+        let analysis = check(&src, Some(&dir));
+        assert!(!analysis.has_errors());
+        let scene = ir::lower(&analysis.program);
+        for (k, def) in analysis.program.atlases.iter().enumerate() {
+            let atlas = analysis.atlases[k].as_ref().unwrap();
+            let points = surface_points(atlas, 600, 17 + k as u64);
+            let scale = sdfc::uv::atlas::scale(&atlas.shape);
+            let mut results = Vec::new();
+            // The grid (for more than 4 seeds, as by default) and the plain scan.
+            let choices: &[SeedGridChoice] = if atlas.seeds.len() > 4 {
+                &[SeedGridChoice::On, SeedGridChoice::Off]
+            } else {
+                &[SeedGridChoice::Off]
+            };
+            for &grid in choices {
+                let module = codegen::generate_with(
+                    &analysis.program,
+                    &scene,
+                    &Options {
+                        atlas: Some(def.name.clone()),
+                        seed_grid: grid,
+                        walk: codegen::WalkForm::Loop,
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                codegen::validate(&module.wgsl).unwrap();
+                results.push(gpu::eval_atlas(&gpu, &module.wgsl, &points).unwrap());
+            }
+            let (mut compared, mut worst) = (0usize, 0.0f64);
+            for (i, x) in points.iter().enumerate() {
+                let (g, plain) = (&results[0][i], &results.last().unwrap()[i]);
+                assert_eq!(
+                    (g.status, g.seed),
+                    (plain.status, plain.seed),
+                    "{name}: the grid search and the plain scan differ at {x}"
+                );
+                let cpu = atlas.sample(*x);
+                if cpu.status != Status::Ok
+                    || g.status != 0
+                    || cpu.seed.map(|s| s as i32) != Some(g.seed)
+                {
+                    continue;
+                }
+                compared += 1;
+                let gpu_uv = DVec2::new(g.uv[0] as f64, g.uv[1] as f64);
+                // Relative to the uv's size, floored at a tenth of the shape's size.
+                let err = (cpu.uv - gpu_uv).length() / cpu.uv.length().max(0.1 * scale);
+                worst = worst.max(err);
+                assert!(
+                    err <= 1e-3,
+                    "{name} `{}`: at {x}: CPU {} vs GPU {gpu_uv} (relative {err:.2e})",
+                    def.name,
+                    cpu.uv
+                );
+                assert!((cpu.weight - g.weight as f64).abs() < 1e-2);
+            }
+            let ok = points
+                .iter()
+                .filter(|x| atlas.sample(**x).status == Status::Ok)
+                .count();
+            eprintln!(
+                "{name} `{}`: {compared} of {ok} ok points compared, max relative |uv_GPU − uv_CPU| = {worst:.2e}",
+                def.name
+            );
+            // Points on a frontier may pick the other seed in f32.
+            assert!(
+                compared as f64 >= 0.98 * ok as f64,
+                "{name}: only {compared} of {ok}"
+            );
+            atlases_checked += 1;
+        }
+    }
+    assert!(atlases_checked >= 8, "{atlases_checked}");
+}
+
+struct Picture {
+    color: Vec<u8>,
+}
+
+impl Picture {
+    fn pixels(&self) -> impl Iterator<Item = [u8; 3]> + '_ {
+        self.color.chunks(4).map(|c| [c[0], c[1], c[2]])
+    }
+    fn count(&self, f: impl Fn([u8; 3]) -> bool) -> usize {
+        self.pixels().filter(|p| f(*p)).count()
+    }
+}
+
+fn view(gpu: &gpu::Gpu, example: &str, mode: ViewMode) -> Picture {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let src = std::fs::read_to_string(dir.join(example)).unwrap();
+    let a = check(&src, Some(&dir));
+    let scene = ir::lower(&a.program);
+    let module = codegen::generate_with(
+        &a.program,
+        &scene,
+        &Options {
+            walk: codegen::WalkForm::Loop,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let shape = scene.render.clone().unwrap();
+    let mut v = View::new(a.program.render.as_ref(), &shape);
+    (v.width, v.height) = (120, 120);
+    let frame = gpu::render(gpu, &module.wgsl, &module.manifest, &v, mode, &dir).unwrap();
+    Picture { color: frame.color }
+}
+
+#[test]
+fn seams_show_only_between_unmerged_seeds() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    // The seam colour, linear (0.95, 0.1, 0.1), is about (250, 89, 89) in sRGB.
+    let red = |p: [u8; 3]| p[0] > 200 && p[1] < 120 && p[2] < 120;
+    // The plate's four seeds are merged in a ring: no seam on it.
+    let plate = view(&gpu, "plate_hole.sdf", ViewMode::Seams);
+    assert_eq!(plate.count(red), 0, "a seam on the fully merged plate");
+    // The robot has unmerged neighbours (each arm's back seed, the faces of boxes).
+    let robot = view(&gpu, "robot.sdf", ViewMode::Seams);
+    let seams = robot.count(red);
+    assert!(seams > 20, "only {seams} seam pixels on the robot");
+}
+
+#[test]
+fn seeds_blend_and_distortion_views() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    // Voronoi cells: the plate with a hole shows its four seeds' colours.
+    let seeds = view(&gpu, "plate_hole.sdf", ViewMode::Seeds);
+    let mut colours: Vec<[u8; 3]> = seeds.pixels().collect();
+    colours.sort();
+    colours.dedup();
+    assert!(colours.len() > 4);
+    // Blend weights: the bands between merged seeds glow (red to yellow); cells are dark.
+    let blend = view(&gpu, "plate_hole.sdf", ViewMode::Blend);
+    let bright = blend.count(|p| p[0] > 150 && p[2] < 120);
+    assert!(bright > 100, "only {bright} pixels in blend bands");
+    // Distortion on the flat plate is (nearly) zero everywhere on the textured top face,
+    // and clearly above zero on the curved blob.
+    let flat = view(&gpu, "plate.sdf", ViewMode::Distortion);
+    let hot = |p: [u8; 3]| p[0] > 120;
+    let flat_hot = flat.count(hot);
+    let blob = view(&gpu, "blob.sdf", ViewMode::Distortion);
+    let blob_hot = blob.count(hot);
+    assert!(
+        flat_hot * 5 < blob_hot.max(1),
+        "plate {flat_hot} vs blob {blob_hot} distorted pixels"
+    );
+}

@@ -2,6 +2,9 @@
 
 use sdfc::ide::{self, Document, SymbolKind};
 
+#[path = "ide/format.rs"]
+mod format;
+
 const SCENE: &str = "let radius = 0.5;
 let ball = sphere(radius).translate([0, 1, 0]);
 atlas skin on ball {

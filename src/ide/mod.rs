@@ -1,6 +1,8 @@
 //! Protocol-free editor queries over one analysed document: hover, go to
-//! definition, references and document symbols. The language server (`src/lsp`)
-//! only converts these to and from the protocol.
+//! definition, references and document symbols; formatting in [`format`]. The
+//! language server (`src/lsp`) only converts these to and from the protocol.
+
+pub mod format;
 
 use crate::driver::{analyze, Analysis};
 use crate::sema::builtins::{self, CONSTANTS};

@@ -75,10 +75,17 @@ type Toks<'a> = Vec<(Token<'a>, Span)>;
 /// inside a comment or a string.
 fn tokens_before(text: &str, offset: usize) -> Option<Toks<'_>> {
     let lexed = lex(text, &mut Vec::new());
-    let inside = |s: Span, closed: bool| s.start < offset && (offset < s.end || !closed);
     for c in &lexed.comments {
-        let closed = c.block && text[c.span.range()].ends_with("*/") && c.span.len() >= 4;
-        if inside(c.span, closed) || (!c.block && c.span.start < offset && offset <= c.span.end) {
+        let s = c.span;
+        let closed = c.block && s.len() >= 4 && text[s.range()].ends_with("*/");
+        let inside = if !c.block {
+            s.start < offset && offset <= s.end
+        } else if closed {
+            s.start < offset && offset < s.end
+        } else {
+            s.start < offset
+        };
+        if inside {
             return None;
         }
     }

@@ -185,7 +185,8 @@ impl<'a> Printer<'a> {
                 && !self.in_statement
                 && !self.prev_open_brace
                 && t != Token::RBrace;
-            let level = if self.in_statement {
+            // A block's `{` pushed to its own line (after a comment) lines up with its `}`.
+            let level = if self.in_statement && t != Token::LBrace {
                 self.continuation(Some(t))
             } else {
                 0

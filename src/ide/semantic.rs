@@ -84,10 +84,8 @@ impl Names {
 
     fn expr(&mut self, e: &Expr) {
         match &e.kind {
-            ExprKind::Name(n) => {
-                if CONSTANTS.iter().any(|c| c.name == n) {
-                    self.set(e.span, TokenKind::Variable, true);
-                }
+            ExprKind::Name(n) if CONSTANTS.iter().any(|c| c.name == n) => {
+                self.set(e.span, TokenKind::Variable, true);
             }
             ExprKind::Call { callee, args } => {
                 let builtin = builtins::lookup(&callee.name).is_some();

@@ -70,6 +70,13 @@ fn keywords_and_settings_by_block() {
     assert_eq!(labels("atlas a $0"), ["on"]);
     // Nor in comments and strings.
     assert!(labels("// sph$0").is_empty());
+    assert!(labels("/* sph$0 */").is_empty());
+    assert!(labels("/* unclosed $0").is_empty());
+    // Comments elsewhere do not matter.
+    assert_eq!(
+        labels("// a comment\n/* another */ $0"),
+        ["let", "atlas", "material", "render"]
+    );
     assert!(labels("let t = image(\"tex$0\");").is_empty());
 }
 

@@ -157,6 +157,11 @@ fn trailing_comments_align_and_blocks_indent() {
         format("render a.b(-1, !c, [-2, x - 3]) {}").unwrap(),
         "render a.b(-1, !c, [-2, x - 3]) {}\n"
     );
+    // A `{` after a comment gets its own line, level with its `}`.
+    assert_eq!(
+        format("atlas a on b // why\n{\n  seed x = [0,0,1]\n     tangent [1,0,0];\n}").unwrap(),
+        "atlas a on b  // why\n{\n    seed x = [0, 0, 1]\n        tangent [1, 0, 0];\n}\n"
+    );
 }
 
 #[test]
@@ -166,4 +171,58 @@ fn minimal_edits() {
     assert_eq!((span.start, span.end, text.as_str()), (5, 6, " = "));
     let (span, text) = minimal_edit("é=1", "é = 1").unwrap();
     assert_eq!((span.start, span.end, text.as_str()), (2, 3, " = "));
+}
+
+/// Re-spaces every file (random whitespace between tokens, newlines after line
+/// comments): the result formats, idempotently, to the same tokens and comments.
+#[test]
+fn any_spacing_formats_idempotently() {
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    let gaps = [" ", "  ", "\n", "\n\n\n", "\t", " \n    "];
+    let mut files = sdf_files("examples");
+    files.extend(sdf_files("tests/ui"));
+    let mut checked = 0;
+    for path in files {
+        let src = std::fs::read_to_string(&path).unwrap();
+        if format(&src).is_err() {
+            continue;
+        }
+        let lexed = lex(&src, &mut Vec::new());
+        let mut pieces: Vec<(usize, usize, bool)> = lexed
+            .tokens
+            .iter()
+            .map(|(_, s)| (s.start, s.end, false))
+            .chain(
+                lexed
+                    .comments
+                    .iter()
+                    .map(|c| (c.span.start, c.span.end, !c.block)),
+            )
+            .collect();
+        pieces.sort();
+        for _ in 0..4 {
+            let mut text = String::new();
+            for &(start, end, line_comment) in &pieces {
+                text.push_str(src[start..end].trim_end());
+                let gap = gaps[(next() % gaps.len() as u64) as usize];
+                text.push_str(if line_comment && !gap.contains('\n') {
+                    "\n"
+                } else {
+                    gap
+                });
+            }
+            let once =
+                format(&text).unwrap_or_else(|d| panic!("{}: {d:?}\n{text}", path.display()));
+            assert_eq!(format(&once).unwrap(), once, "{}:\n{text}", path.display());
+            assert_eq!(tokens(&once), tokens(&src), "{}", path.display());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 150, "{checked}");
 }

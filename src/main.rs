@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         Command::Compile(args) => cli::compile::run(args),
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Fmt(args) => cli::fmt::run(args),
         Command::Lsp => match sdfc::lsp::run_stdio() {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

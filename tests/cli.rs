@@ -186,3 +186,64 @@ fn eval_rejects_bad_points_and_unknown_shapes() {
     ]);
     assert_eq!(code, 1);
 }
+
+#[test]
+fn fmt_check_passes_on_every_example() {
+    let mut args = vec!["fmt", "--check"];
+    let examples: Vec<String> = std::fs::read_dir("examples")
+        .unwrap()
+        .map(|e| e.unwrap().path().display().to_string())
+        .filter(|p| p.ends_with(".sdf"))
+        .collect();
+    assert!(examples.len() >= 5);
+    args.extend(examples.iter().map(String::as_str));
+    let (code, out, err) = sdfc(&args);
+    assert_eq!((code, out.as_str()), (0, ""), "{err}");
+}
+
+#[test]
+fn fmt_rewrites_checks_and_refuses_syntax_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let messy = dir.path().join("messy.sdf");
+    let clean = dir.path().join("clean.sdf");
+    let broken = dir.path().join("broken.sdf");
+    std::fs::write(&messy, "let a=sphere(1);/* keep */\nrender  a;\n").unwrap();
+    std::fs::write(&clean, "let a = sphere(1);\nrender a;\n").unwrap();
+    std::fs::write(&broken, "let a = sphere(1)\nrender  a;\n").unwrap();
+    let path = |p: &Path| p.display().to_string();
+
+    // --check names the files that would change and changes nothing.
+    let (code, out, err) = sdfc(&["fmt", "--check", &path(&messy), &path(&clean)]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(out, format!("{}\n", path(&messy)));
+    assert!(err.contains("1 file would be reformatted"), "{err}");
+    assert!(std::fs::read_to_string(&messy)
+        .unwrap()
+        .starts_with("let a=sphere"));
+
+    let (code, _, err) = sdfc(&["fmt", &path(&messy), &path(&clean)]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&messy).unwrap(),
+        "let a = sphere(1); /* keep */\nrender a;\n"
+    );
+    assert_eq!(sdfc(&["fmt", "--check", &path(&messy)]).0, 0);
+
+    // Syntax errors: exit 1 with the diagnostics, the file left as it is.
+    let (code, _, err) = sdfc(&["fmt", &path(&broken)]);
+    assert_eq!(code, 1);
+    assert!(err.contains("error[E0010]"), "{err}");
+    assert!(err.contains("was not formatted"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&broken).unwrap(),
+        "let a = sphere(1)\nrender  a;\n"
+    );
+    assert_eq!(sdfc(&["fmt", "does/not/exist.sdf"]).0, 2);
+}
+
+#[test]
+fn fmt_formats_standard_input_to_standard_output() {
+    let (code, out, _) = sdfc_with_input(&["fmt", "-"], b"render sphere( 1 ) ;");
+    assert_eq!(code, 0);
+    assert_eq!(out, "render sphere(1);\n");
+}

@@ -50,3 +50,33 @@ fn language_configuration_matches_the_comment_syntax() {
     assert_eq!(config["comments"]["blockComment"][0], "/*");
     assert_eq!(config["comments"]["blockComment"][1], "*/");
 }
+
+/// The VS Code extension's manifest points at the grammar files and runs `sdfc lsp`.
+#[test]
+fn vscode_extension_uses_the_grammar_files() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("editors/vscode");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("package.json")).unwrap()).unwrap();
+    let contributes = &manifest["contributes"];
+    let config = contributes["languages"][0]["configuration"]
+        .as_str()
+        .unwrap();
+    let grammar = contributes["grammars"][0]["path"].as_str().unwrap();
+    assert_eq!(contributes["languages"][0]["extensions"][0], ".sdf");
+    assert_eq!(
+        contributes["grammars"][0]["scopeName"],
+        read_json("sdf.tmLanguage.json")["scopeName"]
+    );
+    for path in [config, grammar] {
+        let resolved = dir.join(path).canonicalize().unwrap();
+        assert_eq!(
+            resolved.parent().unwrap().file_name().unwrap(),
+            "grammar",
+            "{path}"
+        );
+    }
+    let main = manifest["main"].as_str().unwrap();
+    let script = std::fs::read_to_string(dir.join(main)).unwrap();
+    assert!(script.contains("args: [\"lsp\"]"), "{script}");
+    assert!(script.contains("vscode-languageclient"));
+}

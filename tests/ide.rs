@@ -2,6 +2,15 @@
 
 use sdfc::ide::{self, Document, SymbolKind};
 
+#[path = "ide/complete.rs"]
+mod complete;
+#[path = "ide/format.rs"]
+mod format;
+#[path = "ide/rename.rs"]
+mod rename;
+#[path = "ide/semantic.rs"]
+mod semantic;
+
 const SCENE: &str = "let radius = 0.5;
 let ball = sphere(radius).translate([0, 1, 0]);
 atlas skin on ball {

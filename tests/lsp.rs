@@ -19,12 +19,50 @@ impl Client {
             next: 1,
         };
         let caps = c.request("initialize", json!({ "capabilities": {} }));
-        assert_eq!(caps["capabilities"]["hoverProvider"], true);
+        let caps = &caps["capabilities"];
+        assert_eq!(caps["hoverProvider"], true);
+        assert_eq!(caps["documentFormattingProvider"], true);
+        assert_eq!(caps["renameProvider"]["prepareProvider"], true);
+        assert_eq!(
+            caps["completionProvider"]["triggerCharacters"],
+            json!(["."])
+        );
+        assert_eq!(
+            caps["signatureHelpProvider"]["triggerCharacters"],
+            json!(["(", ","])
+        );
+        assert_eq!(caps["semanticTokensProvider"]["full"], true);
+        assert_eq!(
+            caps["semanticTokensProvider"]["legend"]["tokenTypes"],
+            json!([
+                "keyword",
+                "number",
+                "string",
+                "comment",
+                "operator",
+                "function",
+                "variable",
+                "namespace",
+                "enumMember",
+                "struct",
+                "parameter",
+                "property"
+            ])
+        );
         c.notify("initialized", json!({}));
         (c, handle)
     }
 
     fn request(&mut self, method: &str, params: Value) -> Value {
+        self.try_request(method, params)
+            .unwrap_or_else(|e| panic!("{method}: {e:?}"))
+    }
+
+    fn try_request(
+        &mut self,
+        method: &str,
+        params: Value,
+    ) -> Result<Value, lsp_server::ResponseError> {
         let id = RequestId::from(self.next);
         self.next += 1;
         self.conn
@@ -42,11 +80,7 @@ impl Client {
                 .recv_timeout(Duration::from_secs(30))
                 .unwrap()
             {
-                Message::Response(r) if r.id == id => {
-                    return r
-                        .response_result
-                        .unwrap_or_else(|e| panic!("{method}: {e:?}"))
-                }
+                Message::Response(r) if r.id == id => return r.response_result,
                 _ => {}
             }
         }
@@ -79,6 +113,9 @@ impl Client {
 }
 
 const URI: &str = "file:///tmp/sdfc-lsp-test/scene.sdf";
+
+#[path = "lsp/editing.rs"]
+mod editing;
 
 #[test]
 fn diagnostics_hover_definition_references_symbols() {

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod check;
 pub mod compile;
 pub mod eval;
+pub mod fmt;
 pub mod render;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -54,8 +55,16 @@ pub enum Command {
     /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
     Bench(BenchArgs),
     /// Run the language server on standard input and output (LSP, full-document sync):
-    /// diagnostics, hover, go to definition, find references and document symbols.
+    /// diagnostics, hover, go to definition, find references, document symbols,
+    /// formatting, semantic tokens, rename, completion and signature help.
     Lsp,
+    /// Format scene files in place: canonical spacing, 4-space indentation, one
+    /// statement per line; comments are kept.
+    ///
+    /// A file with syntax errors is left unchanged and its errors are printed.
+    /// Exit status: 0 on success, 1 when a file has syntax errors or (with --check)
+    /// would change, 2 on I/O problems.
+    Fmt(fmt::FmtArgs),
 }
 
 #[derive(clap::Args)]

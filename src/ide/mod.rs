@@ -1,6 +1,12 @@
 //! Protocol-free editor queries over one analysed document: hover, go to
-//! definition, references and document symbols. The language server (`src/lsp`)
-//! only converts these to and from the protocol.
+//! definition, references and document symbols; in submodules, formatting,
+//! semantic tokens, rename, completion and signature help. The language server
+//! (`src/lsp`) only converts these to and from the protocol.
+
+pub mod complete;
+pub mod format;
+pub mod rename;
+pub mod semantic;
 
 use crate::driver::Analysis;
 use crate::sema::builtins::{self, CONSTANTS};

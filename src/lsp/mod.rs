@@ -3,6 +3,10 @@
 //! Full-document sync; every change re-analyses the document and publishes its
 //! diagnostics tagged with the document version. Requests are answered against
 //! the latest text. Positions are UTF-16, converted with `line-index`.
+//! Formatting, semantic tokens, rename, completion and signature help are in
+//! [`features`].
+
+mod features;
 
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ide::{self, Document, SymbolKind};
@@ -125,7 +129,7 @@ fn publish(conn: &Connection, uri: &lsp::Uri, o: Option<&Open>) -> Result<(), Er
 }
 
 fn capabilities() -> lsp::ServerCapabilities {
-    lsp::ServerCapabilities {
+    let mut caps = lsp::ServerCapabilities {
         text_document_sync: Some(lsp::TextDocumentSyncCapability::Kind(
             lsp::TextDocumentSyncKind::FULL,
         )),
@@ -134,7 +138,9 @@ fn capabilities() -> lsp::ServerCapabilities {
         references_provider: Some(lsp::OneOf::Left(true)),
         document_symbol_provider: Some(lsp::OneOf::Left(true)),
         ..Default::default()
-    }
+    };
+    features::capabilities(&mut caps);
+    caps
 }
 
 /// Serves one client on a connection until it exits.
@@ -294,6 +300,7 @@ fn answer(docs: &HashMap<String, Open>, req: Request) -> Response {
                 Err(e) => bad(e),
             }
         }
+        m if features::METHODS.contains(&m) => features::answer(docs, req.clone()),
         other => Response::new_err(
             id,
             ErrorCode::MethodNotFound as i32,

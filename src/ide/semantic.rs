@@ -1,0 +1,248 @@
+//! Semantic tokens: every keyword, literal, comment and name of a document,
+//! classified by what it is (a builtin function, a shape, an atlas, a seed, a
+//! named argument, a setting …), in source order.
+
+use super::Document;
+use crate::sema::builtins::{self, CONSTANTS};
+use crate::sema::DefKind;
+use crate::span::Span;
+use crate::syntax::ast::{Arg, AtlasStmt, Expr, ExprKind, Item, ItemKind, Setting};
+use crate::syntax::lexer::{lex, Token};
+use std::collections::HashMap;
+
+/// What a token is. The language server maps these to its legend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TokenKind {
+    Keyword,
+    Number,
+    String,
+    Comment,
+    Operator,
+    /// A builtin function or method.
+    Function,
+    /// A `let` name.
+    Variable,
+    /// An atlas.
+    Atlas,
+    /// A seed of an atlas.
+    Seed,
+    /// A material.
+    Material,
+    /// A named argument.
+    Parameter,
+    /// A block setting, an atlas field or a swizzle.
+    Property,
+}
+
+impl TokenKind {
+    /// Every kind, in the order of the language server's legend.
+    pub const ALL: &'static [TokenKind] = &[
+        TokenKind::Keyword,
+        TokenKind::Number,
+        TokenKind::String,
+        TokenKind::Comment,
+        TokenKind::Operator,
+        TokenKind::Function,
+        TokenKind::Variable,
+        TokenKind::Atlas,
+        TokenKind::Seed,
+        TokenKind::Material,
+        TokenKind::Parameter,
+        TokenKind::Property,
+    ];
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SemanticToken {
+    pub span: Span,
+    pub kind: TokenKind,
+    /// The name is defined here.
+    pub declaration: bool,
+    /// A builtin function or constant.
+    pub builtin: bool,
+}
+
+/// Identifier kinds known from the syntax tree, by span start.
+#[derive(Default)]
+struct Names {
+    kinds: HashMap<usize, (TokenKind, bool)>,
+}
+
+impl Names {
+    fn set(&mut self, span: Span, kind: TokenKind, builtin: bool) {
+        self.kinds.insert(span.start, (kind, builtin));
+    }
+
+    fn args(&mut self, args: &[Arg]) {
+        for a in args {
+            if let Some(n) = &a.name {
+                self.set(n.span, TokenKind::Parameter, false);
+            }
+            self.expr(&a.value);
+        }
+    }
+
+    fn expr(&mut self, e: &Expr) {
+        match &e.kind {
+            ExprKind::Name(n) if CONSTANTS.iter().any(|c| c.name == n) => {
+                self.set(e.span, TokenKind::Variable, true);
+            }
+            ExprKind::Call { callee, args } => {
+                let builtin = builtins::lookup(&callee.name).is_some();
+                self.set(callee.span, TokenKind::Function, builtin);
+                self.args(args);
+            }
+            ExprKind::Method {
+                receiver,
+                method,
+                args,
+            } => {
+                self.expr(receiver);
+                let builtin = builtins::lookup(&method.name).is_some();
+                self.set(method.span, TokenKind::Function, builtin);
+                self.args(args);
+            }
+            ExprKind::Field { receiver, field } => {
+                self.expr(receiver);
+                self.set(field.span, TokenKind::Property, false);
+            }
+            ExprKind::Vector(items) => items.iter().for_each(|i| self.expr(i)),
+            ExprKind::Paren(inner) | ExprKind::Unary { expr: inner, .. } => self.expr(inner),
+            ExprKind::Binary { lhs, rhs, .. } => {
+                self.expr(lhs);
+                self.expr(rhs);
+            }
+            _ => {}
+        }
+    }
+
+    fn setting(&mut self, s: &Setting) {
+        self.set(s.name.span, TokenKind::Property, false);
+        self.expr(&s.value);
+    }
+
+    fn item(&mut self, item: &Item) {
+        match &item.kind {
+            ItemKind::Let { value, .. } => self.expr(value),
+            ItemKind::Atlas { shape, body, .. } => {
+                self.expr(shape);
+                for s in body {
+                    match s {
+                        AtlasStmt::Setting(s) => self.setting(s),
+                        AtlasStmt::Seed {
+                            name,
+                            position,
+                            tangent,
+                            ..
+                        } => {
+                            self.set(name.span, TokenKind::Seed, false);
+                            self.expr(position);
+                            if let Some(t) = tangent {
+                                self.expr(t);
+                            }
+                        }
+                        AtlasStmt::Merge { seeds, .. } => seeds
+                            .iter()
+                            .for_each(|s| self.set(s.span, TokenKind::Seed, false)),
+                        AtlasStmt::Error(_) => {}
+                    }
+                }
+            }
+            ItemKind::Material { body, .. } => body.iter().for_each(|s| self.setting(s)),
+            ItemKind::Render { target, body } => {
+                self.expr(target);
+                body.iter().for_each(|s| self.setting(s));
+            }
+            ItemKind::Error { .. } => {}
+        }
+    }
+}
+
+fn def_kind(kind: DefKind) -> TokenKind {
+    match kind {
+        DefKind::Let => TokenKind::Variable,
+        DefKind::Atlas => TokenKind::Atlas,
+        DefKind::Material => TokenKind::Material,
+        DefKind::Seed { .. } => TokenKind::Seed,
+    }
+}
+
+/// Every token of the document worth colouring, in source order.
+pub fn semantic_tokens(doc: &Document) -> Vec<SemanticToken> {
+    let program = &doc.analysis.program;
+    let mut names = Names::default();
+    doc.analysis
+        .parsed
+        .file
+        .items
+        .iter()
+        .for_each(|i| names.item(i));
+    // Resolved names win over what the syntax says.
+    let mut resolved: HashMap<usize, (TokenKind, bool)> = HashMap::new();
+    for d in &program.defs {
+        resolved.insert(d.span.start, (def_kind(d.kind), true));
+    }
+    for r in &program.references {
+        resolved.insert(r.span.start, (def_kind(program.defs[r.def].kind), false));
+    }
+    let lexed = lex(&doc.text, &mut Vec::new());
+    let mut out: Vec<SemanticToken> = lexed
+        .comments
+        .iter()
+        .map(|c| SemanticToken {
+            span: c.span,
+            kind: TokenKind::Comment,
+            declaration: false,
+            builtin: false,
+        })
+        .collect();
+    for (tok, span) in &lexed.tokens {
+        let token = |kind, declaration, builtin| SemanticToken {
+            span: *span,
+            kind,
+            declaration,
+            builtin,
+        };
+        let t = match tok {
+            Token::Let
+            | Token::Atlas
+            | Token::Material
+            | Token::Render
+            | Token::On
+            | Token::Seed
+            | Token::Tangent
+            | Token::Merge
+            | Token::True
+            | Token::False => token(TokenKind::Keyword, false, false),
+            Token::Number(_) | Token::BadNumber(_) => token(TokenKind::Number, false, false),
+            Token::Str(_) | Token::UnterminatedStr(_) => token(TokenKind::String, false, false),
+            Token::Ident(_) => {
+                if let Some(&(kind, declaration)) = resolved.get(&span.start) {
+                    token(kind, declaration, false)
+                } else if let Some(&(kind, builtin)) = names.kinds.get(&span.start) {
+                    token(kind, false, builtin)
+                } else {
+                    token(TokenKind::Variable, false, false)
+                }
+            }
+            Token::Plus
+            | Token::Minus
+            | Token::Star
+            | Token::Slash
+            | Token::Percent
+            | Token::Pipe
+            | Token::Amp
+            | Token::Bang
+            | Token::EqEq
+            | Token::NotEq
+            | Token::Lt
+            | Token::Le
+            | Token::Gt
+            | Token::Ge => token(TokenKind::Operator, false, false),
+            _ => continue,
+        };
+        out.push(t);
+    }
+    out.sort_by_key(|t| t.span.start);
+    out
+}

@@ -160,12 +160,35 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
                     .tangent
                     .map(|t| format!("tangent {}", Value::Vec(t.to_vec()).display()))
                     .unwrap_or_else(|| String::from("default tangent"));
-                format!(
+                let mut text = format!(
                     "```sdf\nseed {} = {} {tangent}\n```\nin atlas `{}`",
                     s.name,
                     Value::Vec(s.position.to_vec()).display(),
                     a.name
-                )
+                );
+                // What the compile-time geometry made of it (when the file is valid).
+                let prepared = doc.analysis.atlases.get(atlas).and_then(|p| p.as_ref());
+                if let Some(pa) = prepared {
+                    let k = a.seeds.iter().position(|x| x.def == id)?;
+                    let ps = &pa.seeds[k];
+                    let pt = crate::uv::diagnose::fmt_point;
+                    text += &format!(
+                        "\n\nprojected to {} (moved {:.4}); frame e1 = {}, e2 = {}; uv offset ({:.4}, {:.4})",
+                        pt(ps.seed.p),
+                        ps.moved,
+                        pt(ps.seed.e1),
+                        pt(ps.seed.e2),
+                        ps.offset.x,
+                        ps.offset.y
+                    );
+                    for &(j, d) in &pa.graph.neighbors[k] {
+                        text += &format!(
+                            "\n\nmerged with `{}`: geodesic length {d:.4}",
+                            pa.seed_names[j]
+                        );
+                    }
+                }
+                text
             }
         };
         return Some(Hover { span, markdown });

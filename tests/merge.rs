@@ -25,6 +25,19 @@ fn clean_atlas(src: &str) -> Atlas {
     a.atlases[0].clone().expect("the atlas prepares")
 }
 
+/// The file names of every example scene, sorted.
+fn example_names() -> Vec<String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .map(|p| p.file_name().unwrap().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    names
+}
+
 fn example(name: &str) -> (String, Vec<Atlas>) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let src = std::fs::read_to_string(dir.join(name)).unwrap();
@@ -158,14 +171,8 @@ fn surface_path(a: &Atlas, p: DVec3, q: DVec3, n: usize) -> Vec<DVec3> {
 
 #[test]
 fn uv_is_continuous_across_every_merged_frontier_of_every_example() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let mut frontiers = 0;
-    for entry in std::fs::read_dir(&dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_none_or(|e| e != "sdf") {
-            continue;
-        }
-        let name = path.file_name().unwrap().to_string_lossy().to_string();
+    for name in example_names() {
         let (_, atlases) = example(&name);
         for a in &atlases {
             for e in &a.graph.edges {
@@ -188,15 +195,9 @@ fn uv_is_continuous_across_every_merged_frontier_of_every_example() {
 
 #[test]
 fn early_out_and_grid_search_equal_brute_force_on_every_example() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let mut rng = Rng(2024);
     let mut checked = 0;
-    for entry in std::fs::read_dir(&dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_none_or(|e| e != "sdf") {
-            continue;
-        }
-        let name = path.file_name().unwrap().to_string_lossy().to_string();
+    for name in example_names() {
         let (_, atlases) = example(&name);
         for a in &atlases {
             let grid = a.seed_grid();

@@ -380,3 +380,46 @@ fn frames_and_offsets_solve_for_fifty_seeds() {
         a.graph.solve_seconds * 1e3
     );
 }
+
+/// The seed-count sweep's plates (`sdfc bench --seed-sweep`): every one compiles with no
+/// diagnostics, reaches every sampled point of the top face, and when merged is one
+/// isometric chart (the sweep measures working atlases, not failing walks).
+#[test]
+fn seed_sweep_plates_cover_the_top_face() {
+    for seeds in sdfc::bench::SEED_COUNTS {
+        for merged in [false, true] {
+            let a = clean_atlas(&sdfc::bench::plate(seeds, 10, merged));
+            assert_eq!(a.seeds.len(), seeds as usize);
+            let want_edges = if merged {
+                let (r, c) = sdfc::bench::layout(seeds);
+                (r * (c - 1) + c * (r - 1)) as usize
+            } else {
+                0
+            };
+            assert_eq!(a.graph.edges.len(), want_edges, "{seeds} seeds");
+            let mut rng = Rng(seeds as u64 + 100);
+            // Away from the rim, where a long step of the 1-seed walk can meet the edge.
+            let h = sdfc::bench::HALF - 0.3;
+            let pts: Vec<DVec3> = (0..60)
+                .map(|_| DVec3::new(rng.range(-h, h), 0.1, rng.range(-h, h)))
+                .collect();
+            let samples: Vec<_> = pts.iter().map(|&p| a.sample(p)).collect();
+            for (p, s) in pts.iter().zip(&samples) {
+                assert_eq!(
+                    s.status,
+                    Status::Ok,
+                    "{seeds} seeds, merged {merged}, at {p}"
+                );
+            }
+            if merged {
+                for (i, j) in (0..pts.len()).zip(1..pts.len()) {
+                    let (du, dx) = (
+                        (samples[i].uv - samples[j].uv).length(),
+                        (pts[i] - pts[j]).length(),
+                    );
+                    assert!((du - dx).abs() <= 1e-3 * dx, "{seeds} seeds: {du} vs {dx}");
+                }
+            }
+        }
+    }
+}

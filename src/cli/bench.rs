@@ -12,18 +12,22 @@ fn median(mut v: Vec<Duration>) -> Duration {
 }
 
 pub fn run(args: BenchArgs) -> ExitCode {
+    let scene = match &args.scene {
+        Some(s) if !args.seed_sweep => s.clone(),
+        _ => return super::sweep::run(&args),
+    };
     let t = Instant::now();
     let base = Options {
         shape: args.shape.clone(),
         ..Default::default()
     };
-    let (unrolled, _) = match compile::build(&args.scene, &base) {
+    let (unrolled, _) = match compile::build(&scene, &base) {
         Ok(x) => x,
         Err(code) => return code,
     };
     let compile_time = t.elapsed();
     let (rolled, _) = match compile::build(
-        &args.scene,
+        &scene,
         &Options {
             walk: WalkForm::Loop,
             ..base.clone()
@@ -33,7 +37,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Err(code) => return code,
     };
     let (plain, _) = match compile::build(
-        &args.scene,
+        &scene,
         &Options {
             plain: true,
             ..base.clone()
@@ -42,11 +46,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let mut view = match super::view_for(&args.scene, args.shape.as_deref()) {
+    let mut view = match super::view_for(&scene, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
     };
-    (view.width, view.height) = args.size;
+    (view.width, view.height) = args.size.unwrap_or((1920, 1080));
     let gpu = match Gpu::new(args.backend) {
         Ok(g) => g,
         Err(e) => {
@@ -54,7 +58,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
             return ExitCode::from(super::render::GPU_EXIT);
         }
     };
-    let dir = super::base_dir(&args.scene);
+    let dir = super::base_dir(&scene);
     let measure = |module: &sdfc::codegen::Module,
                    mode: ViewMode|
      -> Result<(Duration, Duration), String> {
@@ -86,7 +90,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         }
     }
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    println!("scene:     {}", args.scene.display());
+    println!("scene:     {}", scene.display());
     println!("adapter:   {}", gpu.describe());
     println!(
         "size:      {}x{}, median of {} frames",

@@ -17,13 +17,24 @@ pub fn build(
     options: &codegen::Options,
 ) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
     let (source, analysis) = load(args_scene)?;
+    build_checked(
+        &args_scene.display().to_string(),
+        &source,
+        &analysis,
+        options,
+    )
+}
+
+/// [`build`] for a scene already read and checked (with no errors).
+pub fn build_checked(
+    name: &str,
+    source: &str,
+    analysis: &sdfc::driver::Analysis,
+    options: &codegen::Options,
+) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
     let scene = ir::lower(&analysis.program);
     let module = codegen::generate_with(&analysis.program, &scene, options).map_err(|diags| {
-        let name = args_scene.display().to_string();
-        eprint!(
-            "{}",
-            sdfc::diagnostic::render(&name, &source, &diags, false)
-        );
+        eprint!("{}", sdfc::diagnostic::render(name, source, &diags, false));
         ExitCode::from(1)
     })?;
     // Test hook: corrupts the module so that the internal-compiler-error path can be tested

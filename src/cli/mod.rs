@@ -6,6 +6,7 @@ pub mod compile;
 pub mod eval;
 pub mod fmt;
 pub mod render;
+pub mod sweep;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Read;
@@ -69,11 +70,20 @@ pub enum Command {
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// The scene file.
-    pub scene: PathBuf,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, value_parser = render::parse_size, default_value = "1920x1080")]
-    pub size: (u32, u32),
+    /// The scene file (not with --seed-sweep, which generates its scenes).
+    #[arg(required_unless_present = "seed_sweep")]
+    pub scene: Option<PathBuf>,
+    /// Image size, WIDTHxHEIGHT (default 1920x1080; 320x240 for --seed-sweep).
+    #[arg(long, value_parser = render::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// The seed-count sweep (the paper's Fig. 15): frame time against an untextured
+    /// render for plates with 1, 4, 16, 32 and 64 seeds, N = 10 and 20, merged or not,
+    /// with and without the seed grid; and the merge-graph solve time.
+    #[arg(long, conflicts_with_all = ["scene", "shape"])]
+    pub seed_sweep: bool,
+    /// The walk form of the sweep (the scene benchmark measures both).
+    #[arg(long, value_enum, default_value = "unrolled")]
+    pub walk: sdfc::codegen::WalkForm,
     /// Frames per measurement (the median is reported).
     #[arg(long, default_value = "5")]
     pub frames: u32,

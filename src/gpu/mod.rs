@@ -6,7 +6,7 @@ mod compute;
 mod render;
 
 pub use compute::{eval_atlas, eval_points, AtlasValue};
-pub use render::{render, render_timed, Frame, Timings, ViewMode};
+pub use render::{render, render_repeated, render_timed, Frame, Timings, ViewMode};
 
 use std::fmt;
 use std::sync::Arc;

@@ -229,6 +229,23 @@ pub fn render_timed(
     base_dir: &Path,
     warmup: u32,
 ) -> Result<Frame, GpuError> {
+    render_repeated(gpu, wgsl, manifest, view, mode, base_dir, warmup, 1).map(|(f, _)| f)
+}
+
+/// [`render_timed`] with `repeats` timed frames on one pipeline: returns the last frame
+/// (its `timings.frame` is the median) and every frame time, in order. Only the last
+/// frame is read back.
+#[allow(clippy::too_many_arguments)]
+pub fn render_repeated(
+    gpu: &Gpu,
+    wgsl: &str,
+    manifest: &Manifest,
+    view: &View,
+    mode: ViewMode,
+    base_dir: &Path,
+    warmup: u32,
+    repeats: u32,
+) -> Result<(Frame, Vec<Duration>), GpuError> {
     let d = &gpu.device;
     let (w, h) = (view.width.max(1), view.height.max(1));
     let formats = formats(gpu);
@@ -416,52 +433,81 @@ pub fn render_timed(
         })?;
         gpu.wait()?;
     }
-    let submitted = Instant::now();
-    gpu.scoped(|| {
-        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("frame"),
-        });
-        draw(
-            &mut enc,
-            queries
-                .as_ref()
-                .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
-        );
-        if let Some((set, resolve, read)) = &queries {
-            enc.resolve_query_set(set, 0..2, resolve, 0);
-            enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
-        }
-        for (t, (b, row)) in targets.iter().zip(&readbacks) {
-            enc.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture: t,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: b,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(*row),
-                        rows_per_image: Some(h),
-                    },
-                },
-                wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: 1,
-                },
+    let repeats = repeats.max(1);
+    let mut times = Vec::with_capacity(repeats as usize);
+    let mut from_timestamps = true;
+    for rep in 0..repeats {
+        let last = rep + 1 == repeats;
+        let submitted = Instant::now();
+        gpu.scoped(|| {
+            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+            draw(
+                &mut enc,
+                queries
+                    .as_ref()
+                    .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    }),
             );
-        }
-        gpu.queue.submit([enc.finish()]);
-    })?;
-    gpu.wait()?;
-    let wall = submitted.elapsed();
+            if let Some((set, resolve, read)) = &queries {
+                enc.resolve_query_set(set, 0..2, resolve, 0);
+                enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+            }
+            for (t, (b, row)) in targets.iter().zip(&readbacks).filter(|_| last) {
+                enc.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: t,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d::ZERO,
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: b,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(*row),
+                            rows_per_image: Some(h),
+                        },
+                    },
+                    wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        gpu.wait()?;
+        let wall = submitted.elapsed();
+        let frame_time = match &queries {
+            Some((_, _, read)) => {
+                let bytes = gpu.read_buffer(read)?;
+                let t: &[u64] = bytemuck::cast_slice(&bytes);
+                let ns = t[1].saturating_sub(t[0]) as f64 * gpu.queue.get_timestamp_period() as f64;
+                if ns > 0.0 {
+                    Duration::from_nanos(ns as u64)
+                } else {
+                    from_timestamps = false;
+                    wall
+                }
+            }
+            None => {
+                from_timestamps = false;
+                wall
+            }
+        };
+        times.push(frame_time);
+    }
+    let frame = {
+        let mut sorted = times.clone();
+        sorted.sort();
+        sorted[sorted.len() / 2]
+    };
 
     let read_start = Instant::now();
     let mut planes = Vec::new();
@@ -476,19 +522,6 @@ pub fn render_timed(
         planes.push(out);
     }
     let readback = read_start.elapsed();
-    let (frame, from_timestamps) = match &queries {
-        Some((_, _, read)) => {
-            let bytes = gpu.read_buffer(read)?;
-            let t: &[u64] = bytemuck::cast_slice(&bytes);
-            let ns = t[1].saturating_sub(t[0]) as f64 * gpu.queue.get_timestamp_period() as f64;
-            if ns > 0.0 {
-                (Duration::from_nanos(ns as u64), true)
-            } else {
-                (wall, false)
-            }
-        }
-        None => (wall, false),
-    };
     let half = formats[1] == wgpu::TextureFormat::Rgba16Float;
     let floats = |bytes: &[u8]| -> Vec<[f32; 4]> {
         if half {
@@ -511,7 +544,7 @@ pub fn render_timed(
                 .collect()
         }
     };
-    Ok(Frame {
+    let frame = Frame {
         width: w,
         height: h,
         position: floats(&planes[1]),
@@ -524,7 +557,8 @@ pub fn render_timed(
             frame_from_timestamps: from_timestamps,
             readback,
         },
-    })
+    };
+    Ok((frame, times))
 }
 
 #[cfg(test)]

@@ -234,11 +234,22 @@ fn components(n: usize, edges: &[Edge]) -> Vec<Vec<usize>> {
     groups
 }
 
+/// The free seeds of a group (all but the root) and each seed's index among them, so that
+/// assembling the systems is linear in the edges.
+fn free_slots(n: usize, group: &[usize], root: usize) -> (Vec<usize>, Vec<Option<usize>>) {
+    let free: Vec<usize> = group.iter().copied().filter(|&i| i != root).collect();
+    let mut slots = vec![None; n];
+    for (k, &i) in free.iter().enumerate() {
+        slots[i] = Some(k);
+    }
+    (free, slots)
+}
+
 /// Eq. 45 with t_root fixed: the connection Laplacian (Eq. 48) restricted to the free
 /// seeds of the group, solved by Cholesky; e1 is then t projected onto each tangent plane.
 fn solve_frames(seeds: &mut [Seed], edges: &[Edge], group: &[usize], root: usize) {
-    let free: Vec<usize> = group.iter().copied().filter(|&i| i != root).collect();
-    let index = |i: usize| free.iter().position(|&f| f == i);
+    let (free, slots) = free_slots(seeds.len(), group, root);
+    let index = |i: usize| slots[i];
     let m = 3 * free.len();
     let mut a = DMatrix::<f64>::zeros(m, m);
     let mut rhs = DVector::<f64>::zeros(m);
@@ -250,7 +261,7 @@ fn solve_frames(seeds: &mut [Seed], edges: &[Edge], group: &[usize], root: usize
             }
         }
     };
-    for e in edges.iter().filter(|e| group.contains(&e.a)) {
+    for e in edges.iter().filter(|e| slots[e.a].is_some() || e.a == root) {
         let w = 1.0 / (e.length * e.length);
         // E = w |R t_a − t_b|²: ∂/∂t_a = w (t_a − Rᵀ t_b), ∂/∂t_b = w (t_b − R t_a).
         let r = e.transport;
@@ -300,12 +311,12 @@ fn solve_offsets(
     root: usize,
     offsets: &mut [DVec2],
 ) {
-    let free: Vec<usize> = group.iter().copied().filter(|&i| i != root).collect();
-    let index = |i: usize| free.iter().position(|&f| f == i);
+    let (free, slots) = free_slots(seeds.len(), group, root);
+    let index = |i: usize| slots[i];
     let m = free.len();
     let mut a = DMatrix::<f64>::zeros(m, m);
     let mut rhs = DMatrix::<f64>::zeros(m, 2);
-    for e in edges.iter().filter(|e| group.contains(&e.a)) {
+    for e in edges.iter().filter(|e| slots[e.a].is_some() || e.a == root) {
         let w = 1.0 / (e.length * e.length);
         let (sa, sb) = (&seeds[e.a], &seeds[e.b]);
         let l_ab = DVec2::new(e.log_ab.dot(sa.e1), e.log_ab.dot(sa.e2));

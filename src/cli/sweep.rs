@@ -1,0 +1,230 @@
+//! `sdfc bench --seed-sweep`: per-pixel cost against the number of seeds (the paper's
+//! Fig. 15), as frame-time ratios against an untextured render, measured in one run on
+//! one adapter; and the merge-graph solve time of each merged plate.
+
+use super::{compile, BenchArgs};
+use sdfc::bench::{layout, plate, SEED_COUNTS};
+use sdfc::codegen::{Options, SeedGridChoice};
+use sdfc::gpu::{self, Gpu, ViewMode};
+use sdfc::{driver, ir, view::View};
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// One measured configuration.
+struct Row {
+    seeds: u32,
+    steps: u32,
+    merged: bool,
+    grid: bool,
+    frame: Duration,
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// Checks a generated scene; its diagnostics are printed and the sweep stops if any.
+fn checked(name: &str, source: &str) -> Result<driver::Analysis, ExitCode> {
+    let analysis = driver::check(source, None);
+    if !analysis.diagnostics.is_empty() {
+        eprint!(
+            "{}",
+            sdfc::diagnostic::render(name, source, &analysis.diagnostics, false)
+        );
+        eprintln!("error: a generated sweep scene has diagnostics (a bug in sdfc::bench::plate)");
+        return Err(ExitCode::from(1));
+    }
+    Ok(analysis)
+}
+
+/// The median over `runs` checks of the time the frame and offset solves take.
+fn solve_time(source: &str, runs: usize) -> Duration {
+    let mut times: Vec<f64> = (0..runs)
+        .filter_map(|_| {
+            let a = driver::check(source, None);
+            a.atlases.first()?.as_ref().map(|x| x.graph.solve_seconds)
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    Duration::from_secs_f64(times.get(times.len() / 2).copied().unwrap_or(0.0))
+}
+
+pub fn run(args: &BenchArgs) -> ExitCode {
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(super::render::GPU_EXIT);
+        }
+    };
+    let (width, height) = args.size.unwrap_or((320, 240));
+    let frames = args.frames.max(1);
+    let here = Path::new(".");
+    let measure =
+        |name: &str, source: &str, options: &Options| -> Result<(Duration, Duration), ExitCode> {
+            let analysis = checked(name, source)?;
+            let (module, _) = compile::build_checked(name, source, &analysis, options)?;
+            let scene = ir::lower(&analysis.program);
+            let target = super::eval::pick_shape(&scene, None).map_err(|e| {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            })?;
+            let mut view = View::new(analysis.program.render.as_ref(), &target);
+            (view.width, view.height) = (width, height);
+            let (frame, _) = gpu::render_repeated(
+                &gpu,
+                &module.wgsl,
+                &module.manifest,
+                &view,
+                ViewMode::Color,
+                here,
+                1,
+                frames,
+            )
+            .map_err(|e| {
+                eprintln!("error: {e}");
+                ExitCode::from(super::render::GPU_EXIT)
+            })?;
+            Ok((frame.timings.pipeline, frame.timings.frame))
+        };
+    let plain_options = Options {
+        plain: true,
+        ..Default::default()
+    };
+    let plain_source = plate(1, 10, false);
+
+    println!("seed-count sweep (Fig. 15): the 8 x 8 plate of examples/plate.sdf");
+    println!("adapter:   {}", gpu.describe());
+    println!(
+        "size:      {width}x{height}, median of {frames} frames after one warm-up frame, walk {:?}",
+        args.walk
+    );
+    // The untextured baseline is measured before each seed count and at the end; the
+    // ratios use the median of those measurements, and the spread is reported.
+    let mut plain = Vec::new();
+    let measure_plain = |plain: &mut Vec<Duration>| -> Result<(), ExitCode> {
+        plain.push(measure("plain", &plain_source, &plain_options)?.1);
+        Ok(())
+    };
+    println!();
+    println!(
+        "{:>5} {:>3} {:>6} {:>4} {:>12} {:>10}",
+        "seeds", "N", "merged", "grid", "pipeline ms", "frame ms"
+    );
+    let mut rows = Vec::new();
+    for seeds in SEED_COUNTS {
+        if let Err(code) = measure_plain(&mut plain) {
+            return code;
+        }
+        for steps in [10, 20] {
+            // One seed has nothing to merge with: its merged row would repeat the other.
+            for merged in [false, true].into_iter().filter(|&m| !m || seeds > 1) {
+                let source = plate(seeds, steps, merged);
+                for grid in [false, true] {
+                    let options = Options {
+                        walk: args.walk,
+                        seed_grid: if grid {
+                            SeedGridChoice::On
+                        } else {
+                            SeedGridChoice::Off
+                        },
+                        ..Default::default()
+                    };
+                    let name = format!("plate({seeds}, {steps}, {merged})");
+                    let (pipeline, frame) = match measure(&name, &source, &options) {
+                        Ok(r) => r,
+                        Err(code) => return code,
+                    };
+                    println!(
+                        "{seeds:>5} {steps:>3} {:>6} {:>4} {:>12.1} {:>10.2}",
+                        if merged { "yes" } else { "no" },
+                        if grid { "on" } else { "off" },
+                        ms(pipeline),
+                        ms(frame),
+                    );
+                    rows.push(Row {
+                        seeds,
+                        steps,
+                        merged,
+                        grid,
+                        frame,
+                    });
+                }
+            }
+        }
+    }
+    if let Err(code) = measure_plain(&mut plain) {
+        return code;
+    }
+    let mut sorted = plain.clone();
+    sorted.sort();
+    let base = sorted[sorted.len() / 2];
+    println!();
+    println!(
+        "untextured (plain sphere trace): median {:.2} ms of {} measurements through the run (min {:.2}, max {:.2})",
+        ms(base),
+        plain.len(),
+        ms(sorted[0]),
+        ms(sorted[sorted.len() - 1])
+    );
+    println!();
+    println!("frame time ÷ untextured:");
+    println!(
+        "{:>5} {:>3}   {:>14} {:>14} {:>14} {:>14}",
+        "seeds", "N", "unmerged, off", "unmerged, grid", "merged, off", "merged, grid"
+    );
+    for seeds in SEED_COUNTS {
+        for steps in [10, 20] {
+            let cell = |merged: bool, grid: bool| {
+                rows.iter()
+                    .find(|r| (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid))
+                    .map(|r| format!("{:.2}", ms(r.frame) / ms(base)))
+                    .unwrap_or_else(|| String::from("—"))
+            };
+            println!(
+                "{seeds:>5} {steps:>3}   {:>14} {:>14} {:>14} {:>14}",
+                cell(false, false),
+                cell(false, true),
+                cell(true, false),
+                cell(true, true)
+            );
+        }
+    }
+
+    println!();
+    println!("seed grid speed-up (frame time off ÷ on):");
+    for seeds in SEED_COUNTS {
+        let mut cells = Vec::new();
+        for steps in [10, 20] {
+            for merged in [false, true] {
+                let pick = |grid: bool| {
+                    rows.iter().find(|r| {
+                        (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid)
+                    })
+                };
+                if let (Some(off), Some(on)) = (pick(false), pick(true)) {
+                    cells.push(format!(
+                        "N={steps} {}: {:.2}",
+                        if merged { "merged" } else { "unmerged" },
+                        ms(off.frame) / ms(on.frame)
+                    ));
+                }
+            }
+        }
+        println!("{seeds:>5} seeds   {}", cells.join("   "));
+    }
+
+    println!();
+    println!("merge-graph solve (frames, Eq. 45/48, and offsets, Eq. 47), median of 21 checks:");
+    for seeds in SEED_COUNTS.into_iter().filter(|&s| s > 1) {
+        let (r, c) = layout(seeds);
+        let edges = r * (c - 1) + c * (r - 1);
+        let t = solve_time(&plate(seeds, 10, true), 21);
+        println!(
+            "{seeds:>5} seeds, {edges:>3} merges: {:.3} ms",
+            t.as_secs_f64() * 1e3
+        );
+    }
+    ExitCode::SUCCESS
+}

@@ -37,6 +37,20 @@ impl Label {
     }
 }
 
+/// One replacement of source text.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Edit {
+    pub span: Span,
+    pub text: String,
+}
+
+/// A fix that can be applied mechanically (a code action in the editor).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Fix {
+    pub title: String,
+    pub edits: Vec<Edit>,
+}
+
 /// One problem (or fact) about a source file.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostic {
@@ -48,6 +62,8 @@ pub struct Diagnostic {
     pub secondary: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
+    /// Machine-applicable fixes, offered as code actions.
+    pub fixes: Vec<Fix>,
 }
 
 impl Diagnostic {
@@ -93,6 +109,7 @@ impl Diagnostic {
             secondary: Vec::new(),
             notes: Vec::new(),
             help: None,
+            fixes: Vec::new(),
         }
     }
 
@@ -109,6 +126,33 @@ impl Diagnostic {
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
         self
+    }
+
+    /// A fix that replaces `span` with `text`.
+    pub fn with_fix(
+        mut self,
+        title: impl Into<String>,
+        span: Span,
+        text: impl Into<String>,
+    ) -> Self {
+        self.fixes.push(Fix {
+            title: title.into(),
+            edits: vec![Edit {
+                span,
+                text: text.into(),
+            }],
+        });
+        self
+    }
+
+    /// "did you mean `best`?" as help, and the fix that replaces the primary span with it.
+    pub fn with_suggestion(self, best: &str) -> Self {
+        let span = self.primary.span;
+        self.with_help(format!("did you mean `{best}`?")).with_fix(
+            format!("replace with `{best}`"),
+            span,
+            best,
+        )
     }
 
     pub fn is_error(&self) -> bool {

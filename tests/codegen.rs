@@ -215,3 +215,42 @@ fn naga_rejection_is_an_internal_compiler_error_with_the_wgsl_saved() {
     assert!(text.contains("fn sdf_twisted") && text.contains("fn corrupted( {"));
     let _ = std::fs::remove_file(saved);
 }
+
+/// naga's rejection of code generated from a scene definition is reported on that
+/// definition's span in the scene, not on a WGSL line.
+#[test]
+fn naga_rejection_points_at_the_scene_definition() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(["compile", "examples/plate.sdf"])
+        .env("SDFC_TEST_CORRUPT_WGSL", "material")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    let src = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/plate.sdf"),
+    )
+    .unwrap();
+    let line = src
+        .lines()
+        .position(|l| l.starts_with("material tiled"))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains(&format!("┌─ examples/plate.sdf:{line}:1")),
+        "{err}"
+    );
+    assert!(
+        err.contains("naga rejected the WGSL generated for material `tiled`"),
+        "{err}"
+    );
+    assert!(err.contains("note: the generated WGSL is saved at"), "{err}");
+    if let Some(saved) = err
+        .lines()
+        .find_map(|l| l.strip_prefix("note: the generated WGSL is saved at "))
+        .and_then(|l| l.split(';').next())
+    {
+        let _ = std::fs::remove_file(saved);
+    }
+}

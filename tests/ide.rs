@@ -2,6 +2,8 @@
 
 use sdfc::ide::{self, Document, SymbolKind};
 
+#[path = "ide/actions.rs"]
+mod actions;
 #[path = "ide/complete.rs"]
 mod complete;
 #[path = "ide/format.rs"]

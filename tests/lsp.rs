@@ -114,6 +114,8 @@ impl Client {
 
 const URI: &str = "file:///tmp/sdfc-lsp-test/scene.sdf";
 
+#[path = "lsp/actions.rs"]
+mod actions;
 #[path = "lsp/editing.rs"]
 mod editing;
 

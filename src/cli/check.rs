@@ -27,7 +27,7 @@ pub fn run(args: CheckArgs) -> ExitCode {
                 continue;
             }
         };
-        let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
+        let analysis = sdfc::driver::check_all(&source, Some(&base_dir(path)));
         any_errors |= analysis.has_errors();
         errors += analysis
             .diagnostics

@@ -33,24 +33,33 @@ pub fn build_checked(
     options: &codegen::Options,
 ) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
     let scene = ir::lower(&analysis.program);
-    let module = codegen::generate_with(&analysis.program, &scene, options).map_err(|diags| {
-        eprint!("{}", sdfc::diagnostic::render(name, source, &diags, false));
-        ExitCode::from(1)
-    })?;
+    let prepared = (analysis.atlases.len() == analysis.program.atlases.len())
+        .then_some(analysis.atlases.as_slice());
+    let module = codegen::generate_prepared(&analysis.program, &scene, options, prepared).map_err(
+        |diags| {
+            eprint!("{}", sdfc::diagnostic::render(name, source, &diags, false));
+            ExitCode::from(1)
+        },
+    )?;
     // Test hook: corrupts the module so that the internal-compiler-error path can be tested
-    // end to end (tests/codegen.rs). Never set outside tests.
+    // end to end (tests/codegen.rs). Never set outside tests. `material` breaks the code
+    // of the first material; anything else appends a broken function.
     let mut module = module;
-    if std::env::var_os("SDFC_TEST_CORRUPT_WGSL").is_some() {
-        module.wgsl.push_str("\nfn corrupted( {\n");
+    match std::env::var("SDFC_TEST_CORRUPT_WGSL").as_deref() {
+        Ok("material") => module.corrupt_first_material(),
+        Ok(_) => module.wgsl.push_str("\nfn corrupted( {\n"),
+        Err(_) => {}
     }
     match codegen::validate(&module.wgsl) {
         Ok(v) => Ok((module, v)),
         Err(e) => {
             let path = std::env::temp_dir().join(format!("sdfc-ice-{}.wgsl", std::process::id()));
             let saved = write_atomic(&path, module.wgsl.as_bytes()).is_ok();
-            eprintln!(
-                "error[{}]: internal compiler error: naga rejected the generated WGSL",
-                sdfc::codes::E_INTERNAL
+            // The error on the scene definition that produced the rejected code, then
+            // naga's own report on the WGSL.
+            eprint!(
+                "{}",
+                sdfc::diagnostic::render(name, source, &[module.internal_error(&e)], false)
             );
             eprintln!("{e}");
             if saved {

@@ -5,6 +5,7 @@ pub mod check;
 pub mod compile;
 pub mod eval;
 pub mod fmt;
+pub mod latency;
 pub mod render;
 pub mod sweep;
 
@@ -81,6 +82,13 @@ pub struct BenchArgs {
     /// with and without the seed grid; and the merge-graph solve time.
     #[arg(long, conflicts_with_all = ["scene", "shape"])]
     pub seed_sweep: bool,
+    /// The language server's didChange → publishDiagnostics latency on the scene
+    /// (p50/p95 over --edits edits), instead of frame times.
+    #[arg(long, requires = "scene")]
+    pub lsp_latency: bool,
+    /// Edits measured by --lsp-latency.
+    #[arg(long, default_value = "50")]
+    pub edits: u32,
     /// The walk form of the sweep (the scene benchmark measures both).
     #[arg(long, value_enum, default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,

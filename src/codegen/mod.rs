@@ -13,7 +13,7 @@ pub mod targets;
 
 pub use atlas::{SeedGridChoice, WalkForm};
 pub use emit::{lit, TextureUse};
-pub use targets::{translate, validate, Target, Validated};
+pub use targets::{translate, validate, NagaError, Target, Validated};
 
 use crate::codes;
 use crate::diagnostic::Diagnostic;
@@ -33,6 +33,90 @@ pub const UV_LIBRARY: &str = include_str!("../../shaders/uv.wgsl");
 pub struct Module {
     pub wgsl: String,
     pub manifest: Manifest,
+    /// Which scene definition each generated function came from.
+    pub source_map: Vec<SourceRegion>,
+}
+
+/// A byte range of the generated WGSL and the scene definition that produced it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SourceRegion {
+    pub wgsl: std::ops::Range<usize>,
+    pub span: crate::span::Span,
+    /// What the definition is, for messages: "shape `body`", "material `tiled`" …
+    pub what: String,
+}
+
+impl Module {
+    /// For tests of the internal-error path only: inserts an undefined name at the start
+    /// of the first material's code (the regions are kept in step).
+    #[doc(hidden)]
+    pub fn corrupt_first_material(&mut self) {
+        let Some(at) = self
+            .source_map
+            .iter()
+            .find(|r| r.what.starts_with("material"))
+            .map(|r| r.wgsl.start)
+        else {
+            return;
+        };
+        let line_end = self.wgsl[at..].find('\n').map_or(at, |i| at + i + 1);
+        let broken = "            let corrupted = undefined_name;\n";
+        self.wgsl.insert_str(line_end, broken);
+        for r in &mut self.source_map {
+            if r.wgsl.start >= line_end {
+                r.wgsl.start += broken.len();
+            }
+            if r.wgsl.end >= line_end {
+                r.wgsl.end += broken.len();
+            }
+        }
+    }
+
+    /// The innermost region holding a byte offset of the WGSL.
+    pub fn region_at(&self, offset: usize) -> Option<&SourceRegion> {
+        self.source_map
+            .iter()
+            .filter(|r| r.wgsl.contains(&offset))
+            .min_by_key(|r| r.wgsl.len())
+    }
+
+    /// naga's rejection of this module as an internal-compiler-error diagnostic on the
+    /// scene span that produced the offending code (or the file's start, for code of
+    /// the shared library).
+    pub fn internal_error(&self, e: &NagaError) -> Diagnostic {
+        let first = e
+            .message
+            .lines()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("naga rejected the module")
+            .trim()
+            .to_string();
+        let region = e.offset.and_then(|o| self.region_at(o));
+        let (span, label) = match region {
+            Some(r) => (
+                r.span,
+                format!("naga rejected the WGSL generated for {}", r.what),
+            ),
+            None => (
+                crate::span::Span::default(),
+                String::from(
+                    "naga rejected code sdfc adds to every module, not code from this scene",
+                ),
+            ),
+        };
+        let mut d = Diagnostic::error(
+            codes::E_INTERNAL,
+            "internal compiler error: naga rejected the generated WGSL",
+            span,
+            label,
+        )
+        .with_note(format!("naga: {first}"));
+        if let Some(o) = e.offset {
+            let line = self.wgsl[..o.min(self.wgsl.len())].matches('\n').count() + 1;
+            d = d.with_note(format!("at line {line} of the generated WGSL"));
+        }
+        d.with_help("this is a bug in sdfc, not in the scene: please report it with the generated WGSL (`sdfc compile` saves it)")
+    }
 }
 
 /// A resource binding of the generated module.
@@ -112,7 +196,26 @@ pub fn generate_with(
     scene: &Scene,
     options: &Options,
 ) -> Result<Module, Vec<Diagnostic>> {
+    generate_prepared(program, scene, options, None)
+}
+
+/// [`generate_with`] reusing atlases [`crate::driver::check`] prepared already (one per
+/// atlas of the program), so the compile-time geometry runs once.
+pub fn generate_prepared(
+    program: &Program,
+    scene: &Scene,
+    options: &Options,
+    prepared: Option<&[Option<crate::uv::Atlas>]>,
+) -> Result<Module, Vec<Diagnostic>> {
     let form = options.walk;
+    let mut source_map: Vec<SourceRegion> = Vec::new();
+    let let_span = |name: &str| {
+        program
+            .defs
+            .iter()
+            .find(|d| d.kind == crate::sema::DefKind::Let && d.name == name)
+            .map(|d| d.item_span)
+    };
     let target = match options.shape.as_deref() {
         Some(n) => scene.shape(n).cloned().ok_or_else(|| {
             vec![Diagnostic::error(
@@ -152,14 +255,35 @@ pub fn generate_with(
         lit((b.max - b.min).max_element().max(1e-3))
     );
     for named in &scene.shapes {
+        let start = out.len();
         map_fn(&mut out, &format!("map_{}", named.name), &named.shape);
         let _ = writeln!(
             out,
             "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
             named.name
         );
+        if let Some(span) = let_span(&named.name) {
+            source_map.push(SourceRegion {
+                wgsl: start..out.len(),
+                span,
+                what: format!("shape `{}`", named.name),
+            });
+        }
     }
+    let start = out.len();
     map_fn(&mut out, "scene_map", &target);
+    let target_span = match (options.shape.as_deref(), &program.render) {
+        (Some(n), _) => let_span(n),
+        (None, Some(r)) => Some(r.target_span),
+        (None, None) => scene.shapes.first().and_then(|s| let_span(&s.name)),
+    };
+    if let Some(span) = target_span {
+        source_map.push(SourceRegion {
+            wgsl: start..out.len(),
+            span,
+            what: String::from("the rendered shape"),
+        });
+    }
 
     // Atlases: seeds are projected and framed here, at compile time, on the CPU.
     let atlases: &[crate::sema::AtlasDef] = if options.plain { &[] } else { &program.atlases };
@@ -169,12 +293,26 @@ pub fn generate_with(
         &program.materials
     };
     if !atlases.is_empty() {
-        let (prepared, diags) = crate::uv::diagnose::prepare_all(program);
-        // Warnings and notes were reported by the check; errors stop generation.
-        problems.extend(diags.into_iter().filter(Diagnostic::is_error));
+        let computed;
+        let prepared = match prepared {
+            Some(p) if p.len() == atlases.len() => p,
+            _ => {
+                let (p, diags) = crate::uv::diagnose::prepare_all(program);
+                // Warnings and notes were reported by the check; errors stop generation.
+                problems.extend(diags.into_iter().filter(Diagnostic::is_error));
+                computed = p;
+                &computed[..]
+            }
+        };
         for (k, a) in prepared.iter().enumerate() {
             if let Some(a) = a {
+                let start = out.len();
                 atlas::emit(&mut out, k, a, form, &options.seed_grid.grid(a));
+                source_map.push(SourceRegion {
+                    wgsl: start..out.len(),
+                    span: atlases[k].span,
+                    what: format!("atlas `{}`", atlases[k].name),
+                });
             }
         }
     }
@@ -205,6 +343,7 @@ pub fn generate_with(
         "// `footprint` is the pixel's size on the surface; tangent_u and tangent_v span the tangent plane.\nfn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {{\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n    switch id {{"
     );
     for (i, m) in materials.iter().enumerate() {
+        let start = out.len();
         textures.atlases.clear();
         let mut attr = |v: &Value, what: &str| {
             textures.srgb = matches!(what, "color" | "emission");
@@ -245,6 +384,11 @@ pub fn generate_with(
             })
             .collect();
         let _ = writeln!(out, "        case {}: {{\n{samples}            return Material({color}, {r}, {mt}, {e});\n        }}", i + 1);
+        source_map.push(SourceRegion {
+            wgsl: start..out.len(),
+            span: program.defs[m.def].item_span,
+            what: format!("material `{}`", m.name),
+        });
     }
     let _ = writeln!(out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
     if !problems.is_empty() {
@@ -340,6 +484,11 @@ pub fn generate_with(
     );
     let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
     let wgsl = format!("{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{UV_LIBRARY}\n{out}");
+    // The regions were recorded in `out`, which ends the module.
+    let shift = wgsl.len() - out.len();
+    for r in &mut source_map {
+        r.wgsl = r.wgsl.start + shift..r.wgsl.end + shift;
+    }
     let manifest = Manifest {
         entry_points: vec![
             ("vs_main", "vertex"),
@@ -354,7 +503,11 @@ pub fn generate_with(
         shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
         textures: textures.textures,
     };
-    Ok(Module { wgsl, manifest })
+    Ok(Module {
+        wgsl,
+        manifest,
+        source_map,
+    })
 }
 
 fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {

@@ -19,26 +19,35 @@ pub struct Validated {
     pub info: naga::valid::ModuleInfo,
 }
 
-/// Why naga rejected WGSL: the message as naga renders it, with source context.
+/// Why naga rejected WGSL: the message as naga renders it, with source context, and the
+/// byte offset in the WGSL of naga's first label, when it gave one.
 #[derive(Debug, Clone, PartialEq)]
-pub struct NagaError(pub String);
+pub struct NagaError {
+    pub message: String,
+    pub offset: Option<usize>,
+}
 
 impl fmt::Display for NagaError {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
 /// Parses and validates WGSL with naga.
 pub fn validate(wgsl: &str) -> Result<Validated, NagaError> {
-    let module =
-        naga::front::wgsl::parse_str(wgsl).map_err(|e| NagaError(e.emit_to_string(wgsl)))?;
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| NagaError {
+        message: e.emit_to_string(wgsl),
+        offset: e.location(wgsl).map(|l| l.offset as usize),
+    })?;
     let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
-    .map_err(|e| NagaError(e.emit_to_string(wgsl)))?;
+    .map_err(|e| NagaError {
+        message: e.emit_to_string(wgsl),
+        offset: e.location(wgsl).map(|l| l.offset as usize),
+    })?;
     Ok(Validated { module, info })
 }
 

@@ -1,8 +1,10 @@
 //! Protocol-free editor queries over one analysed document: hover, go to
-//! definition, references and document symbols; in submodules, formatting,
+//! definition, references and document symbols; in submodules, code actions, inlay
+//! hints and merge hover, formatting,
 //! semantic tokens, rename, completion and signature help. The language server
 //! (`src/lsp`) only converts these to and from the protocol.
 
+pub mod actions;
 pub mod complete;
 pub mod format;
 pub mod rename;
@@ -24,7 +26,7 @@ pub struct Document {
 impl Document {
     pub fn new(text: impl Into<String>, base_dir: Option<&Path>) -> Document {
         let text = text.into();
-        let analysis = crate::driver::check(&text, base_dir);
+        let analysis = crate::driver::check_all(&text, base_dir);
         Document { text, analysis }
     }
 }
@@ -193,7 +195,10 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
         };
         return Some(Hover { span, markdown });
     }
-    match named_at(doc, offset)? {
+    let Some(named) = named_at(doc, offset) else {
+        return actions::merge_hover(doc, offset);
+    };
+    match named {
         Named::Function(ident) => {
             let b = builtins::lookup(&ident.name)?;
             Some(Hover {

@@ -4,8 +4,9 @@
 //! diagnostics tagged with the document version. Requests are answered against
 //! the latest text. Positions are UTF-16, converted with `line-index`.
 //! Formatting, semantic tokens, rename, completion and signature help are in
-//! [`features`].
+//! [`features`]; code actions and inlay hints in [`actions`].
 
+mod actions;
 mod features;
 
 use crate::diagnostic::{Diagnostic, Severity};
@@ -140,25 +141,63 @@ fn capabilities() -> lsp::ServerCapabilities {
         ..Default::default()
     };
     features::capabilities(&mut caps);
+    actions::capabilities(&mut caps);
     caps
 }
 
 /// Serves one client on a connection until it exits.
+///
+/// Messages are taken in batches: everything already waiting when the server is free.
+/// Each document changed in a batch is analysed once, at its latest text, and its
+/// diagnostics are published with that version; requests are then answered against
+/// that text, except those the client cancelled (`$/cancelRequest`), which get
+/// `RequestCancelled` without being computed.
 pub fn serve(conn: Connection) -> Result<(), Error> {
     let caps = serde_json::to_value(capabilities())?;
     conn.initialize(caps)?;
     let mut docs: HashMap<String, Open> = HashMap::new();
-    for msg in &conn.receiver {
-        match msg {
-            Message::Request(req) => {
-                if conn.handle_shutdown(&req)? {
-                    return Ok(());
+    while let Ok(first) = conn.receiver.recv() {
+        let mut batch = vec![first];
+        while let Ok(m) = conn.receiver.try_recv() {
+            batch.push(m);
+        }
+        let mut cancelled = std::collections::HashSet::new();
+        let mut changed: Vec<(lsp::Uri, String, i32)> = Vec::new();
+        let mut requests = Vec::new();
+        for msg in batch {
+            match msg {
+                Message::Request(req) => requests.push(req),
+                Message::Notification(n) if n.method == "$/cancelRequest" => {
+                    if let Ok(p) = serde_json::from_value::<lsp::CancelParams>(n.params) {
+                        cancelled.insert(match p.id {
+                            lsp::NumberOrString::Number(i) => lsp_server::RequestId::from(i),
+                            lsp::NumberOrString::String(s) => lsp_server::RequestId::from(s),
+                        });
+                    }
                 }
-                let resp = answer(&docs, req);
-                conn.sender.send(Message::Response(resp))?;
+                Message::Notification(n) => notify(&conn, &mut docs, &mut changed, n)?,
+                Message::Response(_) => {}
             }
-            Message::Notification(n) => notify(&conn, &mut docs, n)?,
-            Message::Response(_) => {}
+        }
+        for (uri, text, version) in changed {
+            let o = open(&uri, text, version);
+            publish(&conn, &uri, Some(&o))?;
+            docs.insert(uri.as_str().to_string(), o);
+        }
+        for req in requests {
+            if conn.handle_shutdown(&req)? {
+                return Ok(());
+            }
+            let resp = if cancelled.contains(&req.id) {
+                Response::new_err(
+                    req.id,
+                    ErrorCode::RequestCanceled as i32,
+                    String::from("cancelled by the client"),
+                )
+            } else {
+                answer(&docs, req)
+            };
+            conn.sender.send(Message::Response(resp))?;
         }
     }
     Ok(())
@@ -174,33 +213,46 @@ fn open(uri: &lsp::Uri, text: String, version: i32) -> Open {
     }
 }
 
+/// Applies a notification. Opened and changed texts are queued in `changed` (the latest
+/// per document) to be analysed once the batch is read.
 fn notify(
     conn: &Connection,
     docs: &mut HashMap<String, Open>,
+    changed: &mut Vec<(lsp::Uri, String, i32)>,
     n: Notification,
 ) -> Result<(), Error> {
+    let mut queue = |uri: lsp::Uri, text: String, version: i32| {
+        changed.retain(|(u, _, _)| u != &uri);
+        changed.push((uri, text, version));
+    };
     match n.method.as_str() {
         "textDocument/didOpen" => {
-            let p: lsp::DidOpenTextDocumentParams = serde_json::from_value(n.params)?;
-            let o = open(
-                &p.text_document.uri,
+            // Malformed notifications are ignored: there is no one to answer.
+            let Ok(p) = serde_json::from_value::<lsp::DidOpenTextDocumentParams>(n.params) else {
+                return Ok(());
+            };
+            queue(
+                p.text_document.uri,
                 p.text_document.text,
                 p.text_document.version,
             );
-            publish(conn, &p.text_document.uri, Some(&o))?;
-            docs.insert(p.text_document.uri.as_str().to_string(), o);
         }
         "textDocument/didChange" => {
-            let p: lsp::DidChangeTextDocumentParams = serde_json::from_value(n.params)?;
+            // Malformed notifications are ignored: there is no one to answer.
+            let Ok(p) = serde_json::from_value::<lsp::DidChangeTextDocumentParams>(n.params) else {
+                return Ok(());
+            };
             // Full sync: the last change holds the whole text.
             if let Some(change) = p.content_changes.into_iter().last() {
-                let o = open(&p.text_document.uri, change.text, p.text_document.version);
-                publish(conn, &p.text_document.uri, Some(&o))?;
-                docs.insert(p.text_document.uri.as_str().to_string(), o);
+                queue(p.text_document.uri, change.text, p.text_document.version);
             }
         }
         "textDocument/didClose" => {
-            let p: lsp::DidCloseTextDocumentParams = serde_json::from_value(n.params)?;
+            // Malformed notifications are ignored: there is no one to answer.
+            let Ok(p) = serde_json::from_value::<lsp::DidCloseTextDocumentParams>(n.params) else {
+                return Ok(());
+            };
+            changed.retain(|(u, _, _)| u != &p.text_document.uri);
             docs.remove(p.text_document.uri.as_str());
             publish(conn, &p.text_document.uri, None)?;
         }
@@ -301,6 +353,7 @@ fn answer(docs: &HashMap<String, Open>, req: Request) -> Response {
             }
         }
         m if features::METHODS.contains(&m) => features::answer(docs, req.clone()),
+        m if actions::METHODS.contains(&m) => actions::answer(docs, req.clone()),
         other => Response::new_err(
             id,
             ErrorCode::MethodNotFound as i32,

@@ -203,7 +203,7 @@ impl Checker<'_> {
                     "unknown setting",
                 );
                 if let Some(best) = suggest(&s.name.name, specs.iter().map(|x| x.name)) {
-                    d = d.with_help(format!("did you mean `{best}`?"));
+                    d = d.with_suggestion(best);
                 }
                 let names: Vec<&str> = specs.iter().map(|x| x.name).collect();
                 self.error(d.with_note(format!(
@@ -304,7 +304,11 @@ impl Checker<'_> {
                         format!("found {s:?}"),
                     );
                     if let Some(best) = suggest(s, options.iter().copied()) {
-                        d = d.with_help(format!("did you mean \"{best}\"?"));
+                        d = d.with_help(format!("did you mean \"{best}\"?")).with_fix(
+                            format!("replace with \"{best}\""),
+                            span,
+                            format!("\"{best}\""),
+                        );
                     }
                     self.error(d);
                     return false;
@@ -591,7 +595,7 @@ impl Checker<'_> {
                         } else if let Some(best) =
                             suggest(&n.name, local.keys().map(|s| s.as_str()))
                         {
-                            d = d.with_help(format!("did you mean `{best}`?"));
+                            d = d.with_suggestion(best);
                         }
                         self.error(d);
                         ids.push(None);

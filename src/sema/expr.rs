@@ -155,7 +155,7 @@ impl Checker<'_> {
                 .chain(CONSTANTS.iter().map(|c| c.name.to_string()))
                 .collect();
             if let Some(best) = suggest(n, candidates.iter().map(|s| s.as_str())) {
-                d = d.with_help(format!("did you mean `{best}`?"));
+                d = d.with_suggestion(best);
             }
         }
         self.error(d);
@@ -286,7 +286,7 @@ impl Checker<'_> {
                             "unknown field",
                         );
                         if let Some(best) = suggest(name, AtlasAttr::ALL.iter().map(|a| a.1)) {
-                            d = d.with_help(format!("did you mean `{best}`?"));
+                            d = d.with_suggestion(best);
                         }
                         let all: Vec<&str> = AtlasAttr::ALL.iter().map(|a| a.1).collect();
                         self.error(d.with_note(format!("an atlas provides: {}", all.join(", "))));
@@ -387,7 +387,7 @@ impl Checker<'_> {
                 });
                 d = d.with_note(format!("`{}` is a value, not a function", callee.name));
             } else if let Some(best) = suggest(&callee.name, BUILTINS.iter().map(|b| b.name)) {
-                d = d.with_help(format!("did you mean `{best}`?"));
+                d = d.with_suggestion(best);
             }
             self.error(d);
             return Value::Error;
@@ -467,7 +467,7 @@ impl Checker<'_> {
                             )
                             .with_note(format!("the signature is `{}`", b.signature()));
                             if let Some(best) = suggest(&n.name, b.params.iter().map(|p| p.name)) {
-                                d = d.with_help(format!("did you mean `{best}`?"));
+                                d = d.with_suggestion(best);
                             }
                             self.error(d);
                             ok = false;

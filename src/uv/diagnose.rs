@@ -90,7 +90,12 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
                 .with_help(format!(
                     "write `{}` to place it on the surface",
                     fmt_vec(seed.seed.p)
-                )),
+                ))
+                .with_fix(
+                    "snap seed to surface",
+                    sd.position_span,
+                    fmt_vec(seed.seed.p),
+                ),
             );
         }
     }

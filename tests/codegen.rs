@@ -245,7 +245,10 @@ fn naga_rejection_points_at_the_scene_definition() {
         err.contains("naga rejected the WGSL generated for material `tiled`"),
         "{err}"
     );
-    assert!(err.contains("note: the generated WGSL is saved at"), "{err}");
+    assert!(
+        err.contains("note: the generated WGSL is saved at"),
+        "{err}"
+    );
     if let Some(saved) = err
         .lines()
         .find_map(|l| l.strip_prefix("note: the generated WGSL is saved at "))

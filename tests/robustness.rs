@@ -130,3 +130,33 @@ fn deep_nesting_is_reported_not_crashed() {
         analysis.diagnostics
     );
 }
+
+/// The language server runs the whole pipeline on every edit: random numeric edits keep
+/// most scenes valid, so the compile-time geometry, code generation and naga run on
+/// odd inputs (seeds off the shape, zero sizes, huge distances). None may panic, and
+/// naga must accept every module generated (an E0900 here is a code generator bug).
+#[test]
+fn numeric_edits_through_geometry_codegen_and_naga() {
+    let mut rng = Rng(0xC0DE_6E0);
+    let mut valid = 0;
+    for (name, original) in examples() {
+        for _ in 0..6 {
+            let mut bytes = original.clone();
+            let digits: Vec<usize> = (0..bytes.len())
+                .filter(|&i| bytes[i].is_ascii_digit())
+                .collect();
+            for _ in 0..1 + rng.below(3) {
+                let at = digits[rng.below(digits.len())];
+                bytes[at] = b"0123456789"[rng.below(10)];
+            }
+            let text = String::from_utf8(bytes).unwrap();
+            let analysis = sdfc::driver::check_all(&text, Some(Path::new("examples")));
+            valid += usize::from(!analysis.has_errors());
+            for d in &analysis.diagnostics {
+                assert_ne!(d.code, sdfc::codes::E_INTERNAL, "{name}: {d:#?}\n{text}");
+                assert!(d.primary.span.end <= text.len());
+            }
+        }
+    }
+    assert!(valid >= 20, "only {valid} edited scenes were valid");
+}

@@ -114,6 +114,13 @@ impl Client {
 
 const URI: &str = "file:///tmp/sdfc-lsp-test/scene.sdf";
 
+/// Shuts the server down as a client does, and waits for it to exit.
+fn stop(mut c: Client, handle: std::thread::JoinHandle<()>) {
+    c.request("shutdown", json!(null));
+    c.notify("exit", json!(null));
+    handle.join().unwrap();
+}
+
 #[path = "lsp/actions.rs"]
 mod actions;
 #[path = "lsp/editing.rs"]

@@ -1,15 +1,9 @@
 //! Code actions, inlay hints and cancellation over the in-memory connection.
 
-use super::{Client, URI};
+use super::{stop, Client, URI};
 use lsp_server::{Message, Notification, Request, RequestId};
 use serde_json::json;
 use std::time::Duration;
-
-fn stop(mut c: Client, handle: std::thread::JoinHandle<()>) {
-    c.request("shutdown", json!(null));
-    c.notify("exit", json!(null));
-    handle.join().unwrap();
-}
 
 #[test]
 fn code_action_fixes_a_misspelling() {

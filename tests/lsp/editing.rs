@@ -1,7 +1,7 @@
 //! Formatting, semantic tokens, rename, completion and signature help over
 //! the in-memory connection.
 
-use super::{Client, URI};
+use super::{stop, Client, URI};
 use serde_json::{json, Value};
 
 fn open(c: &mut Client, text: &str, version: i32) {
@@ -14,12 +14,6 @@ fn open(c: &mut Client, text: &str, version: i32) {
 
 fn at(line: u32, character: u32) -> Value {
     json!({ "textDocument": { "uri": URI }, "position": { "line": line, "character": character } })
-}
-
-fn stop(mut c: Client, handle: std::thread::JoinHandle<()>) {
-    c.request("shutdown", json!(null));
-    c.notify("exit", json!(null));
-    handle.join().unwrap();
 }
 
 #[test]

@@ -186,8 +186,8 @@ fn naga_errors_map_to_the_scene_definition_that_produced_the_code() {
     assert!(
         d.notes
             .iter()
-            .any(|n| n.contains("undefined_name") || n.contains("naga:")),
-        "{d:#?}"
+            .any(|n| n.starts_with("naga:") && n.contains("`undefined_name`")),
+        "naga's own message names the undefined identifier: {d:#?}"
     );
     // Every region of the source map is a real definition of the scene.
     let scene = sdfc::ir::lower(&analysis.program);

@@ -70,11 +70,13 @@ fn cancelled_requests_are_not_answered_with_results() {
     let (mut c, handle) = Client::start();
     // A large scene keeps the server busy analysing while the request and its
     // cancellation queue up behind it; both are then read in one batch.
-    let robot = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/robot.sdf"))
-        .unwrap();
+    // At its real path, so its texture resolves and the whole pipeline runs.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/robot.sdf");
+    let robot = std::fs::read_to_string(path).unwrap();
+    let uri = format!("file://{path}");
     c.notify(
         "textDocument/didOpen",
-        json!({ "textDocument": { "uri": URI, "languageId": "sdf", "version": 1, "text": robot } }),
+        json!({ "textDocument": { "uri": uri, "languageId": "sdf", "version": 1, "text": robot } }),
     );
     let id = RequestId::from(900);
     c.conn
@@ -82,7 +84,7 @@ fn cancelled_requests_are_not_answered_with_results() {
         .send(Message::Request(Request::new(
             id.clone(),
             String::from("textDocument/hover"),
-            json!({ "textDocument": { "uri": URI }, "position": { "line": 0, "character": 0 } }),
+            json!({ "textDocument": { "uri": uri }, "position": { "line": 0, "character": 0 } }),
         )))
         .unwrap();
     c.conn
@@ -107,11 +109,27 @@ fn cancelled_requests_are_not_answered_with_results() {
         .response_result
         .expect_err("a cancelled request gets an error");
     assert_eq!(err.code, -32800, "RequestCancelled");
-    // The server goes on answering.
+    // The server goes on answering, against the analysed robot: a seed name hovers
+    // with its projected position.
+    let (line, col) = robot
+        .lines()
+        .enumerate()
+        .find_map(|(i, l)| {
+            l.trim_start()
+                .starts_with("seed ")
+                .then(|| (i, l.find("seed ").unwrap() + 5))
+        })
+        .unwrap();
     let h = c.request(
         "textDocument/hover",
-        json!({ "textDocument": { "uri": URI }, "position": { "line": 0, "character": 0 } }),
+        json!({ "textDocument": { "uri": uri }, "position": { "line": line, "character": col } }),
     );
-    let _ = h;
+    assert!(
+        h["contents"]["value"]
+            .as_str()
+            .unwrap_or("")
+            .contains("projected to"),
+        "{h}"
+    );
     stop(c, handle);
 }

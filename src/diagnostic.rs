@@ -58,7 +58,9 @@ pub struct Diagnostic {
     /// Stable code, see [`crate::codes`].
     pub code: &'static str,
     pub message: String,
-    pub primary: Label,
+    /// Where in the scene: None for a diagnostic about no place in it (explicitly
+    /// unlocated, never a label at byte 0).
+    pub primary: Option<Label>,
     pub secondary: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
@@ -105,12 +107,32 @@ impl Diagnostic {
             severity,
             code,
             message: message.into(),
-            primary: Label::new(span, label),
+            primary: Some(Label::new(span, label)),
             secondary: Vec::new(),
             notes: Vec::new(),
             help: None,
             fixes: Vec::new(),
         }
+    }
+
+    /// A diagnostic about no place in the scene (a problem of the whole file or of the
+    /// compiler itself): rendered without a source excerpt.
+    pub fn unlocated(severity: Severity, code: &'static str, message: impl Into<String>) -> Self {
+        Diagnostic {
+            severity,
+            code,
+            message: message.into(),
+            primary: None,
+            secondary: Vec::new(),
+            notes: Vec::new(),
+            help: None,
+            fixes: Vec::new(),
+        }
+    }
+
+    /// The primary span, when the diagnostic has a place.
+    pub fn span(&self) -> Option<Span> {
+        self.primary.as_ref().map(|l| l.span)
     }
 
     pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Self {
@@ -147,12 +169,11 @@ impl Diagnostic {
 
     /// "did you mean `best`?" as help, and the fix that replaces the primary span with it.
     pub fn with_suggestion(self, best: &str) -> Self {
-        let span = self.primary.span;
-        self.with_help(format!("did you mean `{best}`?")).with_fix(
-            format!("replace with `{best}`"),
-            span,
-            best,
-        )
+        let with_help = self.with_help(format!("did you mean `{best}`?"));
+        match with_help.span() {
+            Some(span) => with_help.with_fix(format!("replace with `{best}`"), span, best),
+            None => with_help,
+        }
     }
 
     pub fn is_error(&self) -> bool {
@@ -160,22 +181,11 @@ impl Diagnostic {
     }
 }
 
-/// Sorts diagnostics by position, then severity, so output is stable.
+/// Sorts diagnostics by position (unlocated ones first), then severity, so output is
+/// stable.
 pub fn sort(diags: &mut [Diagnostic]) {
-    diags.sort_by(|a, b| {
-        (
-            a.primary.span.start,
-            a.primary.span.end,
-            std::cmp::Reverse(a.severity),
-            a.code,
-        )
-            .cmp(&(
-                b.primary.span.start,
-                b.primary.span.end,
-                std::cmp::Reverse(b.severity),
-                b.code,
-            ))
-    });
+    let key = |d: &Diagnostic| (d.span(), std::cmp::Reverse(d.severity), d.code);
+    diags.sort_by(|a, b| key(a).cmp(&key(b)));
 }
 
 fn to_codespan(d: &Diagnostic, len: usize) -> cs::Diagnostic<()> {
@@ -185,8 +195,11 @@ fn to_codespan(d: &Diagnostic, len: usize) -> cs::Diagnostic<()> {
         Severity::Note => cs::Severity::Note,
     };
     let clamp = |s: Span| s.start.min(len)..s.end.min(len).max(s.start.min(len));
-    let mut labels =
-        vec![cs::Label::primary((), clamp(d.primary.span)).with_message(&d.primary.message)];
+    let mut labels: Vec<cs::Label<()>> = d
+        .primary
+        .iter()
+        .map(|p| cs::Label::primary((), clamp(p.span)).with_message(&p.message))
+        .collect();
     for l in &d.secondary {
         labels.push(cs::Label::secondary((), clamp(l.span)).with_message(&l.message));
     }
@@ -251,10 +264,11 @@ struct JsonDiagnostic<'a> {
     severity: Severity,
     message: &'a str,
     file: &'a str,
-    byte_start: usize,
-    byte_end: usize,
-    start: JsonPos,
-    end: JsonPos,
+    /// The primary span; null for a diagnostic about no place in the file.
+    byte_start: Option<usize>,
+    byte_end: Option<usize>,
+    start: Option<JsonPos>,
+    end: Option<JsonPos>,
     labels: Vec<JsonLabel<'a>>,
     notes: &'a [String],
     help: Option<&'a str>,
@@ -272,7 +286,7 @@ pub fn to_json(file_name: &str, source: &str, d: &Diagnostic) -> String {
         }
     };
     let mut labels = Vec::new();
-    for l in std::iter::once(&d.primary).chain(&d.secondary) {
+    for l in d.primary.iter().chain(&d.secondary) {
         labels.push(JsonLabel {
             message: &l.message,
             byte_start: l.span.start,
@@ -286,10 +300,10 @@ pub fn to_json(file_name: &str, source: &str, d: &Diagnostic) -> String {
         severity: d.severity,
         message: &d.message,
         file: file_name,
-        byte_start: d.primary.span.start,
-        byte_end: d.primary.span.end,
-        start: pos(d.primary.span.start),
-        end: pos(d.primary.span.end),
+        byte_start: d.span().map(|s| s.start),
+        byte_end: d.span().map(|s| s.end),
+        start: d.span().map(|s| pos(s.start)),
+        end: d.span().map(|s| pos(s.end)),
         labels,
         notes: &d.notes,
         help: d.help.as_deref(),

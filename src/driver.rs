@@ -1,11 +1,26 @@
-//! The front end as one call: text → tokens → AST → checked program, with diagnostics.
+//! The whole pipeline, owned here, run once per document, in one direction:
+//!
+//! ```text
+//! text → tokens → AST → checked program ─┬─ prepared atlases (compile-time geometry)
+//!                                        └─ IR scene ──▶ WGSL ──▶ naga-validated module
+//! ```
+//!
+//! [`check`] runs the front end, the atlas geometry and lowering; [`compile`] turns an
+//! [`Analysis`] into a validated module for a set of [`codegen::Options`], reusing its
+//! IR scene and prepared atlases (code generation never recomputes them); [`check_all`]
+//! is both with the default options, as `sdfc check` and the language server run them,
+//! and keeps the validated module. Every command goes through these three.
 
+use crate::codegen::{self, Module, Validated};
 use crate::diagnostic::{self, Diagnostic};
+use crate::ir::{self, Scene};
 use crate::sema::{self, Program};
 use crate::syntax::{self, Parsed};
+use crate::uv::Atlas;
 use std::path::Path;
+use std::sync::Arc;
 
-/// Everything the front end knows about one document.
+/// Everything the compiler knows about one document.
 #[derive(Debug, Clone)]
 pub struct Analysis {
     pub parsed: Parsed,
@@ -13,17 +28,59 @@ pub struct Analysis {
     /// Every diagnostic, sorted by position.
     pub diagnostics: Vec<Diagnostic>,
     /// The prepared atlases (projected seeds, solved merge graphs), one per atlas of the
-    /// program, when [`check`] ran the geometric analysis (None where one failed).
-    pub atlases: Vec<Option<crate::uv::Atlas>>,
+    /// program (None where one failed), once [`check`] ran the geometry; else empty.
+    pub atlases: Vec<Option<Atlas>>,
+    /// The lowered scene, once [`check`] found no errors.
+    pub scene: Option<Scene>,
+    /// The validated module for the default options, once [`check_all`] built it.
+    pub compiled: Option<Arc<Compiled>>,
 }
 
 impl Analysis {
     pub fn has_errors(&self) -> bool {
         self.diagnostics.iter().any(Diagnostic::is_error)
     }
+
+    /// The prepared atlas of the program's atlas `name`.
+    pub fn atlas(&self, name: &str) -> Option<&Atlas> {
+        let k = self.program.atlases.iter().position(|a| a.name == name)?;
+        self.atlases.get(k)?.as_ref()
+    }
 }
 
-/// Parses and checks a scene. `base_dir` is the folder of the scene file, for texture paths.
+/// A module that naga accepted, with naga's own form of it.
+pub struct Compiled {
+    pub module: Module,
+    pub validated: Validated,
+}
+
+impl std::fmt::Debug for Compiled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Compiled")
+            .field("wgsl_bytes", &self.module.wgsl.len())
+            .finish()
+    }
+}
+
+/// Why [`compile`] produced no module. Each maps to one exit status of the CLI.
+#[derive(Debug)]
+pub enum CompileError {
+    /// The scene has errors (exit 1): the diagnostics to show.
+    Scene(Vec<Diagnostic>),
+    /// A choice made outside the scene names nothing in it (exit 2): `--shape`,
+    /// `--atlas`. The message ends with a did-you-mean or the list of choices.
+    Usage(String),
+    /// naga rejected the generated module (exit 3): an internal compiler error, on the
+    /// scene definition that produced the rejected code, with the module for the report.
+    Internal {
+        diagnostic: Box<Diagnostic>,
+        naga: codegen::NagaError,
+        module: Box<Module>,
+    },
+}
+
+/// Parses and checks a scene: the front end only. `base_dir` is the folder of the
+/// scene file, for texture paths.
 pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
     let mut diagnostics = Vec::new();
     let parsed = syntax::parse(source, &mut diagnostics);
@@ -34,12 +91,14 @@ pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
         program,
         diagnostics,
         atlases: Vec::new(),
+        scene: None,
+        compiled: None,
     }
 }
 
-/// The whole check, as `sdfc check` and the language server run it: the front end and,
-/// when it finds no errors, the compile-time geometry of the atlases (seed projection,
-/// merge walks, frame and offset solves, obstruction tests) with its diagnostics.
+/// The whole check: the front end and, when it finds no errors, the compile-time
+/// geometry of the atlases (seed projection, merge walks, frame and offset solves,
+/// obstruction tests) with its diagnostics, and the lowered scene.
 pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
     let mut analysis = analyze(source, base_dir);
     if !analysis.has_errors() {
@@ -48,58 +107,167 @@ pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
         analysis.diagnostics.extend(diags);
         diagnostic::sort(&mut analysis.diagnostics);
     }
+    if !analysis.has_errors() {
+        analysis.scene = Some(ir::lower(&analysis.program));
+    }
     analysis
 }
 
-/// [`check`] and, when it finds no errors, code generation and naga validation, as
-/// `sdfc check` and the language server run them: everything the compiler would report.
+/// [`check`] and, when it finds no errors, code generation and naga validation with the
+/// default options: everything the compiler would report. The module is kept in
+/// [`Analysis::compiled`]; a library file (shapes, no `render`) is built for its first
+/// shape.
 pub fn check_all(source: &str, base_dir: Option<&Path>) -> Analysis {
     let mut analysis = check(source, base_dir);
-    let more = codegen_diagnostics(&analysis);
-    if !more.is_empty() {
-        analysis.diagnostics.extend(more);
-        diagnostic::sort(&mut analysis.diagnostics);
-    }
-    analysis
-}
-
-/// Code generation and naga validation of a scene [`check`] found no errors in. Where
-/// naga rejects the module (an internal compiler error), the diagnostic is on the scene
-/// definition that produced the rejected code.
-pub fn codegen_diagnostics(analysis: &Analysis) -> Vec<Diagnostic> {
-    codegen_diagnostics_with(analysis, |_| {})
-}
-
-/// [`codegen_diagnostics`] with a hook that may alter the module before validation (for
-/// the tests of the internal-error path).
-pub fn codegen_diagnostics_with(
-    analysis: &Analysis,
-    tamper: impl FnOnce(&mut crate::codegen::Module),
-) -> Vec<Diagnostic> {
-    use crate::codegen;
-    if analysis.has_errors() {
-        return Vec::new();
-    }
-    let scene = crate::ir::lower(&analysis.program);
-    // A file of shapes with no render item (a library) is generated for its first shape.
+    let Some(scene) = &analysis.scene else {
+        return analysis;
+    };
     let shape = match (&analysis.program.render, scene.shapes.first()) {
         (Some(_), _) => None,
         (None, Some(first)) => Some(first.name.clone()),
-        (None, None) => return Vec::new(),
+        (None, None) => return analysis,
     };
     let options = codegen::Options {
         shape,
         ..Default::default()
     };
-    let prepared = (analysis.atlases.len() == analysis.program.atlases.len())
-        .then_some(analysis.atlases.as_slice());
-    match codegen::generate_prepared(&analysis.program, &scene, &options, prepared) {
-        Err(diags) => diags,
-        Ok(mut module) => {
-            tamper(&mut module);
-            match codegen::validate(&module.wgsl) {
-                Ok(_) => Vec::new(),
-                Err(e) => vec![module.internal_error(&e)],
+    match compile(&analysis, &options) {
+        Ok(c) => analysis.compiled = Some(Arc::new(c)),
+        Err(CompileError::Scene(d)) => analysis.diagnostics.extend(d),
+        Err(CompileError::Internal { diagnostic, .. }) => analysis.diagnostics.push(*diagnostic),
+        // The default options name nothing, so they cannot be a usage error.
+        Err(CompileError::Usage(_)) => {}
+    }
+    diagnostic::sort(&mut analysis.diagnostics);
+    analysis
+}
+
+/// Code generation and naga validation of a checked scene, reusing its IR scene and
+/// prepared atlases.
+pub fn compile(analysis: &Analysis, options: &codegen::Options) -> Result<Compiled, CompileError> {
+    let module = generate(analysis, options)?;
+    #[cfg(feature = "test-hooks")]
+    let module = test_hooks::corrupt(module);
+    match codegen::validate(&module.wgsl) {
+        Ok(validated) => Ok(Compiled { module, validated }),
+        Err(naga) => Err(CompileError::Internal {
+            diagnostic: Box::new(module.internal_error(&naga)),
+            naga,
+            module: Box::new(module),
+        }),
+    }
+}
+
+/// The generated (not yet validated) module of a checked scene.
+pub fn generate(analysis: &Analysis, options: &codegen::Options) -> Result<Module, CompileError> {
+    let scene = match &analysis.scene {
+        Some(s) if !analysis.has_errors() => s,
+        _ => {
+            let errors = analysis.diagnostics.iter().filter(|d| d.is_error());
+            return Err(CompileError::Scene(errors.cloned().collect()));
+        }
+    };
+    pick_shape(scene, options.shape.as_deref()).map_err(CompileError::Usage)?;
+    if let Some(name) = options.atlas.as_deref() {
+        pick_atlas(&analysis.program, Some(name)).map_err(CompileError::Usage)?;
+    }
+    codegen::generate(&analysis.program, scene, &analysis.atlases, options)
+        .map_err(CompileError::Scene)
+}
+
+/// "did you mean `best`?" among `choices`, or the list of them.
+pub fn suggest<'a>(name: &str, choices: impl IntoIterator<Item = &'a str>) -> String {
+    let choices: Vec<&str> = choices.into_iter().collect();
+    match crate::sema::closest(name, choices.iter().copied()) {
+        Some(best) => format!("did you mean `{best}`?"),
+        None if choices.is_empty() => String::from("there are none"),
+        None => format!("choose one of: {}", choices.join(", ")),
+    }
+}
+
+/// The shape to render or evaluate: the named one, else the render target, else the
+/// only shape. An error is a usage message (the choice was made outside the scene).
+pub fn pick_shape(scene: &Scene, name: Option<&str>) -> Result<ir::Shape, String> {
+    let names = || scene.shapes.iter().map(|s| s.name.as_str());
+    match name {
+        Some(n) => scene
+            .shape(n)
+            .cloned()
+            .ok_or_else(|| format!("the scene has no shape `{n}`; {}", suggest(n, names()))),
+        None => match (&scene.render, scene.shapes.as_slice()) {
+            (Some(r), _) => Ok(r.clone()),
+            (None, [only]) => Ok(only.shape.clone()),
+            (None, []) => Err(String::from("the scene has no shape")),
+            (None, _) => Err(format!(
+                "the scene has no render item; choose a shape with --shape: {}",
+                names().collect::<Vec<_>>().join(", ")
+            )),
+        },
+    }
+}
+
+/// The atlas named outside the scene, or the only one (None when there is none).
+pub fn pick_atlas<'a>(
+    program: &'a Program,
+    name: Option<&str>,
+) -> Result<Option<&'a sema::AtlasDef>, String> {
+    let names = || program.atlases.iter().map(|a| a.name.as_str());
+    match name {
+        Some(n) => match program.atlases.iter().find(|a| a.name == n) {
+            Some(a) => Ok(Some(a)),
+            None => Err(format!(
+                "the scene has no atlas `{n}`; {}",
+                suggest(n, names())
+            )),
+        },
+        None => match program.atlases.as_slice() {
+            [] => Ok(None),
+            [only] => Ok(Some(only)),
+            _ => Err(format!(
+                "the scene has several atlases; choose one with --atlas: {}",
+                names().collect::<Vec<_>>().join(", ")
+            )),
+        },
+    }
+}
+
+/// The injection point of the internal-compiler-error tests, compiled only with the
+/// `test-hooks` feature (which the test build turns on and release builds never have):
+/// `SDFC_TEST_CORRUPT_WGSL=material` breaks the first material's code, any other value
+/// appends a broken function, so the E0900 path runs end to end through the real binary.
+#[cfg(feature = "test-hooks")]
+pub mod test_hooks {
+    use crate::codegen::Module;
+
+    pub fn corrupt(mut module: Module) -> Module {
+        match std::env::var("SDFC_TEST_CORRUPT_WGSL").as_deref() {
+            Ok("material") => corrupt_first_material(&mut module),
+            Ok(_) => module.wgsl.push_str("\nfn corrupted( {\n"),
+            Err(_) => {}
+        }
+        module
+    }
+
+    /// Inserts an undefined name at the start of the first material's code, keeping the
+    /// source map in step.
+    pub fn corrupt_first_material(module: &mut Module) {
+        let Some(at) = module
+            .source_map
+            .iter()
+            .find(|r| matches!(r.what, crate::codegen::Definition::Material(_)))
+            .map(|r| r.wgsl.start)
+        else {
+            return;
+        };
+        let line_end = module.wgsl[at..].find('\n').map_or(at, |i| at + i + 1);
+        let broken = "            let corrupted = undefined_name;\n";
+        module.wgsl.insert_str(line_end, broken);
+        for r in &mut module.source_map {
+            if r.wgsl.start >= line_end {
+                r.wgsl.start += broken.len();
+            }
+            if r.wgsl.end >= line_end {
+                r.wgsl.end += broken.len();
             }
         }
     }

@@ -2,14 +2,26 @@
 //! the generated scene code, the manifest, and `sdfc compile`.
 
 use sdfc::codegen::{self, targets::Output, Target};
-use sdfc::driver::analyze;
-use sdfc::ir;
+use sdfc::codes;
+use sdfc::driver::{self, CompileError};
 use std::path::Path;
 
-fn generate(src: &str, dir: Option<&Path>) -> Result<codegen::Module, Vec<sdfc::Diagnostic>> {
-    let a = analyze(src, dir);
+fn generate_with(
+    src: &str,
+    dir: Option<&Path>,
+    options: &codegen::Options,
+) -> Result<codegen::Module, Vec<sdfc::Diagnostic>> {
+    let a = driver::check(src, dir);
     assert!(!a.has_errors(), "{:?}", a.diagnostics);
-    codegen::generate(&a.program, &ir::lower(&a.program), None)
+    match driver::generate(&a, options) {
+        Ok(m) => Ok(m),
+        Err(CompileError::Scene(d)) => Err(d),
+        Err(e) => panic!("{e:?}"),
+    }
+}
+
+fn generate(src: &str, dir: Option<&Path>) -> Result<codegen::Module, Vec<sdfc::Diagnostic>> {
+    generate_with(src, dir, &codegen::Options::default())
 }
 
 #[test]
@@ -24,11 +36,29 @@ fn library_files_validate_on_their_own() {
     }
 }
 
+/// The module validates, compacts to a smaller module that validates again and keeps
+/// every entry point and `sdf_NAME`, and translates to every target.
 fn every_target(name: &str, module: &codegen::Module) {
-    let v = codegen::validate(&module.wgsl)
+    let full = codegen::validate(&module.wgsl)
         .unwrap_or_else(|e| panic!("{name}: naga rejects the generated WGSL:\n{e}"));
+    let v = codegen::compact(&full).unwrap_or_else(|e| panic!("{name}: compaction: {e}"));
+    assert!(
+        v.module.functions.len() < full.module.functions.len(),
+        "{name}"
+    );
+    assert_eq!(v.module.entry_points.len(), codegen::ENTRY_POINTS.len());
+    for shape in &module.manifest.shapes {
+        let f = format!("sdf_{shape}");
+        assert!(
+            v.module
+                .functions
+                .iter()
+                .any(|(_, x)| x.name.as_deref() == Some(&f)),
+            "{name}: compaction dropped {f}"
+        );
+    }
     for target in [Target::Wgsl, Target::Spirv, Target::Msl] {
-        match codegen::translate(&v, &module.wgsl, target, "") {
+        match codegen::translate(&v, &module.header, target, "") {
             Ok(Output::Text(t)) => assert!(!t.is_empty()),
             Ok(Output::Binary(b)) => {
                 assert_eq!(&b[..4], &0x0723_0203u32.to_le_bytes(), "{name}: not SPIR-V")
@@ -37,7 +67,7 @@ fn every_target(name: &str, module: &codegen::Module) {
         }
     }
     for entry in ["vs_main", "fs_main", "cs_points", "cs_grid"] {
-        if let Err(e) = codegen::translate(&v, &module.wgsl, Target::Glsl, entry) {
+        if let Err(e) = codegen::translate(&v, &module.header, Target::Glsl, entry) {
             panic!("{name}: GLSL {entry}: {e}");
         }
     }
@@ -98,15 +128,22 @@ fn manifest_describes_bindings_and_textures() {
     assert_eq!(m.manifest.textures.len(), 1);
     assert_eq!(m.manifest.textures[0].path, "textures/bricks.png");
     assert_eq!(m.manifest.textures[0].wrap, "mirror");
-    let kinds: Vec<(u32, u32, &str)> = m
+    let kind = |b: &codegen::Binding| {
+        serde_json::to_value(b.kind)
+            .unwrap()
+            .as_str()
+            .unwrap()
+            .to_string()
+    };
+    let kinds: Vec<(u32, u32, String)> = m
         .manifest
         .bindings
         .iter()
-        .map(|b| (b.group, b.binding, b.kind))
+        .map(|b| (b.group, b.binding, kind(b)))
         .collect();
     assert_eq!(
         kinds,
-        vec![
+        [
             (0, 0, "uniform"),
             (0, 1, "texture-2d"),
             (0, 2, "sampler"),
@@ -114,13 +151,37 @@ fn manifest_describes_bindings_and_textures() {
             (1, 1, "storage-read"),
             (1, 2, "storage-read-write")
         ]
+        .map(|(g, b, k)| (g, b, k.to_string()))
     );
-    // The header comment documents the same bindings.
+    // The header comment documents the same bindings, and the WGSL declares exactly
+    // them: both come from the one table.
+    let v = codegen::validate(&m.wgsl).unwrap();
+    let mut declared: Vec<(u32, u32, String)> = v
+        .module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| {
+            let b = g.binding.as_ref()?;
+            Some((b.group, b.binding, g.name.clone().unwrap_or_default()))
+        })
+        .collect();
+    // naga orders globals by first use; the table by slot.
+    declared.sort();
+    let table: Vec<(u32, u32, String)> = m
+        .manifest
+        .bindings
+        .iter()
+        .map(|b| (b.group, b.binding, b.name.clone()))
+        .collect();
+    assert_eq!(declared, table);
     for b in &m.manifest.bindings {
         assert!(
-            m.wgsl.contains(&format!(
+            m.header.contains(&format!(
                 "@group({}) @binding({}) {} {}",
-                b.group, b.binding, b.kind, b.name
+                b.group,
+                b.binding,
+                kind(b),
+                b.name
             )),
             "header lacks {}",
             b.name
@@ -174,7 +235,8 @@ fn compile_command_writes_every_target() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 8);
     let (code, stdout, _) = sdfc(&["compile", "examples/warps.sdf"]);
     assert_eq!(code, 0);
-    assert!(stdout.contains("fn sdf_twisted(p: vec3<f32>) -> f32"));
+    // naga's WGSL writer names arguments uniquely; the function keeps its name and type.
+    assert!(stdout.contains("fn sdf_twisted(") && stdout.contains("-> f32 {"));
     assert_eq!(
         sdfc(&["compile", "examples/warps.sdf", "--target", "spirv"]).0,
         2
@@ -256,4 +318,192 @@ fn naga_rejection_points_at_the_scene_definition() {
     {
         let _ = std::fs::remove_file(saved);
     }
+}
+
+#[test]
+fn naga_errors_map_to_the_scene_definition_that_produced_the_code() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/plate.sdf"))
+        .unwrap();
+    let analysis = driver::check_all(&text, None);
+    assert!(analysis.diagnostics.is_empty());
+    // check_all keeps the validated module.
+    let compiled = analysis.compiled.as_ref().expect("the validated module");
+    // Broken inside the material's code (the test-side injection point), naga's error
+    // lands on the material item.
+    let mut module = compiled.module.clone();
+    driver::test_hooks::corrupt_first_material(&mut module);
+    let e = codegen::validate(&module.wgsl)
+        .err()
+        .expect("naga rejects it");
+    let d = module.internal_error(&e);
+    assert_eq!(d.code, codes::E_INTERNAL);
+    let primary = d.primary.as_ref().expect("a place in the scene");
+    assert!(
+        text[primary.span.range()].starts_with("material tiled {"),
+        "{d:#?}"
+    );
+    assert!(primary.message.contains("material `tiled`"), "{d:#?}");
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.starts_with("naga:") && n.contains("`undefined_name`")),
+        "naga's own message names the undefined identifier: {d:#?}"
+    );
+    // Every region of the source map is a real definition of the scene.
+    use codegen::Definition;
+    let whats: Vec<&Definition> = compiled.module.source_map.iter().map(|r| &r.what).collect();
+    assert_eq!(
+        whats,
+        [
+            &Definition::Shape("plate".into()),
+            &Definition::RenderedShape,
+            &Definition::Atlas("tiles".into()),
+            &Definition::Material("tiled".into()),
+        ]
+    );
+    for r in &compiled.module.source_map {
+        assert!(r.wgsl.end <= compiled.module.wgsl.len() && r.wgsl.start < r.wgsl.end);
+        assert!(!text[r.span.range()].is_empty());
+    }
+    // Code of the shared library is no definition of the scene: the diagnostic says so
+    // and has no place, rather than pointing at byte 0.
+    let mut module = compiled.module.clone();
+    module.wgsl = module
+        .wgsl
+        .replacen("fn sd_sphere(", "fn sd_sphere(oops ", 1);
+    let e = codegen::validate(&module.wgsl)
+        .err()
+        .expect("naga rejects it");
+    let d = module.internal_error(&e);
+    assert!(d.primary.is_none(), "{d:#?}");
+    let rendered = sdfc::diagnostic::render("plate.sdf", &text, &[d], false);
+    assert!(
+        rendered.contains("error[E0900]") && !rendered.contains("plate.sdf:1:1"),
+        "{rendered}"
+    );
+}
+
+/// The templates of shaders/*.wgsl.in are filled completely (every placeholder has a
+/// value and every value a placeholder), in every walk form and seed-grid choice, and
+/// the filled module validates.
+#[test]
+fn templates_are_filled_completely_and_validate() {
+    use codegen::template;
+    assert!(template::placeholders(template::ATLAS).contains(&"walk_steps"));
+    assert_eq!(template::placeholders(template::ENTRY), ["bindings"]);
+    let m = template::fill(
+        "fn a_{{k}}() {}",
+        &[("k", "1".into()), ("extra", "2".into())],
+    );
+    assert_eq!(m.unwrap_err().unused, ["extra"]);
+    let m = template::fill("fn a_{{k}}_{{j}}() {}", &[("k", "1".into())]);
+    assert_eq!(m.unwrap_err().missing, ["j"]);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let src = std::fs::read_to_string(dir.join("plate.sdf")).unwrap();
+    for walk in [codegen::WalkForm::Unrolled, codegen::WalkForm::Loop] {
+        for seed_grid in [codegen::SeedGridChoice::On, codegen::SeedGridChoice::Off] {
+            let options = codegen::Options {
+                walk,
+                seed_grid,
+                ..Default::default()
+            };
+            let m = generate_with(&src, Some(&dir), &options).unwrap();
+            assert!(
+                !m.wgsl.contains("{{"),
+                "{walk:?} {seed_grid:?}: a placeholder is left"
+            );
+            codegen::validate(&m.wgsl).unwrap_or_else(|e| panic!("{walk:?} {seed_grid:?}: {e}"));
+        }
+    }
+}
+
+/// What `sdfc compile` writes is compacted: a one-sphere scene carries none of the
+/// library's other primitives, and the output validates on its own.
+#[test]
+fn standalone_modules_carry_only_what_the_scene_uses() {
+    let full = generate("render sphere(0.5);", None).unwrap();
+    let (code, out, err) = sdfc_stdin(&["compile", "-"], "render sphere(0.5);");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("// Generated by sdfc"),
+        "the header comes first"
+    );
+    codegen::validate(&out).unwrap_or_else(|e| panic!("the compacted module: {e}"));
+    assert!(out.contains("fn sd_sphere("));
+    for unused in ["fn sd_torus(", "fn sd_box(", "fn op_twist("] {
+        assert!(
+            full.wgsl.contains(unused) && !out.contains(unused),
+            "{unused}"
+        );
+    }
+    let count = |wgsl: &str| wgsl.lines().filter(|l| l.starts_with("fn ")).count();
+    let (before, after) = (count(&full.wgsl), count(&out));
+    assert!(after * 2 < before, "{after} functions of {before}");
+}
+
+/// Choices made on the command line that name nothing in the scene are usage errors
+/// (exit 2) with a did-you-mean, not scene diagnostics.
+#[test]
+fn unknown_shape_atlas_or_entry_is_a_usage_error() {
+    for (args, want) in [
+        (
+            vec!["compile", "examples/warps.sdf", "--shape", "twistd"],
+            "the scene has no shape `twistd`; did you mean `twisted`?",
+        ),
+        (
+            vec!["compile", "examples/plate.sdf", "--atlas", "tile"],
+            "the scene has no atlas `tile`; did you mean `tiles`?",
+        ),
+        (
+            vec![
+                "compile",
+                "examples/warps.sdf",
+                "--target",
+                "glsl",
+                "--entry",
+                "fs_mian",
+            ],
+            "no entry point `fs_mian`; did you mean `fs_main`?",
+        ),
+        (
+            vec![
+                "eval",
+                "examples/warps.sdf",
+                "--shape",
+                "zzz",
+                "--points",
+                "-",
+            ],
+            "the scene has no shape `zzz`",
+        ),
+    ] {
+        let (code, _, err) = sdfc_stdin(&args, "[[0, 0, 0]]");
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("E0400") && !err.contains("E0900"), "{err}");
+    }
+}
+
+fn sdfc_stdin(args: &[&str], input: &str) -> (i32, String, String) {
+    use std::io::Write;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }

@@ -3,7 +3,6 @@
 
 use glam::DVec3;
 use sdfc::codegen;
-use sdfc::driver::analyze;
 use sdfc::gpu::{self, gpu_for_tests, Frame, ViewMode};
 use sdfc::ir::{self, eval};
 use sdfc::view::{trace_cpu, View};
@@ -19,12 +18,15 @@ struct Compiled {
 
 fn compile(src: &str, size: (u32, u32)) -> Compiled {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let a = analyze(src, Some(&dir));
+    let a = sdfc::driver::check_all(src, Some(&dir));
     assert!(!a.has_errors(), "{:?}", a.diagnostics);
-    let scene = ir::lower(&a.program);
-    let module = codegen::generate(&a.program, &scene, None).unwrap();
-    codegen::validate(&module.wgsl).unwrap();
-    let shape = scene.render.clone().unwrap();
+    let module = a
+        .compiled
+        .as_ref()
+        .expect("a validated module")
+        .module
+        .clone();
+    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
     let mut view = View::new(a.program.render.as_ref(), &shape);
     view.width = size.0;
     view.height = size.1;
@@ -38,8 +40,7 @@ fn compile(src: &str, size: (u32, u32)) -> Compiled {
 fn render(gpu: &gpu::Gpu, c: &Compiled, mode: ViewMode) -> Frame {
     gpu::render(
         gpu,
-        &c.module.wgsl,
-        &c.module.manifest,
+        &c.module,
         &c.view,
         mode,
         Path::new(env!("CARGO_MANIFEST_DIR")),
@@ -388,19 +389,13 @@ fn surface_points(atlas: &sdfc::uv::Atlas, n: usize, half: f64) -> Vec<DVec3> {
 
 fn prepared(src: &str) -> (Compiled, sdfc::uv::Atlas, codegen::Module) {
     let c = compile(src, (16, 16));
-    let a = analyze(src, None);
-    let def = &a.program.atlases[0];
-    let atlas = sdfc::uv::Atlas::prepare(def, &ir::lower_shape(&def.shape).unwrap()).unwrap();
-    let loop_module = codegen::generate_with(
-        &a.program,
-        &ir::lower(&a.program),
-        &codegen::Options {
-            walk: codegen::WalkForm::Loop,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    codegen::validate(&loop_module.wgsl).unwrap();
+    let a = sdfc::driver::check(src, None);
+    let atlas = a.atlases[0].clone().expect("a prepared atlas");
+    let options = codegen::Options {
+        walk: codegen::WalkForm::Loop,
+        ..Default::default()
+    };
+    let loop_module = sdfc::driver::compile(&a, &options).unwrap().module;
     (c, atlas, loop_module)
 }
 
@@ -489,9 +484,8 @@ fn uv_aov_agrees_with_the_cpu_at_the_rendered_points() {
     let mut c = compile(&src, (48, 36));
     c.view.atlas_aov = true;
     let frame = render(&gpu, &c, ViewMode::Color);
-    let a = analyze(&src, None);
-    let def = &a.program.atlases[0];
-    let atlas = sdfc::uv::Atlas::prepare(def, &ir::lower_shape(&def.shape).unwrap()).unwrap();
+    let a = sdfc::driver::check(&src, None);
+    let atlas = a.atlases[0].clone().expect("a prepared atlas");
     let (mut ok, mut compared) = (0, 0);
     for (pos, aov) in frame.position.iter().zip(&frame.atlas) {
         if pos[3] < 0.0 {
@@ -537,21 +531,12 @@ fn texture_level_follows_the_pixel_footprint() {
     // A plane seen from above: near the top of the image each pixel covers many texels
     // (minified: mips average them to grey); a small uv scale magnifies at the bottom.
     let src = "let ground = plane(normal: [0, 1, 0], offset: 0);\nlet t = image(\"texels.png\");\nmaterial m { color = t.sample(position.xz * 4); roughness = 1; }\nrender ground.paint(m) { camera = look_at(eye: [0, 1, 3], target: [0, 0, -3], fov: 50deg); light = sun(direction: [0, 1, 0], intensity: 3); size = [64, 64]; }";
-    let a = analyze(src, Some(dir.path()));
+    let a = sdfc::driver::check_all(src, Some(dir.path()));
     assert!(!a.has_errors(), "{:?}", a.diagnostics);
-    let scene = ir::lower(&a.program);
-    let module = codegen::generate(&a.program, &scene, None).unwrap();
-    let shape = scene.render.clone().unwrap();
+    let module = &a.compiled.as_ref().expect("a validated module").module;
+    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
     let view = View::new(a.program.render.as_ref(), &shape);
-    let frame = gpu::render(
-        &gpu,
-        &module.wgsl,
-        &module.manifest,
-        &view,
-        ViewMode::Color,
-        dir.path(),
-    )
-    .unwrap();
+    let frame = gpu::render(&gpu, module, &view, ViewMode::Color, dir.path()).unwrap();
     // Far rows: many texels per pixel, so neighbouring pixels are alike (grey), not
     // black and white at random as without mip-mapping.
     let row_contrast = |y: u32| -> f64 {

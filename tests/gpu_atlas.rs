@@ -10,7 +10,7 @@ use glam::{DVec2, DVec3};
 use sdfc::codegen::{self, Options, SeedGridChoice};
 use sdfc::driver::check;
 use sdfc::gpu::{self, gpu_for_tests, ViewMode};
-use sdfc::ir::{self, eval};
+use sdfc::ir::eval;
 use sdfc::uv::{Atlas, Status};
 use sdfc::view::View;
 use std::path::{Path, PathBuf};
@@ -55,7 +55,6 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
         let src = std::fs::read_to_string(&path).unwrap();
         let analysis = check(&src, Some(&dir));
         assert!(!analysis.has_errors());
-        let scene = ir::lower(&analysis.program);
         for (k, def) in analysis.program.atlases.iter().enumerate() {
             let atlas = analysis.atlases[k].as_ref().unwrap();
             let points = surface_points(atlas, 600, 17 + k as u64);
@@ -68,18 +67,13 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                 &[SeedGridChoice::Off]
             };
             for &grid in choices {
-                let module = codegen::generate_with(
-                    &analysis.program,
-                    &scene,
-                    &Options {
-                        atlas: Some(def.name.clone()),
-                        seed_grid: grid,
-                        walk: codegen::WalkForm::Loop,
-                        ..Default::default()
-                    },
-                )
-                .unwrap();
-                codegen::validate(&module.wgsl).unwrap();
+                let options = Options {
+                    atlas: Some(def.name.clone()),
+                    seed_grid: grid,
+                    walk: codegen::WalkForm::Loop,
+                    ..Default::default()
+                };
+                let module = sdfc::driver::compile(&analysis, &options).unwrap().module;
                 results.push(gpu::eval_atlas(&gpu, &module.wgsl, &points).unwrap());
             }
             let (mut compared, mut worst) = (0usize, 0.0f64);
@@ -146,20 +140,15 @@ fn view(gpu: &gpu::Gpu, example: &str, mode: ViewMode) -> Picture {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let src = std::fs::read_to_string(dir.join(example)).unwrap();
     let a = check(&src, Some(&dir));
-    let scene = ir::lower(&a.program);
-    let module = codegen::generate_with(
-        &a.program,
-        &scene,
-        &Options {
-            walk: codegen::WalkForm::Loop,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let shape = scene.render.clone().unwrap();
+    let options = Options {
+        walk: codegen::WalkForm::Loop,
+        ..Default::default()
+    };
+    let module = sdfc::driver::compile(&a, &options).unwrap().module;
+    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
     let mut v = View::new(a.program.render.as_ref(), &shape);
     (v.width, v.height) = (120, 120);
-    let frame = gpu::render(gpu, &module.wgsl, &module.manifest, &v, mode, &dir).unwrap();
+    let frame = gpu::render(gpu, &module, &v, mode, &dir).unwrap();
     Picture { color: frame.color }
 }
 

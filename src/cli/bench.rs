@@ -22,32 +22,34 @@ pub fn run(args: BenchArgs) -> ExitCode {
         shape: args.shape.clone(),
         ..Default::default()
     };
-    let (unrolled, _) = match compile::build(&scene, &base) {
+    let (source, analysis, unrolled) = match compile::build(&scene, &base) {
         Ok(x) => x,
         Err(code) => return code,
     };
     let compile_time = t.elapsed();
-    let (rolled, _) = match compile::build(
-        &scene,
-        &Options {
-            walk: WalkForm::Loop,
-            ..base.clone()
-        },
-    ) {
+    let name = scene.display().to_string();
+    // The other forms from the same analysis: the geometry and lowering ran once.
+    let variant = |options: Options| {
+        sdfc::driver::compile(&analysis, &options)
+            .map(|c| c.module)
+            .map_err(|e| compile::report(&name, &source, e))
+    };
+    let rolled = match variant(Options {
+        walk: WalkForm::Loop,
+        ..base.clone()
+    }) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let (plain, _) = match compile::build(
-        &scene,
-        &Options {
-            plain: true,
-            ..base.clone()
-        },
-    ) {
+    let plain = match variant(Options {
+        plain: true,
+        ..base.clone()
+    }) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let mut view = match super::view_for(&scene, args.shape.as_deref()) {
+    let unrolled = unrolled.module;
+    let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
     };
@@ -60,21 +62,15 @@ pub fn run(args: BenchArgs) -> ExitCode {
         }
     };
     let dir = super::base_dir(&scene);
-    let measure = |module: &sdfc::codegen::Module,
-                   mode: ViewMode|
-     -> Result<(Duration, Duration), String> {
-        let mut frames = Vec::new();
-        let mut pipeline = Duration::ZERO;
-        for i in 0..args.frames.max(1) {
-            let f = gpu::render_timed(&gpu, &module.wgsl, &module.manifest, &view, mode, &dir, 1)
+    let measure =
+        |module: &sdfc::codegen::Module, mode: ViewMode| -> Result<(Duration, Duration), String> {
+            // One pipeline per module; a warm-up frame, then the measured ones.
+            let renderer = gpu::Renderer::new(&gpu, module, &dir).map_err(|e| e.to_string())?;
+            let (_, frames) = renderer
+                .frames(&gpu, &view, mode, 1, args.frames.max(1))
                 .map_err(|e| e.to_string())?;
-            if i == 0 {
-                pipeline = f.timings.pipeline;
-            }
-            frames.push(f.timings.frame);
-        }
-        Ok((pipeline, median(frames)))
-    };
+            Ok((renderer.pipeline_time, median(frames)))
+        };
     let rows = [
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),

@@ -1,75 +1,86 @@
-//! `sdfc compile`: a scene → one validated shader module (WGSL, SPIR-V, GLSL or MSL).
+//! `sdfc compile`: a scene → one validated, compacted shader module (WGSL, SPIR-V,
+//! GLSL or MSL).
 
 use super::{load, CompileArgs};
 use sdfc::codegen::{self, targets::Output, Target};
+use sdfc::driver::{self, Analysis, CompileError, Compiled};
 use sdfc::fsutil::write_atomic;
-use sdfc::ir;
 use std::io::Write;
+use std::path::Path;
 use std::process::ExitCode;
 
 /// Exit status for an internal compiler error.
 pub const ICE_EXIT: u8 = 3;
+/// Exit status for usage problems (a `--shape` that names nothing, say).
+pub const USAGE_EXIT: u8 = 2;
 
-/// Generates and validates a module; on an internal compiler error, saves the WGSL
-/// for the bug report and says where.
+/// Reads, checks and compiles a scene through the driver; problems are printed and
+/// come back as the exit status.
 pub fn build(
-    args_scene: &std::path::Path,
+    path: &Path,
     options: &codegen::Options,
-) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
-    let (source, analysis) = load(args_scene)?;
-    build_checked(
-        &args_scene.display().to_string(),
-        &source,
-        &analysis,
-        options,
-    )
+) -> Result<(String, Analysis, Compiled), ExitCode> {
+    let (source, analysis) = load(path)?;
+    let name = path.display().to_string();
+    let compiled = driver::compile(&analysis, options).map_err(|e| report(&name, &source, e))?;
+    Ok((source, analysis, compiled))
 }
 
-/// [`build`] for a scene already read and checked (with no errors).
-pub fn build_checked(
-    name: &str,
-    source: &str,
-    analysis: &sdfc::driver::Analysis,
-    options: &codegen::Options,
-) -> Result<(codegen::Module, codegen::Validated), ExitCode> {
-    let scene = ir::lower(&analysis.program);
-    let prepared = (analysis.atlases.len() == analysis.program.atlases.len())
-        .then_some(analysis.atlases.as_slice());
-    let module = codegen::generate_prepared(&analysis.program, &scene, options, prepared).map_err(
-        |diags| {
+/// Prints why [`driver::compile`] made no module, and gives the exit status: 1 for the
+/// scene's errors, 2 for a usage error, 3 for an internal compiler error (the WGSL is
+/// saved for the bug report, under one name per scene).
+pub fn report(name: &str, source: &str, error: CompileError) -> ExitCode {
+    match error {
+        CompileError::Scene(diags) => {
             eprint!("{}", sdfc::diagnostic::render(name, source, &diags, false));
             ExitCode::from(1)
-        },
-    )?;
-    // Test hook: corrupts the module so that the internal-compiler-error path can be tested
-    // end to end (tests/codegen.rs). Never set outside tests. `material` breaks the code
-    // of the first material; anything else appends a broken function.
-    let mut module = module;
-    match std::env::var("SDFC_TEST_CORRUPT_WGSL").as_deref() {
-        Ok("material") => module.corrupt_first_material(),
-        Ok(_) => module.wgsl.push_str("\nfn corrupted( {\n"),
-        Err(_) => {}
-    }
-    match codegen::validate(&module.wgsl) {
-        Ok(v) => Ok((module, v)),
-        Err(e) => {
-            let path = std::env::temp_dir().join(format!("sdfc-ice-{}.wgsl", std::process::id()));
-            let saved = write_atomic(&path, module.wgsl.as_bytes()).is_ok();
+        }
+        CompileError::Usage(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(USAGE_EXIT)
+        }
+        CompileError::Internal {
+            diagnostic,
+            naga,
+            module,
+        } => {
             // The error on the scene definition that produced the rejected code, then
             // naga's own report on the WGSL.
             eprint!(
                 "{}",
-                sdfc::diagnostic::render(name, source, &[module.internal_error(&e)], false)
+                sdfc::diagnostic::render(name, source, &[*diagnostic], false)
             );
-            eprintln!("{e}");
-            if saved {
-                eprintln!(
-                    "note: the generated WGSL is saved at {}; please attach it to a bug report",
-                    path.display()
-                );
-            }
-            Err(ExitCode::from(ICE_EXIT))
+            eprintln!("{naga}");
+            save_for_report(name, &module.wgsl);
+            ExitCode::from(ICE_EXIT)
         }
+    }
+}
+
+/// Saves the WGSL of an internal compiler error as `sdfc-ice-STEM.wgsl` in the temporary
+/// folder (one file per scene, replaced by the next report) and says where.
+fn save_for_report(name: &str, wgsl: &str) {
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .filter(|s| !s.is_empty() && *s != "-")
+        .unwrap_or("stdin");
+    let stem: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let path = std::env::temp_dir().join(format!("sdfc-ice-{stem}.wgsl"));
+    if write_atomic(&path, wgsl.as_bytes()).is_ok() {
+        eprintln!(
+            "note: the generated WGSL is saved at {}; please attach it to a bug report",
+            path.display()
+        );
     }
 }
 
@@ -81,18 +92,32 @@ pub fn run(args: CompileArgs) -> ExitCode {
         atlas: args.atlas.clone(),
         plain: false,
     };
-    let (module, validated) = match build(&args.scene, &options) {
+    if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
+        let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);
+        eprintln!(
+            "error: the module has no entry point `{}`; {}",
+            args.entry,
+            driver::suggest(&args.entry, names)
+        );
+        return ExitCode::from(USAGE_EXIT);
+    }
+    let (_, _, compiled) = match build(&args.scene, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let output = match codegen::translate(&validated, &module.wgsl, args.target, &args.entry) {
+    // Users get only what their scene uses: the library's unused code goes.
+    let output = codegen::compact(&compiled.validated).and_then(|compact| {
+        codegen::translate(&compact, &compiled.module.header, args.target, &args.entry)
+    });
+    let output = match output {
         Ok(o) => o,
         Err(e) => {
             eprintln!(
-                "error[{}]: internal compiler error: naga could not translate to {:?}: {e}",
+                "error[{}]: internal compiler error: naga could not write {:?}: {e}",
                 sdfc::codes::E_INTERNAL,
                 args.target
             );
+            save_for_report(&args.scene.display().to_string(), &compiled.module.wgsl);
             return ExitCode::from(ICE_EXIT);
         }
     };
@@ -101,7 +126,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         Output::Binary(b) => b,
     };
     if let Some(path) = &args.manifest {
-        let json = serde_json::to_string_pretty(&module.manifest).unwrap_or_default();
+        let json = serde_json::to_string_pretty(&compiled.module.manifest).unwrap_or_default();
         if let Err(e) = write_atomic(path, json.as_bytes()) {
             eprintln!("error: cannot write {}: {e}", path.display());
             return ExitCode::from(2);

@@ -1,37 +1,12 @@
 //! `sdfc eval`: signed distances, gradients and surface projections at points.
 
+use super::compile::USAGE_EXIT;
 use super::{load, read_source, EvalArgs};
 use glam::DVec3;
-use sdfc::ir::{self, eval};
+use sdfc::driver;
+use sdfc::ir::eval;
 use std::io::Write;
 use std::process::ExitCode;
-
-/// Picks the shape: the named one, else the render target, else the only shape.
-pub fn pick_shape(scene: &ir::Scene, name: Option<&str>) -> Result<ir::Shape, String> {
-    let names = || {
-        scene
-            .shapes
-            .iter()
-            .map(|s| s.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    match name {
-        Some(n) => scene
-            .shape(n)
-            .cloned()
-            .ok_or_else(|| format!("the scene has no shape `{n}`; its shapes are: {}", names())),
-        None => match (&scene.render, scene.shapes.as_slice()) {
-            (Some(r), _) => Ok(r.clone()),
-            (None, [only]) => Ok(only.shape.clone()),
-            (None, []) => Err(String::from("the scene has no shape")),
-            (None, _) => Err(format!(
-                "the scene has no render item; choose a shape with --shape: {}",
-                names()
-            )),
-        },
-    }
-}
 
 /// Parses `[[x, y, z], …]`.
 pub fn parse_points(text: &str) -> Result<Vec<DVec3>, String> {
@@ -91,39 +66,19 @@ struct SeedLine {
     offset: [f64; 2],
 }
 
-/// The atlas to report: the named one, or the only one.
-fn pick_atlas<'a>(
-    program: &'a sdfc::sema::Program,
-    name: Option<&str>,
-) -> Result<Option<&'a sdfc::sema::AtlasDef>, String> {
-    match name {
-        Some(n) => program
-            .atlases
-            .iter()
-            .find(|a| a.name == n)
-            .map(Some)
-            .ok_or_else(|| format!("the scene has no atlas `{n}`")),
-        None => match program.atlases.as_slice() {
-            [] => Ok(None),
-            [only] => Ok(Some(only)),
-            _ => Err(String::from(
-                "the scene has several atlases; choose one with --atlas",
-            )),
-        },
-    }
-}
-
 pub fn run(args: EvalArgs) -> ExitCode {
-    let (_, analysis) = match load(&args.scene) {
+    let (source, analysis) = match load(&args.scene) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let scene = ir::lower(&analysis.program);
-    let shape = match pick_shape(&scene, args.shape.as_deref()) {
+    let Some(scene) = &analysis.scene else {
+        return ExitCode::from(1);
+    };
+    let shape = match driver::pick_shape(scene, args.shape.as_deref()) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(2);
+            return ExitCode::from(USAGE_EXIT);
         }
     };
     let points = match read_source(&args.points)
@@ -136,35 +91,23 @@ pub fn run(args: EvalArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let atlas_def = match pick_atlas(&analysis.program, args.atlas.as_deref()) {
-        Ok(a) => a,
+    // The atlas as the check prepared it (projected seeds, solved merge graph).
+    let atlas = match driver::pick_atlas(&analysis.program, args.atlas.as_deref()) {
+        Ok(def) => def.and_then(|def| analysis.atlas(&def.name)),
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(2);
+            return ExitCode::from(USAGE_EXIT);
         }
     };
-    let atlas = match atlas_def.map(|def| (def, ir::lower_shape(&def.shape))) {
-        Some((def, Some(s))) => match sdfc::uv::Atlas::prepare(def, &s) {
-            Ok(a) => Some(a),
-            Err(_) => {
-                eprintln!(
-                    "error: a seed of atlas `{}` cannot be projected onto its surface",
-                    def.name
-                );
-                return ExitCode::from(1);
-            }
-        },
-        _ => None,
-    };
     // Atlas queries happen at each point's projection onto the atlas's own surface.
-    let atlas_points: Vec<Option<DVec3>> = match &atlas {
+    let atlas_points: Vec<Option<DVec3>> = match atlas {
         Some(a) => points
             .iter()
             .map(|p| eval::project(&a.shape, *p, 1e-6 * sdfc::uv::atlas::scale(&a.shape)))
             .collect(),
         None => Vec::new(),
     };
-    let mut atlas_results: Vec<Option<AtlasLine>> = match &atlas {
+    let mut atlas_results: Vec<Option<AtlasLine>> = match atlas {
         Some(a) => atlas_points
             .iter()
             .map(|x| {
@@ -199,9 +142,10 @@ pub fn run(args: EvalArgs) -> ExitCode {
             atlas: args.atlas.clone(),
             ..Default::default()
         };
-        let module = match super::compile::build(&args.scene, &options) {
-            Ok((m, _)) => m,
-            Err(code) => return code,
+        let name = args.scene.display().to_string();
+        let module = match driver::compile(&analysis, &options) {
+            Ok(c) => c.module,
+            Err(e) => return super::compile::report(&name, &source, e),
         };
         let gpu = match sdfc::gpu::Gpu::new(args.backend) {
             Ok(g) => g,
@@ -222,7 +166,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
                 return ExitCode::from(super::render::GPU_EXIT);
             }
         }
-        if let Some(a) = &atlas {
+        if let Some(a) = atlas {
             let on_surface: Vec<DVec3> = atlas_points
                 .iter()
                 .map(|x| x.unwrap_or(DVec3::ZERO))

@@ -247,16 +247,6 @@ pub fn base_dir(path: &Path) -> PathBuf {
     }
 }
 
-/// Reads and checks a scene without printing anything (it was checked already).
-pub fn load_quiet(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
-    let source = read_source(path).map_err(|_| std::process::ExitCode::from(2))?;
-    let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
-    if analysis.has_errors() {
-        return Err(std::process::ExitCode::from(1));
-    }
-    Ok((source, analysis))
-}
-
 /// Reads and checks a scene for the commands that need a valid one: prints its
 /// diagnostics, and gives the exit code to return when it cannot be used.
 pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
@@ -280,14 +270,15 @@ pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::proces
 
 /// The view of a checked scene: the render item's, or framed on `--shape`.
 pub fn view_for(
-    path: &Path,
+    analysis: &sdfc::driver::Analysis,
     shape: Option<&str>,
 ) -> Result<sdfc::view::View, std::process::ExitCode> {
-    let (_, analysis) = load_quiet(path)?;
-    let scene = sdfc::ir::lower(&analysis.program);
-    let target = eval::pick_shape(&scene, shape).map_err(|e| {
+    let Some(scene) = &analysis.scene else {
+        return Err(std::process::ExitCode::from(1));
+    };
+    let target = sdfc::driver::pick_shape(scene, shape).map_err(|e| {
         eprintln!("error: {e}");
-        std::process::ExitCode::from(2)
+        std::process::ExitCode::from(compile::USAGE_EXIT)
     })?;
     let render_item = if shape.is_some() {
         None

@@ -91,12 +91,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
         atlas: args.atlas.clone(),
         plain: false,
     };
-    let (module, _) = match compile::build(&args.scene, &options) {
+    let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };
+    let module = &compiled.module;
     let compile_time = compile_start.elapsed();
-    let mut view = match super::view_for(&args.scene, args.shape.as_deref()) {
+    let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
     };
@@ -114,8 +115,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
     };
     let frame = match gpu::render(
         &gpu,
-        &module.wgsl,
-        &module.manifest,
+        module,
         &view,
         args.view,
         &super::base_dir(&args.scene),

@@ -5,8 +5,8 @@
 use super::{compile, BenchArgs};
 use sdfc::bench::{layout, plate, SEED_COUNTS};
 use sdfc::codegen::{Options, SeedGridChoice};
+use sdfc::driver;
 use sdfc::gpu::{self, Gpu, ViewMode};
-use sdfc::{driver, ir, view::View};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -64,28 +64,19 @@ pub fn run(args: &BenchArgs) -> ExitCode {
     let measure =
         |name: &str, source: &str, options: &Options| -> Result<(Duration, Duration), ExitCode> {
             let analysis = checked(name, source)?;
-            let (module, _) = compile::build_checked(name, source, &analysis, options)?;
-            let scene = ir::lower(&analysis.program);
-            let target = super::eval::pick_shape(&scene, None).map_err(|e| {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            })?;
-            let mut view = View::new(analysis.program.render.as_ref(), &target);
+            let module = driver::compile(&analysis, options)
+                .map_err(|e| compile::report(name, source, e))?
+                .module;
+            let mut view = super::view_for(&analysis, None)?;
             (view.width, view.height) = (width, height);
-            let (frame, _) = gpu::render_repeated(
-                &gpu,
-                &module.wgsl,
-                &module.manifest,
-                &view,
-                ViewMode::Color,
-                here,
-                1,
-                frames,
-            )
-            .map_err(|e| {
+            let gpu_error = |e: gpu::GpuError| {
                 eprintln!("error: {e}");
                 ExitCode::from(super::render::GPU_EXIT)
-            })?;
+            };
+            let renderer = gpu::Renderer::new(&gpu, &module, here).map_err(gpu_error)?;
+            let (frame, _) = renderer
+                .frames(&gpu, &view, ViewMode::Color, 1, frames)
+                .map_err(gpu_error)?;
             Ok((frame.timings.pipeline, frame.timings.frame))
         };
     let plain_options = Options {

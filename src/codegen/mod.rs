@@ -1,24 +1,31 @@
-//! Code generation: the checked program and its IR → one standalone, specialized
-//! WGSL module per scene, validated by naga before anyone sees it.
+//! Code generation: the checked program, its IR and its prepared atlases → one
+//! standalone, specialized WGSL module per scene, validated by naga before anyone
+//! sees it.
 //!
-//! The module is the shared library (`shaders/sdf.wgsl`, `shaders/render.wgsl`)
-//! followed by the scene: an `sdf_NAME(p) -> f32` per named shape, the render
-//! target's `scene_map`, its materials, a full-screen render entry point pair
-//! and two compute entry points (points and grids). Its header documents the
-//! bind groups; [`Manifest`] describes them as JSON.
+//! The module is the shared library (`shaders/sdf.wgsl`, `shaders/render.wgsl`,
+//! `shaders/uv.wgsl`) followed by the scene: an `sdf_NAME(p) -> f32` per named shape,
+//! the render target's `scene_map`, its atlases (from the template
+//! `shaders/atlas.wgsl.in`), its materials, the bindings of the one binding table
+//! ([`bindings`]) and the entry points (`shaders/entry.wgsl.in`). Its header
+//! documents the bind groups; [`Manifest`] describes them as JSON.
 
 mod atlas;
+pub mod bindings;
 mod emit;
 pub mod targets;
+pub mod template;
 
 pub use atlas::{SeedGridChoice, WalkForm};
+pub use bindings::Binding;
 pub use emit::{lit, TextureUse};
-pub use targets::{translate, validate, NagaError, Target, Validated};
+pub use targets::{compact, translate, validate, NagaError, Target, Validated};
 
 use crate::codes;
-use crate::diagnostic::Diagnostic;
+use crate::diagnostic::{Diagnostic, Severity};
 use crate::ir::{self, Scene};
-use crate::sema::{Program, Value};
+use crate::sema::{MaterialDef, Program, Ty, Value};
+use crate::span::Span;
+use crate::uv::Atlas;
 use emit::{field, Uses, Writer};
 use serde::Serialize;
 use std::fmt::Write;
@@ -32,46 +39,45 @@ pub const UV_LIBRARY: &str = include_str!("../../shaders/uv.wgsl");
 #[derive(Debug, Clone)]
 pub struct Module {
     pub wgsl: String,
+    /// The comment that opens the module (what it is, its entry points and bindings),
+    /// also put before the compacted module `sdfc compile` writes.
+    pub header: String,
     pub manifest: Manifest,
     /// Which scene definition each generated function came from.
     pub source_map: Vec<SourceRegion>,
+}
+
+/// The scene definition a region of generated code came from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Definition {
+    /// A named shape (`let NAME = …`), emitted as `sdf_NAME`.
+    Shape(String),
+    /// The render target, emitted as `scene_map`.
+    RenderedShape,
+    Atlas(String),
+    Material(String),
+}
+
+impl std::fmt::Display for Definition {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Definition::Shape(n) => write!(f, "shape `{n}`"),
+            Definition::RenderedShape => f.write_str("the rendered shape"),
+            Definition::Atlas(n) => write!(f, "atlas `{n}`"),
+            Definition::Material(n) => write!(f, "material `{n}`"),
+        }
+    }
 }
 
 /// A byte range of the generated WGSL and the scene definition that produced it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SourceRegion {
     pub wgsl: std::ops::Range<usize>,
-    pub span: crate::span::Span,
-    /// What the definition is, for messages: "shape `body`", "material `tiled`" …
-    pub what: String,
+    pub span: Span,
+    pub what: Definition,
 }
 
 impl Module {
-    /// For tests of the internal-error path only: inserts an undefined name at the start
-    /// of the first material's code (the regions are kept in step).
-    #[doc(hidden)]
-    pub fn corrupt_first_material(&mut self) {
-        let Some(at) = self
-            .source_map
-            .iter()
-            .find(|r| r.what.starts_with("material"))
-            .map(|r| r.wgsl.start)
-        else {
-            return;
-        };
-        let line_end = self.wgsl[at..].find('\n').map_or(at, |i| at + i + 1);
-        let broken = "            let corrupted = undefined_name;\n";
-        self.wgsl.insert_str(line_end, broken);
-        for r in &mut self.source_map {
-            if r.wgsl.start >= line_end {
-                r.wgsl.start += broken.len();
-            }
-            if r.wgsl.end >= line_end {
-                r.wgsl.end += broken.len();
-            }
-        }
-    }
-
     /// The innermost region holding a byte offset of the WGSL.
     pub fn region_at(&self, offset: usize) -> Option<&SourceRegion> {
         self.source_map
@@ -81,8 +87,8 @@ impl Module {
     }
 
     /// naga's rejection of this module as an internal-compiler-error diagnostic on the
-    /// scene span that produced the offending code (or the file's start, for code of
-    /// the shared library).
+    /// scene span that produced the offending code; unlocated for code of the shared
+    /// library, which no scene definition produced.
     pub fn internal_error(&self, e: &NagaError) -> Diagnostic {
         let first = e
             .message
@@ -91,25 +97,18 @@ impl Module {
             .unwrap_or("naga rejected the module")
             .trim()
             .to_string();
-        let region = e.offset.and_then(|o| self.region_at(o));
-        let (span, label) = match region {
-            Some(r) => (
+        let message = "internal compiler error: naga rejected the generated WGSL";
+        let mut d = match e.offset.and_then(|o| self.region_at(o)) {
+            Some(r) => Diagnostic::error(
+                codes::E_INTERNAL,
+                message,
                 r.span,
                 format!("naga rejected the WGSL generated for {}", r.what),
             ),
-            None => (
-                crate::span::Span::default(),
-                String::from(
-                    "naga rejected code sdfc adds to every module, not code from this scene",
-                ),
+            None => Diagnostic::unlocated(Severity::Error, codes::E_INTERNAL, message).with_note(
+                "naga rejected code sdfc adds to every module, not code from this scene",
             ),
-        };
-        let mut d = Diagnostic::error(
-            codes::E_INTERNAL,
-            "internal compiler error: naga rejected the generated WGSL",
-            span,
-            label,
-        )
+        }
         .with_note(format!("naga: {first}"));
         if let Some(o) = e.offset {
             let line = self.wgsl[..o.min(self.wgsl.len())].matches('\n').count() + 1;
@@ -117,19 +116,6 @@ impl Module {
         }
         d.with_help("this is a bug in sdfc, not in the scene: please report it with the generated WGSL (`sdfc compile` saves it)")
     }
-}
-
-/// A resource binding of the generated module.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct Binding {
-    pub group: u32,
-    pub binding: u32,
-    pub name: String,
-    /// `uniform`, `storage-read`, `storage-read-write`, `texture-2d` or `sampler`.
-    pub kind: &'static str,
-    /// WGSL type, or the image path for textures, or the wrap mode for samplers.
-    pub detail: String,
-    pub used_by: Vec<&'static str>,
 }
 
 /// What an application needs to drive the module: entry points, bindings and the
@@ -159,24 +145,16 @@ pub const GLOBALS_LAYOUT: &[&str] = &[
     "trace",
 ];
 
-/// Generates the module for a checked, error-free program. `shape` picks the render
-/// target by name instead of the `render` item's. Problems come back as diagnostics.
-pub fn generate(
-    program: &Program,
-    scene: &Scene,
-    shape: Option<&str>,
-) -> Result<Module, Vec<Diagnostic>> {
-    generate_with(
-        program,
-        scene,
-        &Options {
-            shape: shape.map(str::to_string),
-            ..Default::default()
-        },
-    )
-}
+/// The entry points of every module, with their stages.
+pub const ENTRY_POINTS: &[(&str, &str)] = &[
+    ("vs_main", "vertex"),
+    ("fs_main", "fragment"),
+    ("cs_points", "compute"),
+    ("cs_grid", "compute"),
+    ("cs_atlas", "compute"),
+];
 
-/// Choices for [`generate_with`].
+/// Choices for [`generate`].
 #[derive(Debug, Clone, Default)]
 pub struct Options {
     /// Render this named shape instead of the render item's target.
@@ -190,324 +168,314 @@ pub struct Options {
     pub seed_grid: SeedGridChoice,
 }
 
-/// [`generate`] with a choice of walk form.
-pub fn generate_with(
-    program: &Program,
-    scene: &Scene,
-    options: &Options,
-) -> Result<Module, Vec<Diagnostic>> {
-    generate_prepared(program, scene, options, None)
+/// A material field, for messages and for the colour space of its textures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MaterialField {
+    Color,
+    Roughness,
+    Metallic,
+    Emission,
 }
 
-/// [`generate_with`] reusing atlases [`crate::driver::check`] prepared already (one per
-/// atlas of the program), so the compile-time geometry runs once.
-pub fn generate_prepared(
+impl MaterialField {
+    fn name(self) -> &'static str {
+        match self {
+            MaterialField::Color => "color",
+            MaterialField::Roughness => "roughness",
+            MaterialField::Metallic => "metallic",
+            MaterialField::Emission => "emission",
+        }
+    }
+
+    /// Colours are sampled as sRGB; data (roughness, metallic) as linear.
+    fn is_color(self) -> bool {
+        matches!(self, MaterialField::Color | MaterialField::Emission)
+    }
+}
+
+/// A problem of sdfc itself while generating (never of the scene).
+fn internal(message: String) -> Vec<Diagnostic> {
+    vec![
+        Diagnostic::unlocated(Severity::Error, codes::E_INTERNAL, message)
+            .with_help("this is a bug in sdfc, not in the scene: please report it"),
+    ]
+}
+
+/// Generates the module for a checked, error-free program. `atlases` are the prepared
+/// atlases of [`crate::driver::check`], one per atlas of the program; they are never
+/// recomputed here. Choices that name things outside the scene (`options.shape`,
+/// `options.atlas`) are checked by the driver before; here they are internal errors.
+pub fn generate(
     program: &Program,
     scene: &Scene,
+    atlases: &[Option<Atlas>],
     options: &Options,
-    prepared: Option<&[Option<crate::uv::Atlas>]>,
 ) -> Result<Module, Vec<Diagnostic>> {
-    let form = options.walk;
-    let mut source_map: Vec<SourceRegion> = Vec::new();
-    let let_span = |name: &str| {
-        program
+    if atlases.len() != program.atlases.len() {
+        return Err(internal(format!(
+            "code generation got {} prepared atlases for {} atlases",
+            atlases.len(),
+            program.atlases.len()
+        )));
+    }
+    let target = crate::driver::pick_shape(scene, options.shape.as_deref())
+        .map_err(|e| internal(format!("code generation: {e}")))?;
+    let mut g = Generator {
+        program,
+        out: String::new(),
+        source_map: Vec::new(),
+    };
+    g.scene_constants(&target);
+    g.shapes(scene);
+    g.render_target(scene, &target, options);
+    let plain = options.plain;
+    if !plain {
+        g.atlases(atlases, options)
+            .map_err(|e| internal(e.to_string()))?;
+    }
+    g.atlas_choice(options, plain)?;
+    let textures = g.materials(if plain { &[] } else { &program.materials })?;
+    let table = bindings::table(&textures);
+    let entry = template::fill(
+        template::ENTRY,
+        &[("bindings", bindings::declarations(&table))],
+    )
+    .map_err(|e| internal(e.to_string()))?;
+    g.out.push_str(&entry);
+    Ok(g.finish(&target, scene, table, textures))
+}
+
+/// The module being written: the scene's code after the libraries, with its source map.
+struct Generator<'a> {
+    program: &'a Program,
+    out: String,
+    source_map: Vec<SourceRegion>,
+}
+
+impl Generator<'_> {
+    /// The item span of the shape `let` named `name`.
+    fn let_span(&self, name: &str) -> Option<Span> {
+        self.program
             .defs
             .iter()
             .find(|d| d.kind == crate::sema::DefKind::Let && d.name == name)
             .map(|d| d.item_span)
-    };
-    let target = match options.shape.as_deref() {
-        Some(n) => scene.shape(n).cloned().ok_or_else(|| {
-            vec![Diagnostic::error(
-                codes::E_CODEGEN,
-                format!("the scene has no shape `{n}`"),
-                Default::default(),
-                "",
-            )]
-        })?,
-        None => match (&scene.render, scene.shapes.as_slice()) {
-            (Some(r), _) => r.clone(),
-            (None, [only]) => only.shape.clone(),
-            _ => {
-                return Err(vec![Diagnostic::error(
-                    codes::E_CODEGEN,
-                    "the scene has no render item; choose a shape",
-                    Default::default(),
-                    "",
-                )])
-            }
-        },
-    };
-    let mut out = String::new();
-    let mut textures = Uses::default();
-    let mut problems = Vec::new();
+    }
 
-    let _ = writeln!(out, "// ---- scene ----");
-    let _ = writeln!(
-        out,
-        "const SCENE_LIPSCHITZ: f32 = {};",
-        lit(target.lipschitz().max(1.0))
-    );
-    let b = target.framing_bounds();
-    let _ = writeln!(
-        out,
-        "const SCENE_SCALE: f32 = {};\n",
-        lit((b.max - b.min).max_element().max(1e-3))
-    );
-    for named in &scene.shapes {
-        let start = out.len();
-        map_fn(&mut out, &format!("map_{}", named.name), &named.shape);
-        let _ = writeln!(
-            out,
-            "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
-            named.name
-        );
-        if let Some(span) = let_span(&named.name) {
-            source_map.push(SourceRegion {
-                wgsl: start..out.len(),
+    /// Records that the code written since `start` came from `what` at `span`.
+    fn region(&mut self, start: usize, span: Option<Span>, what: Definition) {
+        if let Some(span) = span {
+            self.source_map.push(SourceRegion {
+                wgsl: start..self.out.len(),
                 span,
-                what: format!("shape `{}`", named.name),
+                what,
             });
         }
     }
-    let start = out.len();
-    map_fn(&mut out, "scene_map", &target);
-    let target_span = match (options.shape.as_deref(), &program.render) {
-        (Some(n), _) => let_span(n),
-        (None, Some(r)) => Some(r.target_span),
-        (None, None) => scene.shapes.first().and_then(|s| let_span(&s.name)),
-    };
-    if let Some(span) = target_span {
-        source_map.push(SourceRegion {
-            wgsl: start..out.len(),
-            span,
-            what: String::from("the rendered shape"),
-        });
+
+    fn scene_constants(&mut self, target: &ir::Shape) {
+        let b = target.framing_bounds();
+        let _ = writeln!(
+            self.out,
+            "// ---- scene ----\nconst SCENE_LIPSCHITZ: f32 = {};\nconst SCENE_SCALE: f32 = {};\n",
+            lit(target.lipschitz().max(1.0)),
+            lit((b.max - b.min).max_element().max(1e-3))
+        );
     }
 
-    // Atlases: seeds are projected and framed here, at compile time, on the CPU.
-    let atlases: &[crate::sema::AtlasDef] = if options.plain { &[] } else { &program.atlases };
-    let materials: &[crate::sema::MaterialDef] = if options.plain {
-        &[]
-    } else {
-        &program.materials
-    };
-    if !atlases.is_empty() {
-        let computed;
-        let prepared = match prepared {
-            Some(p) if p.len() == atlases.len() => p,
-            _ => {
-                let (p, diags) = crate::uv::diagnose::prepare_all(program);
-                // Warnings and notes were reported by the check; errors stop generation.
-                problems.extend(diags.into_iter().filter(Diagnostic::is_error));
-                computed = p;
-                &computed[..]
-            }
-        };
-        for (k, a) in prepared.iter().enumerate() {
-            if let Some(a) = a {
-                let start = out.len();
-                atlas::emit(&mut out, k, a, form, &options.seed_grid.grid(a));
-                source_map.push(SourceRegion {
-                    wgsl: start..out.len(),
-                    span: atlases[k].span,
-                    what: format!("atlas `{}`", atlases[k].name),
-                });
-            }
+    /// `map_NAME` and `sdf_NAME` for every named shape.
+    fn shapes(&mut self, scene: &Scene) {
+        for named in &scene.shapes {
+            let start = self.out.len();
+            map_fn(&mut self.out, &format!("map_{}", named.name), &named.shape);
+            let _ = writeln!(
+                self.out,
+                "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
+                named.name
+            );
+            let span = self.let_span(&named.name);
+            self.region(start, span, Definition::Shape(named.name.clone()));
         }
     }
 
-    // The atlas of the atlas views and of cs_atlas.
-    let chosen = match options.atlas.as_deref() {
-        Some(name) => match program.atlases.iter().find(|a| a.name == name) {
-            Some(a) => Some(a.name.clone()),
-            None => {
-                return Err(vec![Diagnostic::error(
-                    codes::E_CODEGEN,
-                    format!("the scene has no atlas `{name}`"),
-                    Default::default(),
-                    "",
-                )])
-            }
-        },
-        None => atlases.first().map(|a| a.name.clone()),
-    };
-    let _ = match chosen {
-        Some(name) => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return atlas_{name}(p);\n}}\n\nfn scene_atlas_merged(i: u32, j: u32) -> bool {{\n    return atlas_{name}_merged(i, j);\n}}\n"),
-        None => writeln!(out, "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return uv_failed(UV_TOO_FAR, -1.0);\n}}\n\nfn scene_atlas_merged(i: u32, j: u32) -> bool {{\n    return false;\n}}\n"),
-    };
+    /// `scene_map`: the render target.
+    fn render_target(&mut self, scene: &Scene, target: &ir::Shape, options: &Options) {
+        let start = self.out.len();
+        map_fn(&mut self.out, "scene_map", target);
+        let span = match (options.shape.as_deref(), &self.program.render) {
+            (Some(n), _) => self.let_span(n),
+            (None, Some(r)) => Some(r.target_span),
+            (None, None) => scene.shapes.first().and_then(|s| self.let_span(&s.name)),
+        };
+        self.region(start, span, Definition::RenderedShape);
+    }
 
-    // Materials: id 0 is the default; id i + 1 is program.materials[i].
-    let _ = writeln!(
-        out,
-        "// `footprint` is the pixel's size on the surface; tangent_u and tangent_v span the tangent plane.\nfn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {{\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n    switch id {{"
-    );
-    for (i, m) in materials.iter().enumerate() {
-        let start = out.len();
-        textures.atlases.clear();
-        let mut attr = |v: &Value, what: &str| {
-            textures.srgb = matches!(what, "color" | "emission");
-            match field(v, &mut textures) {
-                Ok(e) => e,
-                Err(e) => {
-                    problems.push(Diagnostic::error(
-                        codes::E_CODEGEN,
-                        format!(
-                            "cannot generate the {what} of material `{}`: {}",
-                            m.name, e.0
-                        ),
-                        program.defs[m.def].span,
-                        "in this material",
-                    ));
-                    String::from("0.0")
-                }
-            }
+    /// Every prepared atlas's code, from the atlas template.
+    fn atlases(
+        &mut self,
+        atlases: &[Option<Atlas>],
+        options: &Options,
+    ) -> Result<(), template::Mismatch> {
+        for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
+            let Some(a) = prepared else { continue };
+            let start = self.out.len();
+            let code = atlas::emit(k, a, options.walk, &options.seed_grid.grid(a))?;
+            self.out.push_str(&code);
+            self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
+        }
+        Ok(())
+    }
+
+    /// `scene_atlas` and `scene_atlas_merged`: the atlas of the atlas views and
+    /// `cs_atlas` (the chosen one, or the first).
+    fn atlas_choice(&mut self, options: &Options, plain: bool) -> Result<(), Vec<Diagnostic>> {
+        let atlases = &self.program.atlases;
+        let chosen = match options.atlas.as_deref() {
+            _ if plain => None,
+            Some(name) => match atlases.iter().find(|a| a.name == name) {
+                Some(a) => Some(&a.name),
+                None => return Err(internal(format!("code generation: no atlas `{name}`"))),
+            },
+            None => atlases.first().map(|a| &a.name),
+        };
+        let (sample, merged) = match chosen {
+            Some(name) => (
+                format!("atlas_{name}(p)"),
+                format!("atlas_{name}_merged(i, j)"),
+            ),
+            None => (
+                String::from("uv_failed(UV_TOO_FAR, -1.0)"),
+                String::from("false"),
+            ),
+        };
+        let _ = writeln!(
+            self.out,
+            "fn scene_atlas(p: vec3<f32>) -> AtlasSample {{\n    return {sample};\n}}\n\nfn scene_atlas_merged(i: u32, j: u32) -> bool {{\n    return {merged};\n}}\n"
+        );
+        Ok(())
+    }
+
+    /// `scene_material`: id 0 is the default; id i + 1 is `materials[i]`. Returns the
+    /// textures the materials sample.
+    fn materials(&mut self, materials: &[MaterialDef]) -> Result<Vec<TextureUse>, Vec<Diagnostic>> {
+        let _ = writeln!(
+            self.out,
+            "// `footprint` is the pixel's size on the surface; tangent_u and tangent_v span the tangent plane.\nfn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {{\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n    switch id {{"
+        );
+        let mut uses = Uses::default();
+        let mut problems = Vec::new();
+        for (i, m) in materials.iter().enumerate() {
+            let start = self.out.len();
+            let case = self.material_case(i + 1, m, &mut uses, &mut problems);
+            self.out.push_str(&case);
+            let span = self.program.defs[m.def].item_span;
+            self.region(start, Some(span), Definition::Material(m.name.clone()));
+        }
+        let _ = writeln!(self.out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
+        if problems.is_empty() {
+            Ok(uses.textures)
+        } else {
+            Err(problems)
+        }
+    }
+
+    /// One `case` of `scene_material`.
+    fn material_case(
+        &self,
+        id: usize,
+        m: &MaterialDef,
+        uses: &mut Uses,
+        problems: &mut Vec<Diagnostic>,
+    ) -> String {
+        uses.atlases.clear();
+        let span = self.program.defs[m.def].span;
+        let mut attr = |v: &Value, what: MaterialField| {
+            uses.srgb = what.is_color();
+            field(v, uses).unwrap_or_else(|e| {
+                problems.push(Diagnostic::error(
+                    codes::E_CODEGEN,
+                    format!(
+                        "cannot generate the {} of material `{}`: {}",
+                        what.name(),
+                        m.name,
+                        e.0
+                    ),
+                    span,
+                    "in this material",
+                ));
+                String::from("0.0")
+            })
         };
         let color = match m.color.ty().base() {
-            crate::sema::Ty::Vec(4) => format!("({}).rgb", attr(&m.color, "color")),
-            crate::sema::Ty::Vec(3) => attr(&m.color, "color"),
-            _ => format!("vec3<f32>({})", attr(&m.color, "color")),
+            Ty::Vec(4) => format!("({}).rgb", attr(&m.color, MaterialField::Color)),
+            Ty::Vec(3) => attr(&m.color, MaterialField::Color),
+            _ => format!("vec3<f32>({})", attr(&m.color, MaterialField::Color)),
         };
-        let (r, mt, e) = (
-            attr(&m.roughness, "roughness"),
-            attr(&m.metallic, "metallic"),
-            attr(&m.emission, "emission"),
-        );
-        let samples: String = textures
+        let r = attr(&m.roughness, MaterialField::Roughness);
+        let mt = attr(&m.metallic, MaterialField::Metallic);
+        let e = attr(&m.emission, MaterialField::Emission);
+        let samples: String = uses
             .atlases
             .iter()
             .map(|k| {
                 format!(
                     "            let atlas_sample_{k} = atlas_{}(p);\n",
-                    program.atlases[*k].name
+                    self.program.atlases[*k].name
                 )
             })
             .collect();
-        let _ = writeln!(out, "        case {}: {{\n{samples}            return Material({color}, {r}, {mt}, {e});\n        }}", i + 1);
-        source_map.push(SourceRegion {
-            wgsl: start..out.len(),
-            span: program.defs[m.def].item_span,
-            what: format!("material `{}`", m.name),
-        });
-    }
-    let _ = writeln!(out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
-    if !problems.is_empty() {
-        return Err(problems);
+        format!("        case {id}: {{\n{samples}            return Material({color}, {r}, {mt}, {e});\n        }}\n")
     }
 
-    let mut bindings = vec![Binding {
-        group: 0,
-        binding: 0,
-        name: "globals".into(),
-        kind: "uniform",
-        detail: "Globals".into(),
-        used_by: vec!["vs_main", "fs_main"],
-    }];
-    for (i, t) in textures.textures.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "@group(0) @binding({}) var texture_{i}: texture_2d<f32>;",
-            1 + 2 * i
-        );
-        let _ = writeln!(
-            out,
-            "@group(0) @binding({}) var sampler_{i}: sampler;",
-            2 + 2 * i
-        );
-        bindings.push(Binding {
-            group: 0,
-            binding: 1 + 2 * i as u32,
-            name: format!("texture_{i}"),
-            kind: "texture-2d",
-            detail: t.path.clone(),
-            used_by: vec!["fs_main"],
-        });
-        bindings.push(Binding {
-            group: 0,
-            binding: 2 + 2 * i as u32,
-            name: format!("sampler_{i}"),
-            kind: "sampler",
-            detail: t.wrap.clone(),
-            used_by: vec!["fs_main"],
-        });
-    }
-    bindings.push(Binding {
-        group: 1,
-        binding: 0,
-        name: "grid".into(),
-        kind: "uniform",
-        detail: "GridParams".into(),
-        used_by: vec!["cs_grid"],
-    });
-    bindings.push(Binding {
-        group: 1,
-        binding: 1,
-        name: "points".into(),
-        kind: "storage-read",
-        detail: "array<vec4<f32>>".into(),
-        used_by: vec!["cs_points", "cs_atlas"],
-    });
-    bindings.push(Binding {
-        group: 1,
-        binding: 2,
-        name: "results".into(),
-        kind: "storage-read-write",
-        detail: "array<vec4<f32>>".into(),
-        used_by: vec!["cs_points", "cs_grid", "cs_atlas"],
-    });
-    out.push_str(ENTRY_POINTS);
-
-    let mut header = String::new();
-    let _ = writeln!(
-        header,
-        "// Generated by sdfc {}. Do not edit: regenerate from the scene.",
-        env!("CARGO_PKG_VERSION")
-    );
-    let _ = writeln!(header, "//\n// Entry points: vs_main + fs_main (full-screen render), cs_points, cs_grid and cs_atlas (compute, workgroup 64).\n// Bind groups:");
-    for b in &bindings {
+    /// The header, the libraries and the scene's code, with the source map shifted to
+    /// the final offsets.
+    fn finish(
+        self,
+        target: &ir::Shape,
+        scene: &Scene,
+        table: Vec<Binding>,
+        textures: Vec<TextureUse>,
+    ) -> Module {
+        let mut header = String::new();
         let _ = writeln!(
             header,
-            "//   @group({}) @binding({}) {} {}: {} (used by {})",
-            b.group,
-            b.binding,
-            b.kind,
-            b.name,
-            b.detail,
-            b.used_by.join(", ")
+            "// Generated by sdfc {}. Do not edit: regenerate from the scene.",
+            env!("CARGO_PKG_VERSION")
         );
+        let _ = writeln!(header, "//\n// Entry points: vs_main + fs_main (full-screen render), cs_points, cs_grid and cs_atlas (compute, workgroup 64).\n// Bind groups:");
+        header.push_str(&bindings::describe(&table));
+        let _ = writeln!(
+            header,
+            "// Globals is {} vec4<f32> fields, in order: {}.",
+            GLOBALS_LAYOUT.len(),
+            GLOBALS_LAYOUT.join(", ")
+        );
+        let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
+        let wgsl = format!(
+            "{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{UV_LIBRARY}\n{}",
+            self.out
+        );
+        // The regions were recorded in `out`, which ends the module.
+        let shift = wgsl.len() - self.out.len();
+        let mut source_map = self.source_map;
+        for r in &mut source_map {
+            r.wgsl = r.wgsl.start + shift..r.wgsl.end + shift;
+        }
+        let manifest = Manifest {
+            entry_points: ENTRY_POINTS.to_vec(),
+            bindings: table,
+            globals_layout: GLOBALS_LAYOUT.to_vec(),
+            lipschitz: target.lipschitz(),
+            shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
+            textures,
+        };
+        Module {
+            wgsl,
+            header,
+            manifest,
+            source_map,
+        }
     }
-    let _ = writeln!(
-        header,
-        "// Globals is {} vec4<f32> fields, in order: {}.",
-        GLOBALS_LAYOUT.len(),
-        GLOBALS_LAYOUT.join(", ")
-    );
-    let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
-    let wgsl = format!("{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{UV_LIBRARY}\n{out}");
-    // The regions were recorded in `out`, which ends the module.
-    let shift = wgsl.len() - out.len();
-    for r in &mut source_map {
-        r.wgsl = r.wgsl.start + shift..r.wgsl.end + shift;
-    }
-    let manifest = Manifest {
-        entry_points: vec![
-            ("vs_main", "vertex"),
-            ("fs_main", "fragment"),
-            ("cs_points", "compute"),
-            ("cs_grid", "compute"),
-            ("cs_atlas", "compute"),
-        ],
-        bindings,
-        globals_layout: GLOBALS_LAYOUT.to_vec(),
-        lipschitz: target.lipschitz(),
-        shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
-        textures: textures.textures,
-    };
-    Ok(Module {
-        wgsl,
-        manifest,
-        source_map,
-    })
 }
 
 fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
@@ -519,6 +487,3 @@ fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
         w.out
     );
 }
-
-/// The scene-independent tail of every module: tracing, normals and entry points.
-const ENTRY_POINTS: &str = include_str!("entry.wgsl.in");

@@ -33,6 +33,67 @@ impl fmt::Display for NagaError {
     }
 }
 
+/// Validates a naga module (one sdfc built or transformed, so a failure is sdfc's).
+fn revalidate(module: naga::Module) -> Result<Validated, String> {
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| e.into_inner().to_string())?;
+    Ok(Validated { module, info })
+}
+
+/// The name of the temporary entry point that keeps the `sdf_NAME` functions alive
+/// through compaction.
+const KEEP: &str = "sdfc_keep_shape_functions";
+
+/// The validated module with only what its entry points and its `sdf_NAME` functions
+/// use (naga's compaction: the library's unused primitives, operators and types go),
+/// validated again.
+pub fn compact(v: &Validated) -> Result<Validated, String> {
+    let mut module = v.module.clone();
+    // A temporary entry point calls every sdf_NAME, so compaction keeps them; it is
+    // removed after (entry points are a plain list: removing one moves no handle).
+    let mut keep = naga::Function::default();
+    for (h, f) in module.functions.iter() {
+        if !f.name.as_deref().is_some_and(|n| n.starts_with("sdf_")) {
+            continue;
+        }
+        let Some(arg) = f.arguments.first() else {
+            continue;
+        };
+        let zero = keep
+            .expressions
+            .append(naga::Expression::ZeroValue(arg.ty), naga::Span::UNDEFINED);
+        keep.body.push(
+            naga::Statement::Call {
+                function: h,
+                arguments: vec![zero],
+                result: None,
+            },
+            naga::Span::UNDEFINED,
+        );
+    }
+    let Some(template) = module.entry_points.first() else {
+        return Err(String::from("the module has no entry point"));
+    };
+    let mut ep = template.clone();
+    ep.name = String::from(KEEP);
+    ep.stage = naga::ShaderStage::Compute;
+    ep.early_depth_test = None;
+    ep.workgroup_size = [1, 1, 1];
+    ep.workgroup_size_overrides = None;
+    ep.mesh_info = None;
+    ep.task_payload = None;
+    ep.incoming_ray_payload = None;
+    ep.function = keep;
+    module.entry_points.push(ep);
+    naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
+    module.entry_points.retain(|e| e.name != KEEP);
+    revalidate(module)
+}
+
 /// Parses and validates WGSL with naga.
 pub fn validate(wgsl: &str) -> Result<Validated, NagaError> {
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| NagaError {
@@ -57,10 +118,25 @@ pub enum Output {
     Binary(Vec<u8>),
 }
 
-/// Translates a validated module. GLSL holds one entry point per file, named by `entry`.
-pub fn translate(v: &Validated, wgsl: &str, target: Target, entry: &str) -> Result<Output, String> {
+/// Translates a validated module. GLSL holds one entry point per file, named by `entry`
+/// (the caller checks it names one). WGSL is naga's rendering of the module, after
+/// `header` (a comment).
+pub fn translate(
+    v: &Validated,
+    header: &str,
+    target: Target,
+    entry: &str,
+) -> Result<Output, String> {
     match target {
-        Target::Wgsl => Ok(Output::Text(wgsl.to_string())),
+        Target::Wgsl => {
+            let text = naga::back::wgsl::write_string(
+                &v.module,
+                &v.info,
+                naga::back::wgsl::WriterFlags::empty(),
+            )
+            .map_err(|e| e.to_string())?;
+            Ok(Output::Text(format!("{header}{text}")))
+        }
         Target::Spirv => {
             let words = naga::back::spv::write_vec(
                 &v.module,

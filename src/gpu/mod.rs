@@ -4,9 +4,10 @@
 
 mod compute;
 mod render;
+mod texture;
 
 pub use compute::{eval_atlas, eval_points, AtlasValue};
-pub use render::{render, render_repeated, render_timed, Frame, Timings, ViewMode};
+pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};
 
 use std::fmt;
 use std::sync::Arc;

@@ -1,8 +1,10 @@
 //! Headless rendering: the generated fragment shader into an offscreen target,
 //! read back with its AOVs (position + depth, normal + steps).
 
+use super::texture::{load_texture, sampler};
 use super::{Gpu, GpuError};
-use crate::codegen::Manifest;
+use crate::codegen::bindings::{Resource, RENDER_GROUP};
+use crate::codegen::Module;
 use crate::view::View;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -99,80 +101,6 @@ fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
     ]
 }
 
-/// Loads an image with an sRGB mip chain.
-fn load_texture(gpu: &Gpu, path: &Path, srgb: bool) -> Result<wgpu::Texture, GpuError> {
-    let img = image::open(path)
-        .map_err(|e| GpuError::Texture(format!("cannot read texture {}: {e}", path.display())))?
-        .to_rgba8();
-    let (w, h) = img.dimensions();
-    let levels = 32 - w.max(h).max(1).leading_zeros();
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("image"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: if srgb {
-            wgpu::TextureFormat::Rgba8UnormSrgb
-        } else {
-            wgpu::TextureFormat::Rgba8Unorm
-        },
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let mut level = img;
-    for mip in 0..levels {
-        let (lw, lh) = level.dimensions();
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: mip,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            &level,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * lw),
-                rows_per_image: Some(lh),
-            },
-            wgpu::Extent3d {
-                width: lw,
-                height: lh,
-                depth_or_array_layers: 1,
-            },
-        );
-        level = image::imageops::resize(
-            &level,
-            (lw / 2).max(1),
-            (lh / 2).max(1),
-            image::imageops::FilterType::Triangle,
-        );
-    }
-    Ok(texture)
-}
-
-fn sampler(gpu: &Gpu, wrap: &str) -> wgpu::Sampler {
-    let mode = match wrap {
-        "mirror" => wgpu::AddressMode::MirrorRepeat,
-        "clamp" => wgpu::AddressMode::ClampToEdge,
-        _ => wgpu::AddressMode::Repeat,
-    };
-    gpu.device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some(wrap),
-        address_mode_u: mode,
-        address_mode_v: mode,
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        mipmap_filter: wgpu::MipmapFilterMode::Linear,
-        ..Default::default()
-    })
-}
-
 /// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
 /// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
 fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
@@ -210,137 +138,123 @@ fn f16_to_f32(h: u16) -> f32 {
 /// Renders a generated module. Texture paths in the manifest are relative to `base_dir`.
 pub fn render(
     gpu: &Gpu,
-    wgsl: &str,
-    manifest: &Manifest,
+    module: &Module,
     view: &View,
     mode: ViewMode,
     base_dir: &Path,
 ) -> Result<Frame, GpuError> {
-    render_timed(gpu, wgsl, manifest, view, mode, base_dir, 0)
+    render_timed(gpu, module, view, mode, base_dir, 0)
 }
 
 /// [`render`] after `warmup` untimed frames (drivers may compile shaders at first use).
 pub fn render_timed(
     gpu: &Gpu,
-    wgsl: &str,
-    manifest: &Manifest,
+    module: &Module,
     view: &View,
     mode: ViewMode,
     base_dir: &Path,
     warmup: u32,
 ) -> Result<Frame, GpuError> {
-    render_repeated(gpu, wgsl, manifest, view, mode, base_dir, warmup, 1).map(|(f, _)| f)
+    let renderer = Renderer::new(gpu, module, base_dir)?;
+    renderer.frames(gpu, view, mode, warmup, 1).map(|(f, _)| f)
 }
 
-/// [`render_timed`] with `repeats` timed frames on one pipeline: returns the last frame
-/// (its `timings.frame` is the median) and every frame time, in order. Only the last
-/// frame is read back.
-#[allow(clippy::too_many_arguments)]
-pub fn render_repeated(
-    gpu: &Gpu,
-    wgsl: &str,
-    manifest: &Manifest,
-    view: &View,
-    mode: ViewMode,
-    base_dir: &Path,
-    warmup: u32,
-    repeats: u32,
-) -> Result<(Frame, Vec<Duration>), GpuError> {
-    let d = &gpu.device;
-    let (w, h) = (view.width.max(1), view.height.max(1));
-    let formats = formats(gpu);
-    let textures: Vec<(wgpu::Texture, wgpu::Sampler)> = manifest
-        .textures
-        .iter()
-        .map(|t| {
-            Ok((
-                load_texture(gpu, &base_dir.join(&t.path), t.srgb)?,
-                sampler(gpu, &t.wrap),
-            ))
-        })
-        .collect::<Result<_, GpuError>>()?;
-    let started = Instant::now();
-    let pipeline = gpu.scoped(|| {
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("scene"),
-            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-        });
-        let targets: Vec<Option<wgpu::ColorTargetState>> = formats
+/// A generated module's render pipeline with its textures, built once and used for
+/// any number of frames, views and sizes (`sdfc render`, `sdfc bench`, the tests).
+pub struct Renderer {
+    pipeline: wgpu::RenderPipeline,
+    /// What the binding table of the manifest binds, slot by slot.
+    bindings: Vec<crate::codegen::Binding>,
+    textures: Vec<(wgpu::TextureView, wgpu::Sampler)>,
+    formats: [wgpu::TextureFormat; 4],
+    /// The time the pipeline took to create.
+    pub pipeline_time: Duration,
+}
+
+/// The offscreen targets of one frame size and their readback buffers.
+struct Targets {
+    width: u32,
+    height: u32,
+    textures: Vec<wgpu::Texture>,
+    views: Vec<wgpu::TextureView>,
+    /// Each target's buffer and its padded row length in bytes.
+    readbacks: Vec<(wgpu::Buffer, u32)>,
+}
+
+/// The timestamp queries of the measured frames.
+struct Queries {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+}
+
+impl Renderer {
+    /// Loads the textures and creates the pipeline (timed: `pipeline_time`).
+    pub fn new(gpu: &Gpu, module: &Module, base_dir: &Path) -> Result<Renderer, GpuError> {
+        let formats = formats(gpu);
+        let textures = module
+            .manifest
+            .textures
             .iter()
-            .map(|f| {
-                Some(wgpu::ColorTargetState {
-                    format: *f,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
+            .map(|t| {
+                let image = load_texture(gpu, &base_dir.join(&t.path), t.srgb)?;
+                Ok((
+                    image.create_view(&Default::default()),
+                    sampler(gpu, &t.wrap),
+                ))
+            })
+            .collect::<Result<_, GpuError>>()?;
+        let started = Instant::now();
+        let pipeline = gpu.scoped(|| pipeline(&gpu.device, &module.wgsl, &formats))?;
+        gpu.wait()?;
+        Ok(Renderer {
+            pipeline,
+            bindings: module.manifest.bindings.clone(),
+            textures,
+            formats,
+            pipeline_time: started.elapsed(),
+        })
+    }
+
+    /// The render group's bind group, built from the binding table.
+    fn bind_group(&self, gpu: &Gpu, globals: &wgpu::Buffer) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = self
+            .bindings
+            .iter()
+            .filter(|b| b.group == RENDER_GROUP)
+            .filter_map(|b| {
+                let resource = match b.resource {
+                    Resource::Globals => globals.as_entire_binding(),
+                    Resource::Texture(i) => {
+                        wgpu::BindingResource::TextureView(&self.textures.get(i)?.0)
+                    }
+                    Resource::Sampler(i) => {
+                        wgpu::BindingResource::Sampler(&self.textures.get(i)?.1)
+                    }
+                    Resource::GridParams | Resource::Points | Resource::Results => return None,
+                };
+                Some(wgpu::BindGroupEntry {
+                    binding: b.binding,
+                    resource,
                 })
             })
             .collect();
-        d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("scene"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    })?;
-    gpu.wait()?;
-    let pipeline_time = started.elapsed();
-
-    let uniforms = globals(view, mode);
-    let (targets, views, readbacks, bind_group, queries) = gpu.scoped(|| {
-        use wgpu::util::DeviceExt;
-        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("globals"),
-            contents: bytemuck::cast_slice(&uniforms),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let views: Vec<wgpu::TextureView> = textures
-            .iter()
-            .map(|(t, _)| t.create_view(&Default::default()))
-            .collect();
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: buffer.as_entire_binding(),
-        }];
-        for (i, ((_, s), v)) in textures.iter().zip(&views).enumerate() {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1 + 2 * i as u32,
-                resource: wgpu::BindingResource::TextureView(v),
-            });
-            entries.push(wgpu::BindGroupEntry {
-                binding: 2 + 2 * i as u32,
-                resource: wgpu::BindingResource::Sampler(s),
-            });
-        }
-        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &pipeline.get_bind_group_layout(0),
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render group"),
+            layout: &self.pipeline.get_bind_group_layout(RENDER_GROUP),
             entries: &entries,
-        });
-        let targets: Vec<wgpu::Texture> = formats
+        })
+    }
+
+    fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Targets {
+        let d = &gpu.device;
+        let textures: Vec<wgpu::Texture> = self
+            .formats
             .iter()
             .map(|f| {
                 d.create_texture(&wgpu::TextureDescriptor {
                     label: Some("target"),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
+                    size: extent(width, height),
                     mip_level_count: 1,
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
@@ -350,54 +264,43 @@ pub fn render_repeated(
                 })
             })
             .collect();
-        let target_views: Vec<wgpu::TextureView> = targets
+        let views = textures
             .iter()
             .map(|t| t.create_view(&Default::default()))
             .collect();
-        let readbacks: Vec<(wgpu::Buffer, u32)> = formats
+        let readbacks = self
+            .formats
             .iter()
             .map(|f| {
-                let bpp = f.block_copy_size(None).unwrap_or(4);
-                let row = (w * bpp).div_ceil(256) * 256;
-                (
-                    d.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("readback"),
-                        size: (row * h) as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    }),
-                    row,
-                )
+                let row = (width * f.block_copy_size(None).unwrap_or(4)).div_ceil(256) * 256;
+                let buffer = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("readback"),
+                    size: (row * height) as u64,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (buffer, row)
             })
             .collect();
-        let queries = gpu.timestamps.then(|| {
-            let set = d.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("frame"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            });
-            let resolve = d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            (set, resolve, read)
-        });
-        let _keep = buffer;
-        (targets, target_views, readbacks, bind_group, queries)
-    })?;
+        Targets {
+            width,
+            height,
+            textures,
+            views,
+            readbacks,
+        }
+    }
 
-    // One full-screen pass into every target; timestamps only for the measured frame.
-    let draw = |enc: &mut wgpu::CommandEncoder,
-                timestamps: Option<wgpu::RenderPassTimestampWrites>| {
-        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+    /// One full-screen pass into every target.
+    fn draw(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        bind_group: &wgpu::BindGroup,
+        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
+            .views
             .iter()
             .map(|v| {
                 Some(wgpu::RenderPassColorAttachment {
@@ -419,146 +322,246 @@ pub fn render_repeated(
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(RENDER_GROUP, bind_group, &[]);
         pass.draw(0..3, 0..1);
-    };
-    for _ in 0..warmup {
-        gpu.scoped(|| {
-            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("warm-up"),
-            });
-            draw(&mut enc, None);
-            gpu.queue.submit([enc.finish()]);
-        })?;
-        gpu.wait()?;
     }
-    let repeats = repeats.max(1);
-    let mut times = Vec::with_capacity(repeats as usize);
-    let mut from_timestamps = true;
-    for rep in 0..repeats {
-        let last = rep + 1 == repeats;
-        let submitted = Instant::now();
-        gpu.scoped(|| {
-            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame"),
+
+    /// `warmup` untimed frames, then `repeats` timed ones on this pipeline: returns the
+    /// last frame (its `timings.frame` is the median) and every frame time, in order.
+    /// Only the last frame is read back.
+    pub fn frames(
+        &self,
+        gpu: &Gpu,
+        view: &View,
+        mode: ViewMode,
+        warmup: u32,
+        repeats: u32,
+    ) -> Result<(Frame, Vec<Duration>), GpuError> {
+        let d = &gpu.device;
+        let (w, h) = (view.width.max(1), view.height.max(1));
+        let uniforms = globals(view, mode);
+        let (targets, bind_group, queries, _globals) = gpu.scoped(|| {
+            use wgpu::util::DeviceExt;
+            let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::cast_slice(&uniforms),
+                usage: wgpu::BufferUsages::UNIFORM,
             });
-            draw(
-                &mut enc,
-                queries
-                    .as_ref()
-                    .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }),
-            );
-            if let Some((set, resolve, read)) = &queries {
-                enc.resolve_query_set(set, 0..2, resolve, 0);
-                enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
-            }
-            for (t, (b, row)) in targets.iter().zip(&readbacks).filter(|_| last) {
-                enc.copy_texture_to_buffer(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: t,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d::ZERO,
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    wgpu::TexelCopyBufferInfo {
-                        buffer: b,
-                        layout: wgpu::TexelCopyBufferLayout {
-                            offset: 0,
-                            bytes_per_row: Some(*row),
-                            rows_per_image: Some(h),
-                        },
-                    },
-                    wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                );
-            }
-            gpu.queue.submit([enc.finish()]);
+            let bind_group = self.bind_group(gpu, &buffer);
+            (self.targets(gpu, w, h), bind_group, queries(gpu), buffer)
         })?;
-        gpu.wait()?;
-        let wall = submitted.elapsed();
-        let frame_time = match &queries {
-            Some((_, _, read)) => {
-                let bytes = gpu.read_buffer(read)?;
-                let t: &[u64] = bytemuck::cast_slice(&bytes);
-                let ns = t[1].saturating_sub(t[0]) as f64 * gpu.queue.get_timestamp_period() as f64;
-                if ns > 0.0 {
-                    Duration::from_nanos(ns as u64)
-                } else {
-                    from_timestamps = false;
-                    wall
+        for _ in 0..warmup {
+            gpu.scoped(|| {
+                let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("warm-up"),
+                });
+                self.draw(&mut enc, &targets, &bind_group, None);
+                gpu.queue.submit([enc.finish()]);
+            })?;
+            gpu.wait()?;
+        }
+        let repeats = repeats.max(1);
+        let mut times = Vec::with_capacity(repeats as usize);
+        let mut from_timestamps = true;
+        for rep in 0..repeats {
+            let last = rep + 1 == repeats;
+            let submitted = Instant::now();
+            gpu.scoped(|| {
+                let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame"),
+                });
+                let writes = queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                    query_set: &q.set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                });
+                self.draw(&mut enc, &targets, &bind_group, writes);
+                if let Some(q) = &queries {
+                    enc.resolve_query_set(&q.set, 0..2, &q.resolve, 0);
+                    enc.copy_buffer_to_buffer(&q.resolve, 0, &q.read, 0, 16);
                 }
-            }
-            None => {
-                from_timestamps = false;
-                wall
-            }
-        };
-        times.push(frame_time);
-    }
-    let frame = {
+                if last {
+                    copy_out(&mut enc, &targets);
+                }
+                gpu.queue.submit([enc.finish()]);
+            })?;
+            gpu.wait()?;
+            let wall = submitted.elapsed();
+            let measured = match &queries {
+                Some(q) => gpu_time(gpu, &q.read)?,
+                None => None,
+            };
+            from_timestamps &= measured.is_some();
+            times.push(measured.unwrap_or(wall));
+        }
         let mut sorted = times.clone();
         sorted.sort();
-        sorted[sorted.len() / 2]
-    };
-
-    let read_start = Instant::now();
-    let mut planes = Vec::new();
-    for (f, (b, row)) in formats.iter().zip(&readbacks) {
-        let bytes = gpu.read_buffer(b)?;
-        let bpp = f.block_copy_size(None).unwrap_or(4) as usize;
-        let mut out = Vec::with_capacity(w as usize * h as usize * bpp);
-        for y in 0..h as usize {
-            let start = y * *row as usize;
-            out.extend_from_slice(&bytes[start..start + w as usize * bpp]);
-        }
-        planes.push(out);
+        let median = sorted[sorted.len() / 2];
+        let mut frame = self.read(gpu, &targets)?;
+        frame.timings.pipeline = self.pipeline_time;
+        frame.timings.frame = median;
+        frame.timings.frame_from_timestamps = from_timestamps;
+        Ok((frame, times))
     }
-    let readback = read_start.elapsed();
-    let half = formats[1] == wgpu::TextureFormat::Rgba16Float;
-    let floats = |bytes: &[u8]| -> Vec<[f32; 4]> {
-        if half {
-            bytes
-                .chunks_exact(8)
-                .map(|c| {
-                    std::array::from_fn(|k| {
-                        f16_to_f32(u16::from_le_bytes([c[2 * k], c[2 * k + 1]]))
-                    })
-                })
-                .collect()
-        } else {
-            bytes
-                .chunks_exact(16)
-                .map(|c| {
-                    std::array::from_fn(|k| {
-                        f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]])
-                    })
-                })
-                .collect()
+
+    /// Reads the targets back into a frame (timed: `timings.readback`).
+    fn read(&self, gpu: &Gpu, targets: &Targets) -> Result<Frame, GpuError> {
+        let (w, h) = (targets.width, targets.height);
+        let read_start = Instant::now();
+        let mut planes = Vec::new();
+        for (f, (b, row)) in self.formats.iter().zip(&targets.readbacks) {
+            let bytes = gpu.read_buffer(b)?;
+            let bpp = f.block_copy_size(None).unwrap_or(4) as usize;
+            let mut out = Vec::with_capacity(w as usize * h as usize * bpp);
+            for y in 0..h as usize {
+                let start = y * *row as usize;
+                out.extend_from_slice(&bytes[start..start + w as usize * bpp]);
+            }
+            planes.push(out);
         }
-    };
-    let frame = Frame {
-        width: w,
-        height: h,
-        position: floats(&planes[1]),
-        normal: floats(&planes[2]),
-        atlas: floats(&planes[3]),
-        color: std::mem::take(&mut planes[0]),
-        timings: Timings {
-            pipeline: pipeline_time,
-            frame,
-            frame_from_timestamps: from_timestamps,
-            readback,
+        let readback = read_start.elapsed();
+        let half = self.formats[1] == wgpu::TextureFormat::Rgba16Float;
+        Ok(Frame {
+            width: w,
+            height: h,
+            position: floats(&planes[1], half),
+            normal: floats(&planes[2], half),
+            atlas: floats(&planes[3], half),
+            color: std::mem::take(&mut planes[0]),
+            timings: Timings {
+                readback,
+                ..Default::default()
+            },
+        })
+    }
+}
+
+fn extent(width: u32, height: u32) -> wgpu::Extent3d {
+    wgpu::Extent3d {
+        width,
+        height,
+        depth_or_array_layers: 1,
+    }
+}
+
+/// The render pipeline of a module's vs_main and fs_main into the targets' formats.
+fn pipeline(
+    d: &wgpu::Device,
+    wgsl: &str,
+    formats: &[wgpu::TextureFormat; 4],
+) -> wgpu::RenderPipeline {
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("scene"),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    let targets: Vec<Option<wgpu::ColorTargetState>> = formats
+        .iter()
+        .map(|f| {
+            Some(wgpu::ColorTargetState {
+                format: *f,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        })
+        .collect();
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("scene"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
         },
-    };
-    Ok((frame, times))
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Timestamp queries, where the adapter has them.
+fn queries(gpu: &Gpu) -> Option<Queries> {
+    let d = &gpu.device;
+    gpu.timestamps.then(|| {
+        let buffer = |usage| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        Queries {
+            set: d.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("frame"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolve: buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
+            read: buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+        }
+    })
+}
+
+/// The GPU time between the two timestamps, when the adapter measured one.
+fn gpu_time(gpu: &Gpu, read: &wgpu::Buffer) -> Result<Option<Duration>, GpuError> {
+    let bytes = gpu.read_buffer(read)?;
+    let t: &[u64] = bytemuck::cast_slice(&bytes);
+    let ns = t[1].saturating_sub(t[0]) as f64 * gpu.queue.get_timestamp_period() as f64;
+    Ok((ns > 0.0).then(|| Duration::from_nanos(ns as u64)))
+}
+
+/// Copies every target into its readback buffer.
+fn copy_out(enc: &mut wgpu::CommandEncoder, targets: &Targets) {
+    for (t, (b, row)) in targets.textures.iter().zip(&targets.readbacks) {
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: t,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: b,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(*row),
+                    rows_per_image: Some(targets.height),
+                },
+            },
+            extent(targets.width, targets.height),
+        );
+    }
+}
+
+/// RGBA texels of 32-bit or (`half`) 16-bit floats.
+fn floats(bytes: &[u8], half: bool) -> Vec<[f32; 4]> {
+    if half {
+        bytes
+            .chunks_exact(8)
+            .map(|c| {
+                std::array::from_fn(|k| f16_to_f32(u16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
+            })
+            .collect()
+    } else {
+        bytes
+            .chunks_exact(16)
+            .map(|c| {
+                std::array::from_fn(|k| {
+                    f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]])
+                })
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -23,7 +23,7 @@ pub fn code_actions(doc: &Document, range: Span) -> Vec<Action> {
     let touches = |s: Span| s.start <= range.end && range.start <= s.end;
     let mut out = Vec::new();
     for d in &doc.analysis.diagnostics {
-        if !touches(d.primary.span) {
+        if !d.span().is_some_and(touches) {
             continue;
         }
         for f in &d.fixes {

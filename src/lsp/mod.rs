@@ -90,7 +90,10 @@ fn convert(uri: &lsp::Uri, o: &Open, d: &Diagnostic) -> lsp::Diagnostic {
         })
         .collect();
     lsp::Diagnostic {
-        range: to_range(&o.index, text, d.primary.span),
+        // A diagnostic about no place in the file is shown at its start.
+        range: d
+            .span()
+            .map_or_else(lsp::Range::default, |s| to_range(&o.index, text, s)),
         severity: Some(match d.severity {
             Severity::Error => lsp::DiagnosticSeverity::ERROR,
             Severity::Warning => lsp::DiagnosticSeverity::WARNING,

@@ -29,10 +29,7 @@ pub fn check(file: &ast::File, base_dir: Option<&Path>, diags: &mut Vec<Diagnost
 }
 
 /// The closest candidate within a small edit distance, for "did you mean" help.
-pub(crate) fn suggest<'a>(
-    name: &str,
-    candidates: impl IntoIterator<Item = &'a str>,
-) -> Option<&'a str> {
+pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     let limit = (name.chars().count() / 3).max(1);
     candidates
         .into_iter()

@@ -14,6 +14,8 @@ pub mod fold;
 pub mod types;
 
 pub use check::check;
+/// The closest name within a small edit distance, for "did you mean" help.
+pub use check::suggest as closest;
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 
 use crate::span::Span;

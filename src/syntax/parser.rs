@@ -72,11 +72,9 @@ pub fn parse(src: &str, diags: &mut Vec<Diagnostic>) -> Parsed {
         }
         start = end;
     }
-    diags.extend(
-        item_diags.into_iter().filter(|d| {
-            !(d.code == codes::E_SYNTAX && after_error.contains(&d.primary.span.start))
-        }),
-    );
+    diags.extend(item_diags.into_iter().filter(|d| {
+        !(d.code == codes::E_SYNTAX && d.span().is_some_and(|s| after_error.contains(&s.start)))
+    }));
     Parsed {
         file: File { items },
         comments: lexed.comments,

@@ -1,0 +1,166 @@
+//! The one binding table of a generated module. It produces the WGSL declarations,
+//! the manifest's `bindings` and, through [`Resource`], what the runtime binds at each
+//! slot, so the three can never disagree.
+
+use super::emit::TextureUse;
+use serde::Serialize;
+use std::fmt::Write;
+
+/// The kind of a binding, as the manifest names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    Uniform,
+    StorageRead,
+    StorageReadWrite,
+    #[serde(rename = "texture-2d")]
+    Texture2d,
+    Sampler,
+}
+
+/// What is bound at a slot: the runtime's side of the table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "resource", content = "index")]
+pub enum Resource {
+    /// The `Globals` uniform block (camera, light, view; see `GLOBALS_LAYOUT`).
+    Globals,
+    /// The image of `Manifest::textures[i]`.
+    Texture(usize),
+    /// The sampler of `Manifest::textures[i]` (its wrap mode).
+    Sampler(usize),
+    /// The compute grid's parameters (`GridParams`).
+    GridParams,
+    /// The compute points, read.
+    Points,
+    /// The compute results, written.
+    Results,
+}
+
+/// A resource binding of the generated module.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Binding {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    pub kind: Kind,
+    /// WGSL type, or the image path for textures, or the wrap mode for samplers.
+    pub detail: String,
+    pub used_by: Vec<&'static str>,
+    #[serde(skip)]
+    pub resource: Resource,
+}
+
+/// The bind group of the render entry points and of the compute entry points.
+pub const RENDER_GROUP: u32 = 0;
+pub const COMPUTE_GROUP: u32 = 1;
+
+/// The table for a module that samples `textures`.
+pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
+    let fragment = || vec!["fs_main"];
+    let mut out = vec![Binding {
+        group: RENDER_GROUP,
+        binding: 0,
+        name: "globals".into(),
+        kind: Kind::Uniform,
+        detail: "Globals".into(),
+        used_by: vec!["vs_main", "fs_main"],
+        resource: Resource::Globals,
+    }];
+    for (i, t) in textures.iter().enumerate() {
+        let next = out.len() as u32;
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: next,
+            name: format!("texture_{i}"),
+            kind: Kind::Texture2d,
+            detail: t.path.clone(),
+            used_by: fragment(),
+            resource: Resource::Texture(i),
+        });
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: next + 1,
+            name: format!("sampler_{i}"),
+            kind: Kind::Sampler,
+            detail: t.wrap.clone(),
+            used_by: fragment(),
+            resource: Resource::Sampler(i),
+        });
+    }
+    let compute = [
+        (
+            "grid",
+            Kind::Uniform,
+            "GridParams",
+            Resource::GridParams,
+            vec!["cs_grid"],
+        ),
+        (
+            "points",
+            Kind::StorageRead,
+            "array<vec4<f32>>",
+            Resource::Points,
+            vec!["cs_points", "cs_atlas"],
+        ),
+        (
+            "results",
+            Kind::StorageReadWrite,
+            "array<vec4<f32>>",
+            Resource::Results,
+            vec!["cs_points", "cs_grid", "cs_atlas"],
+        ),
+    ];
+    for (binding, (name, kind, ty, resource, used_by)) in compute.into_iter().enumerate() {
+        out.push(Binding {
+            group: COMPUTE_GROUP,
+            binding: binding as u32,
+            name: name.into(),
+            kind,
+            detail: ty.into(),
+            used_by,
+            resource,
+        });
+    }
+    out
+}
+
+/// The WGSL declarations of the table.
+pub fn declarations(table: &[Binding]) -> String {
+    let mut out = String::new();
+    for b in table {
+        let (space, ty) = match b.kind {
+            Kind::Uniform => ("<uniform>", b.detail.as_str()),
+            Kind::StorageRead => ("<storage, read>", b.detail.as_str()),
+            Kind::StorageReadWrite => ("<storage, read_write>", b.detail.as_str()),
+            Kind::Texture2d => ("", "texture_2d<f32>"),
+            Kind::Sampler => ("", "sampler"),
+        };
+        let _ = writeln!(
+            out,
+            "@group({}) @binding({}) var{space} {}: {ty};",
+            b.group, b.binding, b.name
+        );
+    }
+    out
+}
+
+/// The header comment that documents the table.
+pub fn describe(table: &[Binding]) -> String {
+    let mut out = String::new();
+    for b in table {
+        let kind = serde_json::to_value(b.kind)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "//   @group({}) @binding({}) {kind} {}: {} (used by {})",
+            b.group,
+            b.binding,
+            b.name,
+            b.detail,
+            b.used_by.join(", ")
+        );
+    }
+    out
+}

@@ -7,6 +7,7 @@
 pub mod actions;
 pub mod complete;
 pub mod format;
+mod member;
 pub mod rename;
 pub mod semantic;
 pub mod walk;

@@ -1,7 +1,8 @@
 //! Completion and signature help. Both read the tokens before the cursor, so
 //! they work on the half-written text an editor sends, whatever the parser
 //! made of it; names come from the checked program, signatures from the
-//! builtins table.
+//! builtins table. After `receiver.`, the members of the receiver's type come
+//! from [`super::member`].
 
 use super::Document;
 use crate::sema::builtins::{

@@ -117,3 +117,49 @@ fn outline() {
         ]
     );
 }
+
+#[test]
+fn the_walker_visits_every_node_in_source_order() {
+    use sdfc::ide::walk::{self, Visitor};
+    use sdfc::syntax::ast::{Arg, AtlasStmt, Expr, ExprKind, Setting};
+    #[derive(Default)]
+    struct Trace(Vec<String>);
+    impl<'a> Visitor<'a> for Trace {
+        fn expr(&mut self, e: &'a Expr) {
+            match &e.kind {
+                ExprKind::Name(n) => self.0.push(n.clone()),
+                ExprKind::Call { callee, .. } => self.0.push(format!("{}(", callee.name)),
+                ExprKind::Method { method, .. } => self.0.push(format!(".{}(", method.name)),
+                ExprKind::Field { field, .. } => self.0.push(format!(".{}", field.name)),
+                _ => {}
+            }
+            walk::walk_expr(self, e);
+        }
+        fn arg(&mut self, a: &'a Arg) {
+            if let Some(n) = &a.name {
+                self.0.push(format!("{}:", n.name));
+            }
+            walk::walk_arg(self, a);
+        }
+        fn setting(&mut self, s: &'a Setting) {
+            self.0.push(format!("{} =", s.name.name));
+            walk::walk_setting(self, s);
+        }
+        fn atlas_stmt(&mut self, s: &'a AtlasStmt) {
+            if let AtlasStmt::Seed { name, .. } = s {
+                self.0.push(format!("seed {}", name.name));
+            }
+            walk::walk_atlas_stmt(self, s);
+        }
+    }
+    let doc = Document::new(SCENE, None);
+    let mut trace = Trace::default();
+    walk::walk_file(&mut trace, &doc.analysis.parsed.file);
+    // Each node before its children, and children in source order (a method's
+    // receiver before its arguments).
+    assert_eq!(
+        trace.0.join(" "),
+        ".translate( sphere( radius ball steps = seed front seed top color = .uv skin \
+         roughness = pi .paint( ball m"
+    );
+}

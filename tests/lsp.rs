@@ -1,5 +1,5 @@
 //! The language server end to end: over an in-memory connection, and the real
-//! `sdfc lsp` binary over stdio.
+//! `sdfc lsp` binary over stdio (in `lsp/stdio.rs`).
 
 use lsp_server::{Connection, Message, Notification, Request, RequestId};
 use serde_json::{json, Value};
@@ -125,6 +125,8 @@ fn stop(mut c: Client, handle: std::thread::JoinHandle<()>) {
 mod actions;
 #[path = "lsp/editing.rs"]
 mod editing;
+#[path = "lsp/stdio.rs"]
+mod stdio;
 
 #[test]
 fn diagnostics_hover_definition_references_symbols() {
@@ -187,39 +189,37 @@ fn diagnostics_hover_definition_references_symbols() {
         .collect();
     assert_eq!(names, ["radius", "ball", "ring", "render"]);
 
-    // Garbage and unknown requests are answered with errors, not crashes.
-    let id = RequestId::from(99);
-    c.conn
-        .sender
-        .send(Message::Request(Request::new(
-            id.clone(),
-            String::from("textDocument/hover"),
-            json!({ "nonsense": true }),
-        )))
-        .unwrap();
-    c.conn
-        .sender
-        .send(Message::Request(Request::new(
-            RequestId::from(100),
-            String::from("sdfc/unknown"),
-            json!({}),
-        )))
-        .unwrap();
-    let mut errors = 0;
-    while errors < 2 {
-        if let Message::Response(r) = c
-            .conn
-            .receiver
-            .recv_timeout(Duration::from_secs(30))
-            .unwrap()
-        {
-            assert!(r.response_result.is_err());
-            errors += 1;
-        }
+    // Garbage and unknown requests are answered with errors, not crashes: every
+    // request the server advertises checks its parameters (InvalidParams), and a
+    // method it does not know is MethodNotFound.
+    for method in [
+        "textDocument/hover",
+        "textDocument/definition",
+        "textDocument/references",
+        "textDocument/documentSymbol",
+        "textDocument/formatting",
+        "textDocument/semanticTokens/full",
+        "textDocument/prepareRename",
+        "textDocument/rename",
+        "textDocument/completion",
+        "textDocument/signatureHelp",
+        "textDocument/codeAction",
+        "textDocument/inlayHint",
+    ] {
+        let e = c
+            .try_request(method, json!({ "nonsense": true }))
+            .unwrap_err();
+        assert_eq!(e.code, -32602, "{method}: {e:?}");
     }
-    c.request("shutdown", json!(null));
-    c.notify("exit", json!(null));
-    handle.join().unwrap();
+    let e = c.try_request("sdfc/unknown", json!({})).unwrap_err();
+    assert_eq!(e.code, -32601, "{e:?}");
+    assert_eq!(e.message, "sdfc does not handle sdfc/unknown");
+    // Only one initialize.
+    let e = c
+        .try_request("initialize", json!({ "capabilities": {} }))
+        .unwrap_err();
+    assert_eq!(e.code, -32600, "{e:?}");
+    stop(c, handle);
 }
 
 #[test]
@@ -246,50 +246,34 @@ fn utf16_positions() {
 }
 
 #[test]
-fn the_real_binary_speaks_lsp_over_stdio() {
-    use std::io::{BufRead, BufReader, Read, Write};
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .arg("lsp")
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stdin = child.stdin.take().unwrap();
-    let mut stdout = BufReader::new(child.stdout.take().unwrap());
-    let mut send = |v: Value| {
-        let body = v.to_string();
-        write!(stdin, "Content-Length: {}\r\n\r\n{body}", body.len()).unwrap();
-        stdin.flush().unwrap();
-    };
-    let mut read = || -> Value {
-        let mut len = 0;
-        loop {
-            let mut line = String::new();
-            stdout.read_line(&mut line).unwrap();
-            if line == "\r\n" {
-                break;
-            }
-            if let Some(n) = line.strip_prefix("Content-Length: ") {
-                len = n.trim().parse().unwrap();
-            }
-        }
-        let mut body = vec![0; len];
-        stdout.read_exact(&mut body).unwrap();
-        serde_json::from_slice(&body).unwrap()
-    };
-    send(
-        json!({ "jsonrpc": "2.0", "id": 1, "method": "initialize", "params": { "capabilities": {} } }),
+fn texture_paths_resolve_in_folders_with_spaces() {
+    // The folder's name is percent-encoded in the URI; the texture beside the scene
+    // must be found (no E-diagnostic), which needs the URI decoded into a path.
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("my scenes #1");
+    std::fs::create_dir_all(folder.join("textures")).unwrap();
+    std::fs::copy(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/examples/textures/bricks.png"),
+        folder.join("textures/bricks.png"),
+    )
+    .unwrap();
+    let uri = url::Url::from_file_path(folder.join("scene.sdf"))
+        .unwrap()
+        .to_string();
+    assert!(uri.contains("my%20scenes%20%231"), "{uri}");
+    let text = "let t = image(\"textures/bricks.png\");\nlet ball = sphere(1);\natlas skin on ball { seed a = [0, 1, 0]; }\nmaterial m { color = t.sample(skin.uv); }\nrender ball.paint(m);\n";
+    let (c, handle) = Client::start();
+    c.notify(
+        "textDocument/didOpen",
+        json!({ "textDocument": { "uri": uri, "languageId": "sdf", "version": 1, "text": text } }),
     );
-    assert!(read()["result"]["capabilities"]["textDocumentSync"].is_number());
-    send(json!({ "jsonrpc": "2.0", "method": "initialized", "params": {} }));
-    send(
-        json!({ "jsonrpc": "2.0", "method": "textDocument/didOpen", "params": { "textDocument": { "uri": URI, "languageId": "sdf", "version": 1, "text": "render sphre(1);" } } }),
-    );
-    let d = read();
-    assert_eq!(d["method"], "textDocument/publishDiagnostics");
-    assert_eq!(d["params"]["diagnostics"][0]["code"], "E0103");
-    send(json!({ "jsonrpc": "2.0", "id": 2, "method": "shutdown", "params": null }));
-    assert_eq!(read()["id"], 2);
-    send(json!({ "jsonrpc": "2.0", "method": "exit", "params": null }));
-    assert!(child.wait().unwrap().success());
+    let d = c.diagnostics();
+    let errors: Vec<&Value> = d["diagnostics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["code"].as_str().is_some_and(|c| c.starts_with('E')))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+    stop(c, handle);
 }

@@ -18,12 +18,28 @@ pub struct Action {
     pub preferred: bool,
 }
 
-/// The fixes of every diagnostic whose primary span touches `range`.
+/// Where a diagnostic's fixes are offered: its primary span, widened to the whole
+/// seed statement for a diagnostic about a seed's written position (such as "snap
+/// seed to surface"), so that the cursor anywhere on the seed finds it.
+fn reach(doc: &Document, d: &Diagnostic) -> Option<Span> {
+    let span = d.span()?;
+    let program = &doc.analysis.program;
+    Some(
+        program
+            .atlases
+            .iter()
+            .flat_map(|a| &a.seeds)
+            .find(|s| s.position_span == span)
+            .map_or(span, |s| program.defs[s.def].item_span.to(span)),
+    )
+}
+
+/// The fixes of every diagnostic whose [`reach`] touches `range`.
 pub fn code_actions(doc: &Document, range: Span) -> Vec<Action> {
     let touches = |s: Span| s.start <= range.end && range.start <= s.end;
     let mut out = Vec::new();
     for d in &doc.analysis.diagnostics {
-        if !d.span().is_some_and(touches) {
+        if !reach(doc, d).is_some_and(touches) {
             continue;
         }
         for f in &d.fixes {

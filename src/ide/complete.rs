@@ -1,14 +1,15 @@
 //! Completion and signature help. Both read the tokens before the cursor, so
 //! they work on the half-written text an editor sends, whatever the parser
 //! made of it; names come from the checked program, signatures from the
-//! builtins table.
+//! builtins table. After `receiver.`, the members of the receiver's type come
+//! from [`super::member`].
 
 use super::Document;
 use crate::sema::builtins::{
     self, Builtin, SettingSpec, ATLAS_SETTINGS, BUILTINS, CONSTANTS, MATERIAL_SETTINGS,
     RENDER_SETTINGS,
 };
-use crate::sema::{AtlasAttr, DefKind};
+use crate::sema::DefKind;
 use crate::span::Span;
 use crate::syntax::lexer::{lex, Token};
 
@@ -43,7 +44,7 @@ pub struct Completion {
 }
 
 impl Completion {
-    fn new(label: impl Into<String>, kind: CompletionKind) -> Completion {
+    pub(super) fn new(label: impl Into<String>, kind: CompletionKind) -> Completion {
         Completion {
             label: label.into(),
             kind,
@@ -53,12 +54,12 @@ impl Completion {
         }
     }
 
-    fn detail(mut self, d: impl Into<String>) -> Completion {
+    pub(super) fn detail(mut self, d: impl Into<String>) -> Completion {
         self.detail = Some(d.into());
         self
     }
 
-    fn doc(mut self, d: impl Into<String>) -> Completion {
+    pub(super) fn doc(mut self, d: impl Into<String>) -> Completion {
         self.documentation = Some(d.into());
         self
     }
@@ -151,16 +152,27 @@ pub(crate) struct Call {
 }
 
 impl Call {
-    /// The parameter the cursor's argument binds to.
+    /// Which parameters the arguments before the cursor's give: the receiver and the
+    /// positional arguments the first ones, named arguments their own.
+    pub fn given(&self) -> Vec<bool> {
+        let positional =
+            self.before.iter().take_while(|a| a.is_none()).count() + usize::from(self.method);
+        self.builtin
+            .params
+            .iter()
+            .enumerate()
+            .map(|(i, p)| i < positional || self.before.iter().flatten().any(|n| n == p.name))
+            .collect()
+    }
+
+    /// The parameter the cursor's argument binds to: the one it names, or else the
+    /// first one not given yet (the next position after positional arguments; after
+    /// named ones, the parameter the user is most likely about to name).
     pub fn active_parameter(&self) -> Option<usize> {
         if let Some(n) = &self.named {
             return self.builtin.param(n).map(|(i, _)| i);
         }
-        if self.before.iter().any(Option::is_some) {
-            return None;
-        }
-        let i = self.before.len() + usize::from(self.method);
-        (i < self.builtin.params.len()).then_some(i)
+        self.given().iter().position(|g| !g)
     }
 }
 
@@ -232,7 +244,7 @@ fn settings(specs: &[SettingSpec]) -> impl Iterator<Item = Completion> + '_ {
     })
 }
 
-fn function(b: &Builtin) -> Completion {
+pub(super) fn function(b: &Builtin) -> Completion {
     Completion::new(b.name, CompletionKind::Function)
         .detail(b.signature())
         .doc(format!("{} — {}", b.kind.title(), b.doc))
@@ -247,22 +259,9 @@ pub fn completions(doc: &Document, offset: usize) -> Vec<Completion> {
     let last = toks.last().map(|t| t.0);
     let block = block(&toks);
 
-    // After `.`: atlas fields, or builtins as methods.
+    // After `.`: what the receiver's type has.
     if last == Some(Token::Dot) {
-        let receiver = toks.len().checked_sub(2).map(|i| toks[i].0);
-        if let Some(Token::Ident(n)) = receiver {
-            if program.lookup(n).is_some_and(|d| d.kind == DefKind::Atlas) {
-                return AtlasAttr::ALL
-                    .iter()
-                    .map(|(_, name, ty, text)| {
-                        Completion::new(*name, CompletionKind::Field)
-                            .detail(format!("field<{ty}>"))
-                            .doc(*text)
-                    })
-                    .collect();
-            }
-        }
-        return BUILTINS.iter().map(function).collect();
+        return super::member::members(doc, &toks);
     }
     // Where a name is being defined, there is nothing to offer.
     if matches!(
@@ -316,10 +315,7 @@ pub fn completions(doc: &Document, offset: usize) -> Vec<Completion> {
     let mut out = Vec::new();
     if let Some(call) = call_at(&toks) {
         if call.at_start {
-            let first_free =
-                call.before.iter().take_while(|a| a.is_none()).count() + usize::from(call.method);
-            for (i, p) in call.builtin.params.iter().enumerate() {
-                let given = i < first_free || call.before.iter().flatten().any(|n| n == p.name);
+            for (p, given) in call.builtin.params.iter().zip(call.given()) {
                 if !given {
                     let detail = match p.default {
                         Some(d) => format!("{}: {} = {}", p.name, p.ty.describe(), d.display()),

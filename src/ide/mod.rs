@@ -7,15 +7,18 @@
 pub mod actions;
 pub mod complete;
 pub mod format;
+mod member;
 pub mod rename;
 pub mod semantic;
+pub mod walk;
 
 use crate::driver::Analysis;
 use crate::sema::builtins::{self, CONSTANTS};
 use crate::sema::{AtlasAttr, DefKind, Value};
 use crate::span::Span;
-use crate::syntax::ast::{AtlasStmt, Expr, ExprKind, Ident, ItemKind};
+use crate::syntax::ast::{AtlasStmt, Expr, ExprKind, Ident, Item, ItemKind, Setting};
 use std::path::Path;
+use walk::Visitor;
 
 /// One analysed document.
 pub struct Document {
@@ -48,84 +51,47 @@ enum Named<'a> {
     Name(&'a str, Span),
 }
 
-fn find_in_expr<'a>(e: &'a Expr, offset: usize, out: &mut Option<Named<'a>>) {
-    if !e.span.contains(offset) {
-        return;
+/// Finds the innermost name at an offset in the items around it.
+struct NameFinder<'a> {
+    offset: usize,
+    found: Option<Named<'a>>,
+}
+
+impl<'a> Visitor<'a> for NameFinder<'a> {
+    fn item(&mut self, item: &'a Item) {
+        if item.span.contains(self.offset) {
+            walk::walk_item(self, item);
+        }
     }
-    match &e.kind {
-        ExprKind::Name(n) => *out = Some(Named::Name(n, e.span)),
-        ExprKind::Call { callee, args } => {
-            if callee.span.contains(offset) {
-                *out = Some(Named::Function(callee));
+
+    fn expr(&mut self, e: &'a Expr) {
+        if !e.span.contains(self.offset) {
+            return;
+        }
+        let at = |i: &Ident| i.span.contains(self.offset);
+        match &e.kind {
+            ExprKind::Name(n) => self.found = Some(Named::Name(n, e.span)),
+            ExprKind::Call { callee, .. } if at(callee) => {
+                self.found = Some(Named::Function(callee))
             }
-            args.iter()
-                .for_each(|a| find_in_expr(&a.value, offset, out));
-        }
-        ExprKind::Method {
-            receiver,
-            method,
-            args,
-        } => {
-            if method.span.contains(offset) {
-                *out = Some(Named::Function(method));
+            ExprKind::Method { method, .. } if at(method) => {
+                self.found = Some(Named::Function(method))
             }
-            find_in_expr(receiver, offset, out);
-            args.iter()
-                .for_each(|a| find_in_expr(&a.value, offset, out));
+            ExprKind::Field { field, .. } if at(field) => self.found = Some(Named::Field(field)),
+            _ => {}
         }
-        ExprKind::Field { receiver, field } => {
-            if field.span.contains(offset) {
-                *out = Some(Named::Field(field));
-            }
-            find_in_expr(receiver, offset, out);
-        }
-        ExprKind::Vector(items) => items.iter().for_each(|i| find_in_expr(i, offset, out)),
-        ExprKind::Paren(inner) | ExprKind::Unary { expr: inner, .. } => {
-            find_in_expr(inner, offset, out)
-        }
-        ExprKind::Binary { lhs, rhs, .. } => {
-            find_in_expr(lhs, offset, out);
-            find_in_expr(rhs, offset, out);
-        }
-        _ => {}
+        // Inner expressions are visited after, and win.
+        walk::walk_expr(self, e);
     }
 }
 
 fn named_at(doc: &Document, offset: usize) -> Option<Named<'_>> {
-    let mut out = None;
-    for item in &doc.analysis.parsed.file.items {
-        if !item.span.contains(offset) {
-            continue;
-        }
-        let exprs: Vec<&Expr> = match &item.kind {
-            ItemKind::Let { value, .. } => vec![value],
-            ItemKind::Atlas { shape, body, .. } => {
-                let mut v = vec![shape];
-                for s in body {
-                    match s {
-                        AtlasStmt::Setting(s) => v.push(&s.value),
-                        AtlasStmt::Seed {
-                            position, tangent, ..
-                        } => {
-                            v.push(position);
-                            v.extend(tangent.iter());
-                        }
-                        _ => {}
-                    }
-                }
-                v
-            }
-            ItemKind::Material { body, .. } => body.iter().map(|s| &s.value).collect(),
-            ItemKind::Render { target, body } => std::iter::once(target)
-                .chain(body.iter().map(|s| &s.value))
-                .collect(),
-            ItemKind::Error { .. } => Vec::new(),
-        };
-        exprs
-            .into_iter()
-            .for_each(|e| find_in_expr(e, offset, &mut out));
-    }
-    out
+    let mut finder = NameFinder {
+        offset,
+        found: None,
+    };
+    walk::walk_file(&mut finder, &doc.analysis.parsed.file);
+    finder.found
 }
 
 /// Hover at a byte offset.
@@ -270,58 +236,72 @@ pub struct Symbol {
     pub children: Vec<Symbol>,
 }
 
-/// The document's outline: items, with seeds and merges under their atlas.
-pub fn symbols(doc: &Document) -> Vec<Symbol> {
-    let mut out = Vec::new();
-    for item in &doc.analysis.parsed.file.items {
-        let leaf = |name: &Ident, kind| Symbol {
+/// Builds the outline: a symbol per item, and per seed and merge under its atlas.
+struct Outline {
+    out: Vec<Symbol>,
+}
+
+impl Symbol {
+    fn leaf(name: &Ident, kind: SymbolKind, span: Span) -> Symbol {
+        Symbol {
             name: name.name.clone(),
             kind,
-            span: item.span,
+            span,
             selection: name.span,
             children: Vec::new(),
-        };
-        match &item.kind {
-            ItemKind::Let { name, .. } => out.push(leaf(name, SymbolKind::Let)),
-            ItemKind::Material { name, .. } => out.push(leaf(name, SymbolKind::Material)),
-            ItemKind::Render { target, .. } => out.push(Symbol {
+        }
+    }
+}
+
+impl<'a> Visitor<'a> for Outline {
+    fn item(&mut self, item: &'a Item) {
+        let symbol = match &item.kind {
+            ItemKind::Let { name, .. } => Symbol::leaf(name, SymbolKind::Let, item.span),
+            ItemKind::Material { name, .. } => Symbol::leaf(name, SymbolKind::Material, item.span),
+            ItemKind::Atlas { name, .. } => Symbol::leaf(name, SymbolKind::Atlas, item.span),
+            ItemKind::Render { target, .. } => Symbol {
                 name: String::from("render"),
                 kind: SymbolKind::Render,
                 span: item.span,
                 selection: target.span,
                 children: Vec::new(),
-            }),
-            ItemKind::Atlas { name, body, .. } => {
-                let mut atlas = leaf(name, SymbolKind::Atlas);
-                for s in body {
-                    match s {
-                        AtlasStmt::Seed { name, span, .. } => atlas.children.push(Symbol {
-                            name: name.name.clone(),
-                            kind: SymbolKind::Seed,
-                            span: *span,
-                            selection: name.span,
-                            children: Vec::new(),
-                        }),
-                        AtlasStmt::Merge { seeds, span } if !seeds.is_empty() => {
-                            atlas.children.push(Symbol {
-                                name: seeds
-                                    .iter()
-                                    .map(|s| s.name.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(" – "),
-                                kind: SymbolKind::Merge,
-                                span: *span,
-                                selection: seeds[0].span.to(seeds[seeds.len() - 1].span),
-                                children: Vec::new(),
-                            })
-                        }
-                        _ => {}
-                    }
-                }
-                out.push(atlas);
-            }
-            ItemKind::Error { .. } => {}
+            },
+            ItemKind::Error { .. } => return,
+        };
+        self.out.push(symbol);
+        walk::walk_item(self, item);
+    }
+
+    fn atlas_stmt(&mut self, stmt: &'a AtlasStmt) {
+        let child = match stmt {
+            AtlasStmt::Seed { name, span, .. } => Symbol::leaf(name, SymbolKind::Seed, *span),
+            AtlasStmt::Merge { seeds, span } if !seeds.is_empty() => Symbol {
+                name: seeds
+                    .iter()
+                    .map(|s| s.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" – "),
+                kind: SymbolKind::Merge,
+                span: *span,
+                selection: seeds[0].span.to(seeds[seeds.len() - 1].span),
+                children: Vec::new(),
+            },
+            _ => return,
+        };
+        if let Some(atlas) = self.out.last_mut() {
+            atlas.children.push(child);
         }
     }
-    out
+
+    /// The outline stops at statements.
+    fn expr(&mut self, _: &'a Expr) {}
+
+    fn setting(&mut self, _: &'a Setting) {}
+}
+
+/// The document's outline: items, with seeds and merges under their atlas.
+pub fn symbols(doc: &Document) -> Vec<Symbol> {
+    let mut outline = Outline { out: Vec::new() };
+    walk::walk_file(&mut outline, &doc.analysis.parsed.file);
+    outline.out
 }

@@ -2,11 +2,12 @@
 //! classified by what it is (a builtin function, a shape, an atlas, a seed, a
 //! named argument, a setting …), in source order.
 
+use super::walk::{self, Visitor};
 use super::Document;
 use crate::sema::builtins::{self, CONSTANTS};
 use crate::sema::DefKind;
 use crate::span::Span;
-use crate::syntax::ast::{Arg, AtlasStmt, Expr, ExprKind, Item, ItemKind, Setting};
+use crate::syntax::ast::{Arg, AtlasStmt, Expr, ExprKind, Setting};
 use crate::syntax::lexer::{lex, Token};
 use std::collections::HashMap;
 
@@ -72,89 +73,45 @@ impl Names {
     fn set(&mut self, span: Span, kind: TokenKind, builtin: bool) {
         self.kinds.insert(span.start, (kind, builtin));
     }
+}
 
-    fn args(&mut self, args: &[Arg]) {
-        for a in args {
-            if let Some(n) = &a.name {
-                self.set(n.span, TokenKind::Parameter, false);
-            }
-            self.expr(&a.value);
+impl<'a> Visitor<'a> for Names {
+    fn arg(&mut self, a: &'a Arg) {
+        if let Some(n) = &a.name {
+            self.set(n.span, TokenKind::Parameter, false);
         }
+        walk::walk_arg(self, a);
     }
 
-    fn expr(&mut self, e: &Expr) {
+    fn expr(&mut self, e: &'a Expr) {
         match &e.kind {
             ExprKind::Name(n) if CONSTANTS.iter().any(|c| c.name == n) => {
                 self.set(e.span, TokenKind::Variable, true);
             }
-            ExprKind::Call { callee, args } => {
-                let builtin = builtins::lookup(&callee.name).is_some();
-                self.set(callee.span, TokenKind::Function, builtin);
-                self.args(args);
+            ExprKind::Call { callee: f, .. } | ExprKind::Method { method: f, .. } => {
+                let builtin = builtins::lookup(&f.name).is_some();
+                self.set(f.span, TokenKind::Function, builtin);
             }
-            ExprKind::Method {
-                receiver,
-                method,
-                args,
-            } => {
-                self.expr(receiver);
-                let builtin = builtins::lookup(&method.name).is_some();
-                self.set(method.span, TokenKind::Function, builtin);
-                self.args(args);
-            }
-            ExprKind::Field { receiver, field } => {
-                self.expr(receiver);
-                self.set(field.span, TokenKind::Property, false);
-            }
-            ExprKind::Vector(items) => items.iter().for_each(|i| self.expr(i)),
-            ExprKind::Paren(inner) | ExprKind::Unary { expr: inner, .. } => self.expr(inner),
-            ExprKind::Binary { lhs, rhs, .. } => {
-                self.expr(lhs);
-                self.expr(rhs);
-            }
+            ExprKind::Field { field, .. } => self.set(field.span, TokenKind::Property, false),
             _ => {}
         }
+        walk::walk_expr(self, e);
     }
 
-    fn setting(&mut self, s: &Setting) {
+    fn setting(&mut self, s: &'a Setting) {
         self.set(s.name.span, TokenKind::Property, false);
-        self.expr(&s.value);
+        walk::walk_setting(self, s);
     }
 
-    fn item(&mut self, item: &Item) {
-        match &item.kind {
-            ItemKind::Let { value, .. } => self.expr(value),
-            ItemKind::Atlas { shape, body, .. } => {
-                self.expr(shape);
-                for s in body {
-                    match s {
-                        AtlasStmt::Setting(s) => self.setting(s),
-                        AtlasStmt::Seed {
-                            name,
-                            position,
-                            tangent,
-                            ..
-                        } => {
-                            self.set(name.span, TokenKind::Seed, false);
-                            self.expr(position);
-                            if let Some(t) = tangent {
-                                self.expr(t);
-                            }
-                        }
-                        AtlasStmt::Merge { seeds, .. } => seeds
-                            .iter()
-                            .for_each(|s| self.set(s.span, TokenKind::Seed, false)),
-                        AtlasStmt::Error(_) => {}
-                    }
-                }
-            }
-            ItemKind::Material { body, .. } => body.iter().for_each(|s| self.setting(s)),
-            ItemKind::Render { target, body } => {
-                self.expr(target);
-                body.iter().for_each(|s| self.setting(s));
-            }
-            ItemKind::Error { .. } => {}
+    fn atlas_stmt(&mut self, stmt: &'a AtlasStmt) {
+        match stmt {
+            AtlasStmt::Seed { name, .. } => self.set(name.span, TokenKind::Seed, false),
+            AtlasStmt::Merge { seeds, .. } => seeds
+                .iter()
+                .for_each(|s| self.set(s.span, TokenKind::Seed, false)),
+            _ => {}
         }
+        walk::walk_atlas_stmt(self, stmt);
     }
 }
 
@@ -171,12 +128,7 @@ fn def_kind(kind: DefKind) -> TokenKind {
 pub fn semantic_tokens(doc: &Document) -> Vec<SemanticToken> {
     let program = &doc.analysis.program;
     let mut names = Names::default();
-    doc.analysis
-        .parsed
-        .file
-        .items
-        .iter()
-        .for_each(|i| names.item(i));
+    walk::walk_file(&mut names, &doc.analysis.parsed.file);
     // Resolved names win over what the syntax says.
     let mut resolved: HashMap<usize, (TokenKind, bool)> = HashMap::new();
     for d in &program.defs {

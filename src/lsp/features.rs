@@ -1,24 +1,14 @@
 //! Formatting, semantic tokens, rename, completion and signature help: thin
 //! conversions between the protocol and [`crate::ide`].
 
-use super::{to_offset, to_position, to_range, Open};
+use super::dispatch::Failure;
+use super::{at, to_position, to_range, Docs, Open};
 use crate::ide::complete::{self, CompletionKind};
 use crate::ide::format;
 use crate::ide::rename;
 use crate::ide::semantic::{self, TokenKind};
-use lsp_server::{ErrorCode, Request, Response};
 use lsp_types as lsp;
 use std::collections::HashMap;
-
-/// The requests answered here.
-pub(super) const METHODS: &[&str] = &[
-    "textDocument/formatting",
-    "textDocument/semanticTokens/full",
-    "textDocument/prepareRename",
-    "textDocument/rename",
-    "textDocument/completion",
-    "textDocument/signatureHelp",
-];
 
 fn token_type(kind: TokenKind) -> lsp::SemanticTokenType {
     match kind {
@@ -78,7 +68,7 @@ fn utf16_len(s: &str) -> u32 {
 
 /// Semantic tokens, split at line breaks (clients do not all take multi-line
 /// tokens) and delta-encoded.
-fn semantic_tokens(o: &Open) -> lsp::SemanticTokens {
+fn encode_tokens(o: &Open) -> lsp::SemanticTokens {
     let text = &o.doc.text;
     let mut data = Vec::new();
     let (mut line, mut col) = (0u32, 0u32);
@@ -139,157 +129,118 @@ fn markdown(value: String) -> lsp::Documentation {
     })
 }
 
-/// Answers one of [`METHODS`].
-pub(super) fn answer(docs: &HashMap<String, Open>, req: Request) -> Response {
-    let id = req.id.clone();
-    let failed = |message: String| {
-        Response::new_err(req.id.clone(), ErrorCode::RequestFailed as i32, message)
+/// The one formatting edit, or none (a document with syntax errors is left alone).
+pub(super) fn formatting(
+    docs: &Docs,
+    p: lsp::DocumentFormattingParams,
+) -> Result<Option<Vec<lsp::TextEdit>>, Failure> {
+    let edits = docs
+        .get(p.text_document.uri.as_str())
+        .and_then(|o| {
+            let text = &o.doc.text;
+            let formatted = format::format(text).ok()?;
+            let (span, new_text) = format::minimal_edit(text, &formatted)?;
+            Some(vec![lsp::TextEdit {
+                range: to_range(&o.index, text, span),
+                new_text,
+            }])
+        })
+        .unwrap_or_default();
+    Ok(Some(edits))
+}
+
+pub(super) fn semantic_tokens(
+    docs: &Docs,
+    p: lsp::SemanticTokensParams,
+) -> Result<Option<lsp::SemanticTokensResult>, Failure> {
+    let tokens = docs.get(p.text_document.uri.as_str()).map(encode_tokens);
+    Ok(tokens.map(lsp::SemanticTokensResult::Tokens))
+}
+
+pub(super) fn prepare_rename(
+    docs: &Docs,
+    p: lsp::TextDocumentPositionParams,
+) -> Result<Option<lsp::PrepareRenameResponse>, Failure> {
+    let Some((o, offset)) = at(docs, &p) else {
+        return Ok(None);
     };
-    let bad = |e: serde_json::Error| {
-        Response::new_err(
-            req.id.clone(),
-            ErrorCode::InvalidParams as i32,
-            e.to_string(),
-        )
-    };
-    let at = |p: &lsp::TextDocumentPositionParams| -> Option<(&Open, usize)> {
-        let o = docs.get(p.text_document.uri.as_str())?;
-        Some((o, to_offset(&o.index, p.position)?))
-    };
-    let params = req.params.clone();
-    match req.method.as_str() {
-        "textDocument/formatting" => {
-            let p: lsp::DocumentFormattingParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            // A document with syntax errors is left alone: no edits.
-            let edits: Vec<lsp::TextEdit> = docs
-                .get(p.text_document.uri.as_str())
-                .and_then(|o| {
-                    let text = &o.doc.text;
-                    let formatted = format::format(text).ok()?;
-                    let (span, new_text) = format::minimal_edit(text, &formatted)?;
-                    Some(vec![lsp::TextEdit {
-                        range: to_range(&o.index, text, span),
-                        new_text,
-                    }])
-                })
-                .unwrap_or_default();
-            Response::new_ok(id, edits)
-        }
-        "textDocument/semanticTokens/full" => {
-            let p: lsp::SemanticTokensParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            let tokens = docs.get(p.text_document.uri.as_str()).map(semantic_tokens);
-            Response::new_ok(id, tokens.map(lsp::SemanticTokensResult::Tokens))
-        }
-        "textDocument/prepareRename" => {
-            let p: lsp::TextDocumentPositionParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            let Some((o, offset)) = at(&p) else {
-                return Response::new_ok(id, Option::<lsp::PrepareRenameResponse>::None);
-            };
-            match rename::prepare_rename(&o.doc, offset) {
-                Ok((span, placeholder)) => Response::new_ok(
-                    id,
-                    lsp::PrepareRenameResponse::RangeWithPlaceholder {
-                        range: to_range(&o.index, &o.doc.text, span),
-                        placeholder,
-                    },
-                ),
-                Err(e) => failed(e.0),
-            }
-        }
-        "textDocument/rename" => {
-            let p: lsp::RenameParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            let Some((o, offset)) = at(&p.text_document_position) else {
-                return failed(String::from("the document is not open"));
-            };
-            match rename::rename(&o.doc, offset, &p.new_name) {
-                Ok(spans) => {
-                    let edits = spans
-                        .into_iter()
-                        .map(|s| lsp::TextEdit {
-                            range: to_range(&o.index, &o.doc.text, s),
-                            new_text: p.new_name.clone(),
-                        })
-                        .collect();
-                    let uri = p.text_document_position.text_document.uri;
-                    Response::new_ok(
-                        id,
-                        lsp::WorkspaceEdit {
-                            changes: Some(HashMap::from([(uri, edits)])),
-                            ..Default::default()
-                        },
-                    )
-                }
-                Err(e) => failed(e.0),
-            }
-        }
-        "textDocument/completion" => {
-            let p: lsp::CompletionParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            let items: Vec<lsp::CompletionItem> = at(&p.text_document_position)
-                .map(|(o, offset)| complete::completions(&o.doc, offset))
-                .unwrap_or_default()
-                .into_iter()
-                .map(|c| lsp::CompletionItem {
-                    label: c.label,
-                    kind: Some(completion_kind(c.kind)),
-                    detail: c.detail,
-                    documentation: c.documentation.map(markdown),
-                    insert_text: c.insert_text,
-                    ..Default::default()
+    let (span, placeholder) =
+        rename::prepare_rename(&o.doc, offset).map_err(|e| Failure::failed(e.0))?;
+    Ok(Some(lsp::PrepareRenameResponse::RangeWithPlaceholder {
+        range: to_range(&o.index, &o.doc.text, span),
+        placeholder,
+    }))
+}
+
+pub(super) fn rename(
+    docs: &Docs,
+    p: lsp::RenameParams,
+) -> Result<Option<lsp::WorkspaceEdit>, Failure> {
+    let pos = p.text_document_position;
+    let (o, offset) = at(docs, &pos).ok_or_else(|| Failure::failed("the document is not open"))?;
+    let spans = rename::rename(&o.doc, offset, &p.new_name).map_err(|e| Failure::failed(e.0))?;
+    let edits = spans
+        .into_iter()
+        .map(|s| lsp::TextEdit {
+            range: to_range(&o.index, &o.doc.text, s),
+            new_text: p.new_name.clone(),
+        })
+        .collect();
+    Ok(Some(lsp::WorkspaceEdit {
+        changes: Some(HashMap::from([(pos.text_document.uri, edits)])),
+        ..Default::default()
+    }))
+}
+
+pub(super) fn completion(
+    docs: &Docs,
+    p: lsp::CompletionParams,
+) -> Result<Option<lsp::CompletionResponse>, Failure> {
+    let items: Vec<lsp::CompletionItem> = at(docs, &p.text_document_position)
+        .map(|(o, offset)| complete::completions(&o.doc, offset))
+        .unwrap_or_default()
+        .into_iter()
+        .map(|c| lsp::CompletionItem {
+            label: c.label,
+            kind: Some(completion_kind(c.kind)),
+            detail: c.detail,
+            documentation: c.documentation.map(markdown),
+            insert_text: c.insert_text,
+            ..Default::default()
+        })
+        .collect();
+    Ok(Some(lsp::CompletionResponse::Array(items)))
+}
+
+pub(super) fn signature_help(
+    docs: &Docs,
+    p: lsp::SignatureHelpParams,
+) -> Result<Option<lsp::SignatureHelp>, Failure> {
+    Ok(
+        at(docs, &p.text_document_position_params).and_then(|(o, offset)| {
+            let h = complete::signature_help(&o.doc, offset)?;
+            let parameters = h
+                .parameters
+                .iter()
+                .map(|&(s, e)| lsp::ParameterInformation {
+                    label: lsp::ParameterLabel::LabelOffsets([
+                        utf16_len(&h.label[..s]),
+                        utf16_len(&h.label[..e]),
+                    ]),
+                    documentation: None,
                 })
                 .collect();
-            Response::new_ok(id, lsp::CompletionResponse::Array(items))
-        }
-        "textDocument/signatureHelp" => {
-            let p: lsp::SignatureHelpParams = match serde_json::from_value(params) {
-                Ok(p) => p,
-                Err(e) => return bad(e),
-            };
-            let help = at(&p.text_document_position_params).and_then(|(o, offset)| {
-                let h = complete::signature_help(&o.doc, offset)?;
-                let parameters = h
-                    .parameters
-                    .iter()
-                    .map(|&(s, e)| lsp::ParameterInformation {
-                        label: lsp::ParameterLabel::LabelOffsets([
-                            utf16_len(&h.label[..s]),
-                            utf16_len(&h.label[..e]),
-                        ]),
-                        documentation: None,
-                    })
-                    .collect();
-                let active = h.active_parameter.map(|a| a as u32);
-                Some(lsp::SignatureHelp {
-                    signatures: vec![lsp::SignatureInformation {
-                        label: h.label,
-                        documentation: Some(markdown(h.documentation)),
-                        parameters: Some(parameters),
-                        active_parameter: active,
-                    }],
-                    active_signature: Some(0),
+            let active = h.active_parameter.map(|a| a as u32);
+            Some(lsp::SignatureHelp {
+                signatures: vec![lsp::SignatureInformation {
+                    label: h.label,
+                    documentation: Some(markdown(h.documentation)),
+                    parameters: Some(parameters),
                     active_parameter: active,
-                })
-            });
-            Response::new_ok(id, help)
-        }
-        other => Response::new_err(
-            id,
-            ErrorCode::MethodNotFound as i32,
-            format!("sdfc does not handle {other}"),
-        ),
-    }
+                }],
+                active_signature: Some(0),
+                active_parameter: active,
+            })
+        }),
+    )
 }

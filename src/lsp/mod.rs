@@ -3,23 +3,32 @@
 //! Full-document sync; every change re-analyses the document and publishes its
 //! diagnostics tagged with the document version. Requests are answered against
 //! the latest text. Positions are UTF-16, converted with `line-index`.
-//! Formatting, semantic tokens, rename, completion and signature help are in
-//! [`features`]; code actions and inlay hints in [`actions`].
+//! The loop, the lifecycle and cancellation are in [`server`]; typed dispatch in
+//! [`dispatch`]; formatting, semantic tokens, rename, completion and signature help
+//! in [`features`]; code actions and inlay hints in [`actions`].
 
 mod actions;
+mod dispatch;
 mod features;
+mod server;
+
+pub use server::serve;
 
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ide::{self, Document, SymbolKind};
 use crate::span::Span;
+use dispatch::{Failure, RequestDispatcher};
 use line_index::{LineCol, LineIndex, TextSize, WideEncoding, WideLineCol};
-use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
+use lsp_server::{Connection, Message, Notification, Request, Response};
 use lsp_types as lsp;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::str::FromStr;
 
 type Error = Box<dyn std::error::Error + Send + Sync>;
+
+/// The open documents, by URI.
+type Docs = HashMap<String, Open>;
 
 struct Open {
     version: i32,
@@ -63,10 +72,11 @@ fn to_offset(index: &LineIndex, p: lsp::Position) -> Option<usize> {
     index.offset(lc).map(|o| u32::from(o) as usize)
 }
 
-/// The folder of a `file:` URI, for texture paths.
+/// The folder of a `file:` URI, for texture paths: percent-decoded (a folder named
+/// `my scenes` arrives as `my%20scenes`), by the rules of the platform's paths.
 fn base_dir(uri: &lsp::Uri) -> Option<PathBuf> {
-    let path = uri.as_str().strip_prefix("file://")?;
-    PathBuf::from(path).parent().map(PathBuf::from)
+    let path = url::Url::parse(uri.as_str()).ok()?.to_file_path().ok()?;
+    path.parent().map(PathBuf::from)
 }
 
 fn convert(uri: &lsp::Uri, o: &Open, d: &Diagnostic) -> lsp::Diagnostic {
@@ -126,7 +136,9 @@ fn publish(conn: &Connection, uri: &lsp::Uri, o: Option<&Open>) -> Result<(), Er
         version,
     };
     conn.sender.send(Message::Notification(Notification::new(
-        String::from("textDocument/publishDiagnostics"),
+        String::from(
+            <lsp::notification::PublishDiagnostics as lsp::notification::Notification>::METHOD,
+        ),
         params,
     )))?;
     Ok(())
@@ -148,62 +160,15 @@ fn capabilities() -> lsp::ServerCapabilities {
     caps
 }
 
-/// Serves one client on a connection until it exits.
-///
-/// Messages are taken in batches: everything already waiting when the server is free.
-/// Each document changed in a batch is analysed once, at its latest text, and its
-/// diagnostics are published with that version; requests are then answered against
-/// that text, except those the client cancelled (`$/cancelRequest`), which get
-/// `RequestCancelled` without being computed.
-pub fn serve(conn: Connection) -> Result<(), Error> {
-    let caps = serde_json::to_value(capabilities())?;
-    conn.initialize(caps)?;
-    let mut docs: HashMap<String, Open> = HashMap::new();
-    while let Ok(first) = conn.receiver.recv() {
-        let mut batch = vec![first];
-        while let Ok(m) = conn.receiver.try_recv() {
-            batch.push(m);
-        }
-        let mut cancelled = std::collections::HashSet::new();
-        let mut changed: Vec<(lsp::Uri, String, i32)> = Vec::new();
-        let mut requests = Vec::new();
-        for msg in batch {
-            match msg {
-                Message::Request(req) => requests.push(req),
-                Message::Notification(n) if n.method == "$/cancelRequest" => {
-                    if let Ok(p) = serde_json::from_value::<lsp::CancelParams>(n.params) {
-                        cancelled.insert(match p.id {
-                            lsp::NumberOrString::Number(i) => lsp_server::RequestId::from(i),
-                            lsp::NumberOrString::String(s) => lsp_server::RequestId::from(s),
-                        });
-                    }
-                }
-                Message::Notification(n) => notify(&conn, &mut docs, &mut changed, n)?,
-                Message::Response(_) => {}
-            }
-        }
-        for (uri, text, version) in changed {
-            let o = open(&uri, text, version);
-            publish(&conn, &uri, Some(&o))?;
-            docs.insert(uri.as_str().to_string(), o);
-        }
-        for req in requests {
-            if conn.handle_shutdown(&req)? {
-                return Ok(());
-            }
-            let resp = if cancelled.contains(&req.id) {
-                Response::new_err(
-                    req.id,
-                    ErrorCode::RequestCanceled as i32,
-                    String::from("cancelled by the client"),
-                )
-            } else {
-                answer(&docs, req)
-            };
-            conn.sender.send(Message::Response(resp))?;
-        }
+/// The reply to `initialize`.
+fn initialize_result() -> lsp::InitializeResult {
+    lsp::InitializeResult {
+        capabilities: capabilities(),
+        server_info: Some(lsp::ServerInfo {
+            name: String::from("sdfc"),
+            version: Some(String::from(env!("CARGO_PKG_VERSION"))),
+        }),
     }
-    Ok(())
 }
 
 fn open(uri: &lsp::Uri, text: String, version: i32) -> Open {
@@ -216,153 +181,86 @@ fn open(uri: &lsp::Uri, text: String, version: i32) -> Open {
     }
 }
 
-/// Applies a notification. Opened and changed texts are queued in `changed` (the latest
-/// per document) to be analysed once the batch is read.
-fn notify(
-    conn: &Connection,
-    docs: &mut HashMap<String, Open>,
-    changed: &mut Vec<(lsp::Uri, String, i32)>,
-    n: Notification,
-) -> Result<(), Error> {
-    let mut queue = |uri: lsp::Uri, text: String, version: i32| {
-        changed.retain(|(u, _, _)| u != &uri);
-        changed.push((uri, text, version));
-    };
-    match n.method.as_str() {
-        "textDocument/didOpen" => {
-            // Malformed notifications are ignored: there is no one to answer.
-            let Ok(p) = serde_json::from_value::<lsp::DidOpenTextDocumentParams>(n.params) else {
-                return Ok(());
-            };
-            queue(
-                p.text_document.uri,
-                p.text_document.text,
-                p.text_document.version,
-            );
-        }
-        "textDocument/didChange" => {
-            // Malformed notifications are ignored: there is no one to answer.
-            let Ok(p) = serde_json::from_value::<lsp::DidChangeTextDocumentParams>(n.params) else {
-                return Ok(());
-            };
-            // Full sync: the last change holds the whole text.
-            if let Some(change) = p.content_changes.into_iter().last() {
-                queue(p.text_document.uri, change.text, p.text_document.version);
-            }
-        }
-        "textDocument/didClose" => {
-            // Malformed notifications are ignored: there is no one to answer.
-            let Ok(p) = serde_json::from_value::<lsp::DidCloseTextDocumentParams>(n.params) else {
-                return Ok(());
-            };
-            changed.retain(|(u, _, _)| u != &p.text_document.uri);
-            docs.remove(p.text_document.uri.as_str());
-            publish(conn, &p.text_document.uri, None)?;
-        }
-        _ => {}
-    }
-    Ok(())
+/// Answers a request against the latest texts: every request the server handles, by
+/// its `lsp_types` type.
+fn answer(docs: &Docs, req: Request) -> Response {
+    use lsp::request::*;
+    RequestDispatcher::new(req, docs)
+        .on::<HoverRequest>(hover)
+        .on::<GotoDefinition>(definition)
+        .on::<References>(references)
+        .on::<DocumentSymbolRequest>(document_symbols)
+        .on::<Formatting>(features::formatting)
+        .on::<SemanticTokensFullRequest>(features::semantic_tokens)
+        .on::<PrepareRenameRequest>(features::prepare_rename)
+        .on::<Rename>(features::rename)
+        .on::<Completion>(features::completion)
+        .on::<SignatureHelpRequest>(features::signature_help)
+        .on::<CodeActionRequest>(actions::code_actions)
+        .on::<InlayHintRequest>(actions::inlay_hints)
+        .finish()
 }
 
-fn respond<T: serde::Serialize>(id: lsp_server::RequestId, value: T) -> Response {
-    Response::new_ok(id, value)
+/// The open document at a position, and the position as a byte offset.
+fn at<'a>(docs: &'a Docs, p: &lsp::TextDocumentPositionParams) -> Option<(&'a Open, usize)> {
+    let o = docs.get(p.text_document.uri.as_str())?;
+    Some((o, to_offset(&o.index, p.position)?))
 }
 
-/// Answers a request against the latest text; malformed or unknown requests get errors.
-fn answer(docs: &HashMap<String, Open>, req: Request) -> Response {
-    let id = req.id.clone();
-    let at = |params: &lsp::TextDocumentPositionParams| -> Option<(&Open, usize)> {
-        let o = docs.get(params.text_document.uri.as_str())?;
-        let offset = to_offset(&o.index, params.position)?;
-        Some((o, offset))
-    };
-    let bad = |e: serde_json::Error| {
-        Response::new_err(
-            req.id.clone(),
-            ErrorCode::InvalidParams as i32,
-            e.to_string(),
-        )
-    };
-    match req.method.as_str() {
-        "textDocument/hover" => {
-            match serde_json::from_value::<lsp::HoverParams>(req.params.clone()) {
-                Ok(p) => {
-                    let h = at(&p.text_document_position_params).and_then(|(o, offset)| {
-                        let h = ide::hover(&o.doc, offset)?;
-                        Some(lsp::Hover {
-                            contents: lsp::HoverContents::Markup(lsp::MarkupContent {
-                                kind: lsp::MarkupKind::Markdown,
-                                value: h.markdown,
-                            }),
-                            range: Some(to_range(&o.index, &o.doc.text, h.span)),
-                        })
-                    });
-                    respond(id, h)
-                }
-                Err(e) => bad(e),
-            }
-        }
-        "textDocument/definition" => {
-            match serde_json::from_value::<lsp::GotoDefinitionParams>(req.params.clone()) {
-                Ok(p) => {
-                    let uri = p.text_document_position_params.text_document.uri.clone();
-                    let loc = at(&p.text_document_position_params).and_then(|(o, offset)| {
-                        let span = ide::definition(&o.doc, offset)?;
-                        Some(lsp::GotoDefinitionResponse::Scalar(lsp::Location {
-                            uri,
-                            range: to_range(&o.index, &o.doc.text, span),
-                        }))
-                    });
-                    respond(id, loc)
-                }
-                Err(e) => bad(e),
-            }
-        }
-        "textDocument/references" => {
-            match serde_json::from_value::<lsp::ReferenceParams>(req.params.clone()) {
-                Ok(p) => {
-                    let uri = p.text_document_position.text_document.uri.clone();
-                    let locs: Vec<lsp::Location> = at(&p.text_document_position)
-                        .map(|(o, offset)| {
-                            ide::references(&o.doc, offset, p.context.include_declaration)
-                                .into_iter()
-                                .map(|s| lsp::Location {
-                                    uri: uri.clone(),
-                                    range: to_range(&o.index, &o.doc.text, s),
-                                })
-                                .collect()
-                        })
-                        .unwrap_or_default();
-                    respond(id, locs)
-                }
-                Err(e) => bad(e),
-            }
-        }
-        "textDocument/documentSymbol" => {
-            match serde_json::from_value::<lsp::DocumentSymbolParams>(req.params.clone()) {
-                Ok(p) => {
-                    let symbols = docs
-                        .get(p.text_document.uri.as_str())
-                        .map(|o| {
-                            ide::symbols(&o.doc)
-                                .iter()
-                                .map(|s| symbol(o, s))
-                                .collect::<Vec<_>>()
-                        })
-                        .unwrap_or_default();
-                    respond(id, lsp::DocumentSymbolResponse::Nested(symbols))
-                }
-                Err(e) => bad(e),
-            }
-        }
-        m if features::METHODS.contains(&m) => features::answer(docs, req.clone()),
-        m if actions::METHODS.contains(&m) => actions::answer(docs, req.clone()),
-        other => Response::new_err(
-            id,
-            ErrorCode::MethodNotFound as i32,
-            format!("sdfc does not handle {other}"),
-        ),
-    }
+fn hover(docs: &Docs, p: lsp::HoverParams) -> Result<Option<lsp::Hover>, Failure> {
+    Ok(
+        at(docs, &p.text_document_position_params).and_then(|(o, offset)| {
+            let h = ide::hover(&o.doc, offset)?;
+            Some(lsp::Hover {
+                contents: lsp::HoverContents::Markup(lsp::MarkupContent {
+                    kind: lsp::MarkupKind::Markdown,
+                    value: h.markdown,
+                }),
+                range: Some(to_range(&o.index, &o.doc.text, h.span)),
+            })
+        }),
+    )
+}
+
+fn definition(
+    docs: &Docs,
+    p: lsp::GotoDefinitionParams,
+) -> Result<Option<lsp::GotoDefinitionResponse>, Failure> {
+    let pos = p.text_document_position_params;
+    Ok(at(docs, &pos).and_then(|(o, offset)| {
+        let span = ide::definition(&o.doc, offset)?;
+        Some(lsp::GotoDefinitionResponse::Scalar(lsp::Location {
+            uri: pos.text_document.uri.clone(),
+            range: to_range(&o.index, &o.doc.text, span),
+        }))
+    }))
+}
+
+fn references(docs: &Docs, p: lsp::ReferenceParams) -> Result<Option<Vec<lsp::Location>>, Failure> {
+    let pos = p.text_document_position;
+    let locs = at(docs, &pos)
+        .map(|(o, offset)| {
+            ide::references(&o.doc, offset, p.context.include_declaration)
+                .into_iter()
+                .map(|s| lsp::Location {
+                    uri: pos.text_document.uri.clone(),
+                    range: to_range(&o.index, &o.doc.text, s),
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(Some(locs))
+}
+
+fn document_symbols(
+    docs: &Docs,
+    p: lsp::DocumentSymbolParams,
+) -> Result<Option<lsp::DocumentSymbolResponse>, Failure> {
+    let symbols = docs
+        .get(p.text_document.uri.as_str())
+        .map(|o| ide::symbols(&o.doc).iter().map(|s| symbol(o, s)).collect())
+        .unwrap_or_default();
+    Ok(Some(lsp::DocumentSymbolResponse::Nested(symbols)))
 }
 
 #[allow(deprecated)]
@@ -392,6 +290,7 @@ fn symbol(o: &Open, s: &ide::Symbol) -> lsp::DocumentSymbol {
 pub fn run_stdio() -> Result<(), Error> {
     let (conn, io) = Connection::stdio();
     serve(conn)?;
+    // The server has let go of the connection, so the writer can finish.
     io.join()?;
     Ok(())
 }

@@ -87,6 +87,39 @@ render ball;
 }
 
 #[test]
+fn snap_seed_to_surface_is_offered_anywhere_on_the_seed() {
+    let text = "let ball = sphere(1);
+atlas skin on ball {
+    seed top = [0.3, 1.1, 0.2] tangent [1, 0, 0];
+    steps = 12;
+}
+render ball;
+";
+    let doc = Document::new(text, None);
+    let titles = |needle: &str| -> Vec<String> {
+        let at = text.find(needle).unwrap();
+        actions::code_actions(&doc, Span::new(at, at))
+            .into_iter()
+            .map(|a| a.title)
+            .collect()
+    };
+    // On the keyword, the name, the `=`, the tangent and the `;`: the seed's fix.
+    for needle in [
+        "seed top",
+        "top =",
+        "= [0.3",
+        "tangent",
+        "[1, 0, 0]",
+        ";\n    steps",
+    ] {
+        assert_eq!(titles(needle), ["snap seed to surface"], "at {needle:?}");
+    }
+    // Not on the next statement, nor on the atlas line.
+    assert!(titles("steps").is_empty());
+    assert!(titles("atlas").is_empty());
+}
+
+#[test]
 fn inlay_hints_show_folded_values_and_merge_lengths() {
     // Seeds on the plane y = 0 (top of a thin box) one unit apart: d_M = 1 exactly.
     let text = "let half = 4 / 2;

@@ -2,7 +2,7 @@
 
 use super::at;
 use sdfc::ide::complete::{completions, signature_help, CompletionKind};
-use sdfc::sema::builtins::BUILTINS;
+use sdfc::sema::builtins::{PTy, BUILTINS};
 
 const PRELUDE: &str = "let radius = 0.5;
 let ball = sphere(radius);
@@ -30,10 +30,75 @@ fn atlas_fields_after_a_dot() {
         labels("material m { color = [skin.u$0, 0]; }"),
         ["uv", "distance", "status", "transport", "seed"]
     );
-    // After any other value: builtins, as methods.
-    let methods = labels("let b = ball.$0");
-    assert_eq!(methods.len(), BUILTINS.len());
-    assert!(methods.contains(&String::from("translate")));
+}
+
+/// The builtins offered after the `.`, by name.
+fn methods(marked: &str) -> Vec<String> {
+    let (doc, offset) = at(&format!("{PRELUDE}{marked}"));
+    completions(&doc, offset)
+        .into_iter()
+        .filter(|c| c.kind == CompletionKind::Function)
+        .map(|c| c.label)
+        .collect()
+}
+
+#[test]
+fn members_follow_the_receivers_type() {
+    // A shape: exactly the builtins that take a shape first, none of the others.
+    let shape = methods("let b = ball.$0");
+    let takes_a_shape: Vec<&str> = BUILTINS
+        .iter()
+        .filter(|b| b.params.first().is_some_and(|p| p.ty == PTy::Shape))
+        .map(|b| b.name)
+        .collect();
+    assert_eq!(shape, takes_a_shape);
+    for unrelated in ["sphere", "orbit", "sin", "sample", "image"] {
+        assert!(!shape.iter().any(|m| m == unrelated), "{unrelated}");
+    }
+    assert!(labels("let b = ball.$0")
+        .iter()
+        .all(|l| BUILTINS.iter().any(|b| b.name == l)));
+    // The receiver may be any expression, typed by the checker, and half-typed text
+    // after the cursor does not matter.
+    assert_eq!(methods("let b = sphere(1).translate([0, 1, 0]).$0"), shape);
+    assert_eq!(methods("let b = (ball | ball).rot$0 nonsense ]"), shape);
+    // A texture: `sample`.
+    assert_eq!(
+        labels("let t = image(\"a.png\");\nmaterial m { color = t.$0 }"),
+        ["sample"]
+    );
+    // A vector: its swizzles and the math on it.
+    let v = labels("let v = [1, 2, 3];\nlet w = v.$0");
+    for l in [
+        "x",
+        "y",
+        "z",
+        "xy",
+        "xyz",
+        "rgb",
+        "length",
+        "normalize",
+        "cross",
+        "sin",
+    ] {
+        assert!(v.iter().any(|m| m == l), "no {l} in {v:?}");
+    }
+    for l in ["w", "a", "translate", "sphere", "checker"] {
+        assert!(!v.iter().any(|m| m == l), "{l} in {v:?}");
+    }
+    // A surface field: swizzles, and only the builtins that take fields.
+    let uv = labels("material m { color = skin.uv.$0 }");
+    for l in ["x", "y", "xy", "checker", "grid", "sin"] {
+        assert!(uv.iter().any(|m| m == l), "no {l} in {uv:?}");
+    }
+    for l in ["z", "cross", "translate"] {
+        assert!(!uv.iter().any(|m| m == l), "{l} in {uv:?}");
+    }
+    // A number: math; a material or an unknown name: nothing.
+    let f = methods("let f = radius.$0");
+    assert!(f.contains(&String::from("sqrt")) && !f.contains(&String::from("sphere")));
+    assert!(labels("material m { color = [1, 0, 0]; }\nlet x = m.$0").is_empty());
+    assert!(labels("let x = nothing.$0").is_empty());
 }
 
 #[test]
@@ -171,11 +236,33 @@ fn signature_help_tracks_the_active_parameter() {
         signature("let t = torus(sin(1), $0"),
         "torus(major: float = 1, [minor: float = 0.25]) -> shape"
     );
-    // A positional argument after a named one has no parameter; outside a call, no help.
+    // After named arguments: the first parameter not given yet.
     assert_eq!(
         signature("let t = torus(minor: 1, $0"),
-        "torus(major: float = 1, minor: float = 0.25) -> shape"
+        "torus([major: float = 1], minor: float = 0.25) -> shape"
     );
+    assert_eq!(
+        signature("let c = cylinder(radius: 0.2, $0"),
+        "cylinder(radius: float = 0.5, [height: float = 1]) -> shape"
+    );
+    assert_eq!(
+        signature("let c = capsule(a: [0, 0, 0], $0"),
+        "capsule(a: vec3 = [0, -0.5, 0], [b: vec3 = [0, 0.5, 0]], radius: float = 0.25) -> shape"
+    );
+    assert_eq!(
+        signature("let c = capsule([0, 0, 0], radius: 1, $0"),
+        "capsule(a: vec3 = [0, -0.5, 0], [b: vec3 = [0, 0.5, 0]], radius: float = 0.25) -> shape"
+    );
+    assert_eq!(
+        signature("let t = ball.translate(offset: [0, 0, 0], $0"),
+        "translate(shape: shape, offset: vec3) -> shape"
+    );
+    // A named argument being typed is its parameter.
+    assert_eq!(
+        signature("let c = capsule(a: [0, 0, 0], radius: $0"),
+        "capsule(a: vec3 = [0, -0.5, 0], b: vec3 = [0, 0.5, 0], [radius: float = 0.25]) -> shape"
+    );
+    // No parameter left, or outside a call: no active parameter, or no help.
     assert_eq!(
         signature("let t = torus(1, 2, 3, $0"),
         "torus(major: float = 1, minor: float = 0.25) -> shape"

@@ -169,5 +169,28 @@ fn completion_and_signature_help() {
         c.request("textDocument/signatureHelp", at(3, 2)),
         json!(null)
     );
+    // After `ball.`: the shape's methods only.
+    let items = c.request("textDocument/completion", at(3, 12));
+    let labels: Vec<&str> = items
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["label"].as_str().unwrap())
+        .collect();
+    assert!(
+        labels.contains(&"translate") && labels.contains(&"paint"),
+        "{labels:?}"
+    );
+    assert!(
+        !labels
+            .iter()
+            .any(|l| ["sphere", "orbit", "sin"].contains(l)),
+        "{labels:?}"
+    );
+    // After a named argument, the next parameter not given is active.
+    open(&mut c, "let c = cylinder(radius: 0.2, ", 2);
+    let help = c.request("textDocument/signatureHelp", at(0, 30));
+    assert_eq!(help["activeParameter"], 1, "{help}");
+    assert_eq!(help["signatures"][0]["activeParameter"], 1);
     stop(c, handle);
 }

@@ -1,0 +1,240 @@
+//! The server loop: the lifecycle (initialize, shutdown, exit), batches of messages,
+//! one analysis per changed document and batch, and cancellation.
+//!
+//! A reader thread moves every message from the connection into an unbounded queue
+//! as soon as it arrives. `lsp-server`'s stdio connection hands messages over a
+//! channel of capacity zero, so without it "everything waiting" would be at most one
+//! message, and every keystroke of a burst would get its own analysis.
+
+use super::dispatch::{respond, Failure, NotificationDispatcher};
+use super::{answer, open, publish, Docs, Error};
+use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
+use lsp_types as lsp;
+use lsp_types::notification::{
+    Cancel, DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Exit,
+    Notification as _,
+};
+use lsp_types::request::{Initialize, Request as _, Shutdown};
+use std::collections::HashSet;
+use std::sync::mpsc;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Before the `initialize` request: requests get `ServerNotInitialized`.
+    Uninitialized,
+    Running,
+    /// After `shutdown`: requests get `InvalidRequest`, and `exit` ends the server.
+    ShutDown,
+}
+
+/// A request of the batch: answered at once (the lifecycle), or after the batch's
+/// analysis against the latest text.
+enum Pending {
+    Ready(Response),
+    Deferred(Request),
+}
+
+pub(super) struct Server {
+    conn: Connection,
+    phase: Phase,
+    docs: Docs,
+    /// Texts opened or changed in this batch, the latest per document.
+    changed: Vec<(lsp::Uri, String, i32)>,
+    /// Requests the client cancelled.
+    cancelled: HashSet<RequestId>,
+}
+
+/// Moves every message of the connection into an unbounded queue, from a thread
+/// that ends when the connection closes or the server stops listening.
+fn queue(conn: &Connection) -> mpsc::Receiver<Message> {
+    let (tx, rx) = mpsc::channel();
+    let receiver = conn.receiver.clone();
+    std::thread::Builder::new()
+        .name(String::from("sdfc-lsp-queue"))
+        .spawn(move || {
+            for m in receiver {
+                if tx.send(m).is_err() {
+                    break;
+                }
+            }
+        })
+        .expect("a thread for the message queue");
+    rx
+}
+
+/// Serves one client on a connection until it exits (`Ok` after a `shutdown`, an
+/// error otherwise) or closes the connection.
+///
+/// Messages are taken in batches: everything that arrived while the server was busy.
+/// Each document changed in a batch is analysed once, at its latest text, and its
+/// diagnostics are published with that version; the batch's requests are then
+/// answered against that text, except those the client cancelled (`$/cancelRequest`),
+/// which get `RequestCancelled` without being computed. A cancellation that arrives
+/// during the analysis still counts for the batch's requests.
+pub fn serve(conn: Connection) -> Result<(), Error> {
+    let inbox = queue(&conn);
+    let mut server = Server {
+        conn,
+        phase: Phase::Uninitialized,
+        docs: Docs::new(),
+        changed: Vec::new(),
+        cancelled: HashSet::new(),
+    };
+    let mut carried: Vec<Message> = Vec::new();
+    loop {
+        let mut batch = std::mem::take(&mut carried);
+        if batch.is_empty() {
+            match inbox.recv() {
+                Ok(m) => batch.push(m),
+                // The client closed the connection.
+                Err(_) => return Ok(()),
+            }
+        }
+        batch.extend(inbox.try_iter());
+        let mut pending = Vec::new();
+        let mut exit = false;
+        for msg in batch {
+            match msg {
+                Message::Request(req) => pending.push(server.classify(req)),
+                Message::Notification(n) if n.method == Exit::METHOD => {
+                    exit = true;
+                    break;
+                }
+                Message::Notification(n) => server.notify(n)?,
+                Message::Response(_) => {}
+            }
+        }
+        server.analyse()?;
+        if !exit {
+            // What arrived during the analysis waits for the next batch, but its
+            // cancellations already apply to this one's requests.
+            carried = inbox.try_iter().collect();
+            for m in &carried {
+                if let Message::Notification(n) = m {
+                    if n.method == Cancel::METHOD {
+                        server.notify(n.clone())?;
+                    }
+                }
+            }
+        }
+        for p in pending {
+            let resp = server.answer(p);
+            server.conn.sender.send(Message::Response(resp))?;
+        }
+        server.cancelled.clear();
+        if exit {
+            return match server.phase {
+                Phase::ShutDown => Ok(()),
+                _ => Err("exit before shutdown".into()),
+            };
+        }
+    }
+}
+
+impl Server {
+    /// Answers the lifecycle requests in order, and defers the others.
+    fn classify(&mut self, req: Request) -> Pending {
+        let lifecycle =
+            |id, result: Result<serde_json::Value, Failure>| Pending::Ready(respond(id, result));
+        match (self.phase, req.method.as_str()) {
+            (Phase::Uninitialized, Initialize::METHOD) => {
+                self.phase = Phase::Running;
+                lifecycle(
+                    req.id,
+                    Ok(serde_json::to_value(super::initialize_result())
+                        .expect("capabilities serialize")),
+                )
+            }
+            (Phase::Uninitialized, _) => lifecycle(
+                req.id,
+                Err(Failure::new(
+                    ErrorCode::ServerNotInitialized,
+                    format!("{} before initialize", req.method),
+                )),
+            ),
+            (Phase::Running, Shutdown::METHOD) => {
+                self.phase = Phase::ShutDown;
+                lifecycle(req.id, Ok(serde_json::Value::Null))
+            }
+            (Phase::Running, Initialize::METHOD) => lifecycle(
+                req.id,
+                Err(Failure::new(
+                    ErrorCode::InvalidRequest,
+                    "the server is already initialized",
+                )),
+            ),
+            (Phase::Running, _) => Pending::Deferred(req),
+            (Phase::ShutDown, _) => lifecycle(
+                req.id,
+                Err(Failure::new(
+                    ErrorCode::InvalidRequest,
+                    format!("{} after shutdown", req.method),
+                )),
+            ),
+        }
+    }
+
+    fn answer(&self, p: Pending) -> Response {
+        match p {
+            Pending::Ready(r) => r,
+            Pending::Deferred(req) if self.cancelled.contains(&req.id) => respond::<()>(
+                req.id,
+                Err(Failure::new(
+                    ErrorCode::RequestCanceled,
+                    "cancelled by the client",
+                )),
+            ),
+            Pending::Deferred(req) => answer(&self.docs, req),
+        }
+    }
+
+    /// Applies a notification; before `initialize`, notifications are dropped.
+    fn notify(&mut self, n: Notification) -> Result<(), Error> {
+        if self.phase == Phase::Uninitialized {
+            return Ok(());
+        }
+        NotificationDispatcher::new(n, self)
+            .on::<DidOpenTextDocument, Error>(|s, p| {
+                let d = p.text_document;
+                s.queue(d.uri, d.text, d.version);
+                Ok(())
+            })?
+            .on::<DidChangeTextDocument, Error>(|s, p| {
+                // Full sync: the last change holds the whole text.
+                if let Some(change) = p.content_changes.into_iter().last() {
+                    s.queue(p.text_document.uri, change.text, p.text_document.version);
+                }
+                Ok(())
+            })?
+            .on::<DidCloseTextDocument, Error>(|s, p| {
+                let uri = p.text_document.uri;
+                s.changed.retain(|(u, _, _)| *u != uri);
+                s.docs.remove(uri.as_str());
+                publish(&s.conn, &uri, None)
+            })?
+            .on::<Cancel, Error>(|s, p| {
+                s.cancelled.insert(match p.id {
+                    lsp::NumberOrString::Number(i) => RequestId::from(i),
+                    lsp::NumberOrString::String(s) => RequestId::from(s),
+                });
+                Ok(())
+            })?;
+        Ok(())
+    }
+
+    /// Queues a document's latest text for the analysis at the end of the batch.
+    fn queue(&mut self, uri: lsp::Uri, text: String, version: i32) {
+        self.changed.retain(|(u, _, _)| *u != uri);
+        self.changed.push((uri, text, version));
+    }
+
+    /// Analyses each document changed in the batch, once, and publishes its diagnostics.
+    fn analyse(&mut self) -> Result<(), Error> {
+        for (uri, text, version) in std::mem::take(&mut self.changed) {
+            let o = open(&uri, text, version);
+            publish(&self.conn, &uri, Some(&o))?;
+            self.docs.insert(uri.as_str().to_string(), o);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,220 @@
+//! The real `sdfc lsp` binary over a stdio pipe: what the in-memory connection cannot
+//! show (how the transport hands messages over, how the process ends).
+
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// A running `sdfc lsp` and the messages it writes, read by a thread so that a server
+/// that stops answering fails the test instead of hanging it.
+pub struct Pipe {
+    child: Child,
+    stdin: ChildStdin,
+    messages: mpsc::Receiver<Value>,
+}
+
+fn frame(v: &Value) -> String {
+    let body = v.to_string();
+    format!("Content-Length: {}\r\n\r\n{body}", body.len())
+}
+
+impl Pipe {
+    pub fn spawn() -> Pipe {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
+            .arg("lsp")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stdin = child.stdin.take().unwrap();
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let (tx, messages) = mpsc::channel();
+        std::thread::spawn(move || loop {
+            let mut len = None;
+            loop {
+                let mut line = String::new();
+                if stdout.read_line(&mut line).unwrap_or(0) == 0 {
+                    return;
+                }
+                if line == "\r\n" {
+                    break;
+                }
+                if let Some(n) = line.strip_prefix("Content-Length: ") {
+                    len = n.trim().parse().ok();
+                }
+            }
+            let mut body = vec![0; len.expect("a Content-Length header")];
+            stdout.read_exact(&mut body).unwrap();
+            if tx.send(serde_json::from_slice(&body).unwrap()).is_err() {
+                return;
+            }
+        });
+        Pipe {
+            child,
+            stdin,
+            messages,
+        }
+    }
+
+    /// Writes every message in one `write`, as a client flushing a burst does.
+    pub fn write(&mut self, messages: &[Value]) {
+        let bytes: String = messages.iter().map(frame).collect();
+        self.stdin.write_all(bytes.as_bytes()).unwrap();
+        self.stdin.flush().unwrap();
+    }
+
+    pub fn send(&mut self, message: Value) {
+        self.write(&[message]);
+    }
+
+    /// The next message from the server.
+    pub fn read(&mut self) -> Value {
+        self.messages
+            .recv_timeout(Duration::from_secs(120))
+            .expect("the server answers")
+    }
+
+    /// The response to request `id`, skipping notifications.
+    pub fn response(&mut self, id: i64) -> Value {
+        loop {
+            let m = self.read();
+            if m["id"] == id {
+                return m;
+            }
+        }
+    }
+
+    /// The next diagnostics the server publishes.
+    pub fn diagnostics(&mut self) -> Value {
+        loop {
+            let m = self.read();
+            if m["method"] == "textDocument/publishDiagnostics" {
+                return m["params"].clone();
+            }
+        }
+    }
+
+    pub fn initialize(&mut self) -> Value {
+        self.send(json!({ "jsonrpc": "2.0", "id": 1, "method": "initialize", "params": { "capabilities": {} } }));
+        let r = self.response(1);
+        self.send(json!({ "jsonrpc": "2.0", "method": "initialized", "params": {} }));
+        r
+    }
+
+    /// Sends `shutdown` and `exit`, and waits for the process.
+    pub fn stop(mut self) -> ExitStatus {
+        self.send(json!({ "jsonrpc": "2.0", "id": 999, "method": "shutdown", "params": null }));
+        assert_eq!(self.response(999)["result"], Value::Null);
+        self.exit()
+    }
+
+    /// Sends `exit` and waits for the process.
+    pub fn exit(mut self) -> ExitStatus {
+        self.send(json!({ "jsonrpc": "2.0", "method": "exit", "params": null }));
+        self.child.wait().unwrap()
+    }
+}
+
+fn did_open(uri: &str, text: &str) -> Value {
+    json!({ "jsonrpc": "2.0", "method": "textDocument/didOpen", "params": { "textDocument": { "uri": uri, "languageId": "sdf", "version": 1, "text": text } } })
+}
+
+fn did_change(uri: &str, version: i32, text: &str) -> Value {
+    json!({ "jsonrpc": "2.0", "method": "textDocument/didChange", "params": { "textDocument": { "uri": uri, "version": version }, "contentChanges": [{ "text": text }] } })
+}
+
+/// The robot example at its real path (its texture resolves, so every analysis runs the
+/// whole pipeline and keeps the server busy for a while).
+fn robot() -> (String, String) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/robot.sdf");
+    let uri = url::Url::from_file_path(path).unwrap().to_string();
+    (uri, std::fs::read_to_string(path).unwrap())
+}
+
+#[test]
+fn the_real_binary_speaks_lsp_over_stdio() {
+    let mut p = Pipe::spawn();
+    assert!(p.initialize()["result"]["capabilities"]["textDocumentSync"].is_number());
+    p.send(did_open(super::URI, "render sphre(1);"));
+    let d = p.diagnostics();
+    assert_eq!(d["diagnostics"][0]["code"], "E0103");
+    assert!(p.stop().success());
+}
+
+#[test]
+fn a_burst_of_changes_is_analysed_once_over_the_pipe() {
+    let (uri, text) = robot();
+    let mut p = Pipe::spawn();
+    p.initialize();
+    p.send(did_open(&uri, &text));
+    assert_eq!(p.diagnostics()["version"], 1);
+    // Twenty keystrokes, written at once: the server reads them all while it analyses
+    // the first, so it analyses (and publishes) once or twice, not twenty times.
+    let burst: Vec<Value> = (2..=21)
+        .map(|v| did_change(&uri, v, &format!("{text}\n// edit {v}\n")))
+        .collect();
+    p.write(&burst);
+    let mut versions = Vec::new();
+    while versions.last() != Some(&21) {
+        versions.push(p.diagnostics()["version"].as_i64().unwrap());
+    }
+    assert!(versions.len() <= 3, "one analysis per change: {versions:?}");
+    assert!(versions.windows(2).all(|w| w[0] < w[1]), "{versions:?}");
+    assert!(p.stop().success());
+}
+
+#[test]
+fn a_request_cancelled_while_the_server_is_busy_is_cancelled_over_the_pipe() {
+    let (uri, text) = robot();
+    let mut p = Pipe::spawn();
+    p.initialize();
+    p.send(did_open(&uri, &text));
+    p.diagnostics();
+    // A change keeps the server analysing while the request and its cancellation
+    // arrive. The server reads everything that arrived during an analysis before it
+    // answers, so the cancellation counts unless the pipe's reader thread has not even
+    // parsed these few hundred bytes by the end of a whole analysis of the robot: the
+    // one race left, inherent to cancelling over a stream.
+    p.write(&[
+        did_change(&uri, 2, &format!("{text}\n// edit\n")),
+        json!({ "jsonrpc": "2.0", "id": 7, "method": "textDocument/hover", "params": { "textDocument": { "uri": uri }, "position": { "line": 0, "character": 0 } } }),
+        json!({ "jsonrpc": "2.0", "method": "$/cancelRequest", "params": { "id": 7 } }),
+    ]);
+    let r = p.response(7);
+    assert_eq!(r["error"]["code"], -32800, "{r}");
+    // Later requests are answered.
+    p.send(json!({ "jsonrpc": "2.0", "id": 8, "method": "textDocument/documentSymbol", "params": { "textDocument": { "uri": uri } } }));
+    assert!(p.response(8)["result"]
+        .as_array()
+        .is_some_and(|s| !s.is_empty()));
+    assert!(p.stop().success());
+}
+
+#[test]
+fn the_lifecycle_is_answered_at_every_step() {
+    let mut p = Pipe::spawn();
+    // Before initialize: ServerNotInitialized, and notifications are dropped.
+    p.send(json!({ "jsonrpc": "2.0", "id": 1, "method": "textDocument/hover", "params": { "textDocument": { "uri": super::URI }, "position": { "line": 0, "character": 0 } } }));
+    assert_eq!(p.response(1)["error"]["code"], -32002);
+    p.send(did_open(super::URI, "render sphre(1);"));
+    p.send(json!({ "jsonrpc": "2.0", "id": 2, "method": "initialize", "params": { "capabilities": {} } }));
+    // The next message is the reply: the dropped didOpen published nothing.
+    let init = p.read();
+    assert_eq!(init["id"], 2, "{init}");
+    assert_eq!(init["result"]["serverInfo"]["name"], "sdfc");
+    // A shutdown before `initialized` gets its reply; after it, requests are refused,
+    // and `exit` ends the server with success.
+    p.send(json!({ "jsonrpc": "2.0", "id": 3, "method": "shutdown", "params": null }));
+    let r = p.response(3);
+    assert_eq!(r["result"], Value::Null, "{r}");
+    assert!(r.get("error").is_none(), "{r}");
+    p.send(json!({ "jsonrpc": "2.0", "id": 4, "method": "textDocument/documentSymbol", "params": { "textDocument": { "uri": super::URI } } }));
+    assert_eq!(p.response(4)["error"]["code"], -32600);
+    assert!(p.exit().success());
+    // `exit` without `shutdown` ends the server too, with a failure status.
+    let mut p = Pipe::spawn();
+    p.initialize();
+    assert!(!p.exit().success());
+}

@@ -3,6 +3,7 @@
 //! sphere trace that the GPU renderer is tested against.
 
 use crate::ir::{eval, Shape};
+use crate::sema::builtins::BuiltinId;
 use crate::sema::{RenderDef, Value};
 use glam::DVec3;
 
@@ -117,11 +118,11 @@ impl View {
         let camera = render
             .and_then(|r| r.camera.as_ref())
             .and_then(|c| match c {
-                Value::Camera(n) if n.builtin == "orbit" => {
+                Value::Camera(n) if n.builtin == BuiltinId::Orbit => {
                     let f = |i: usize| n.args[i].as_float();
                     Some(Camera::orbit(vec3(&n.args[0])?, f(1)?, f(2)?, f(3)?, f(4)?))
                 }
-                Value::Camera(n) if n.builtin == "look_at" => Some(Camera::look_at(
+                Value::Camera(n) if n.builtin == BuiltinId::LookAt => Some(Camera::look_at(
                     vec3(&n.args[0])?,
                     vec3(&n.args[1])?,
                     n.args[2].as_float()?,

@@ -173,13 +173,3 @@ fn every_primitive_is_a_distance_bound() {
         }
     }
 }
-
-#[test]
-fn every_shape_builtin_is_lowered() {
-    for b in sdfc::sema::builtins::BUILTINS
-        .iter()
-        .filter(|b| b.ret == sdfc::sema::builtins::Ret::Shape)
-    {
-        assert!(ir::LOWERED.contains(&b.name), "{} is not lowered", b.name);
-    }
-}

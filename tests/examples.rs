@@ -44,7 +44,7 @@ fn examples_cover_every_shape_builtin() {
     let mut used = std::collections::BTreeSet::new();
     fn walk(v: &sdfc::sema::Value, used: &mut std::collections::BTreeSet<&'static str>) {
         if let sdfc::sema::Value::Shape(n) = v {
-            used.insert(n.builtin);
+            used.insert(n.builtin.name());
             for a in &n.args {
                 walk(a, used);
             }

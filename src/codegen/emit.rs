@@ -3,6 +3,7 @@
 //! functions it calls live in `shaders/*.wgsl`.
 
 use crate::ir::{Csg, NodeId, Op, Prim, Shape};
+use crate::sema::builtins::BuiltinId;
 use crate::sema::{AtlasAttr, FieldExpr, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use glam::{DMat3, DVec3};
@@ -321,7 +322,15 @@ pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
                     .collect();
                 format!("({}).{s}", field(base, tex)?)
             }
-            FieldExpr::Call { builtin, args } => call(builtin, args, ty, tex)?,
+            FieldExpr::Call { builtin, args } => call(*builtin, args, tex)?,
+            FieldExpr::Vector(args) => format!(
+                "{}({})",
+                wgsl_ty(ty),
+                args.iter()
+                    .map(|a| field(a, tex))
+                    .collect::<Result<Vec<_>, _>>()?
+                    .join(", ")
+            ),
         },
         other => {
             return Err(Unsupported(format!(
@@ -364,30 +373,24 @@ fn binary(
     })
 }
 
-fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Uses) -> Result<String, Unsupported> {
+fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Unsupported> {
+    use BuiltinId as B;
+    let name = builtin.name();
     let t_ty = args
         .iter()
         .map(|a| a.ty().base().clone())
         .find(|t| matches!(t, Ty::Vec(_)))
         .unwrap_or(Ty::Float);
     let mut f = |v: &Value| field(v, tex);
-    Ok(match name {
-        "vec" => format!(
-            "{}({})",
-            wgsl_ty(ty),
-            args.iter()
-                .map(&mut f)
-                .collect::<Result<Vec<_>, _>>()?
-                .join(", ")
-        ),
-        "checker" => format!("sdfc_checker({}, {})", f(&args[0])?, f(&args[1])?),
-        "grid" => format!(
+    Ok(match builtin {
+        B::Checker => format!("sdfc_checker({}, {})", f(&args[0])?, f(&args[1])?),
+        B::Grid => format!(
             "sdfc_grid({}, {}, {})",
             f(&args[0])?,
             f(&args[1])?,
             f(&args[2])?
         ),
-        "sample" => {
+        B::Sample => {
             let (Value::Texture(node), Value::Str(wrap)) = (&args[0], &args[2]) else {
                 return Err(Unsupported(String::from(
                     "a texture sample needs an image and a wrap mode",
@@ -417,14 +420,80 @@ fn call(name: &str, args: &[Value], ty: &Ty, tex: &mut Uses) -> Result<String, U
             let i = tex.index(path, wrap);
             format!("textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})")
         }
-        "cross" => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
-        "length" | "normalize" => format!("{name}({})", f(&args[0])?),
-        _ => format!(
+        B::Cross => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
+        B::Length | B::Normalize => format!("{name}({})", f(&args[0])?),
+        // The WGSL builtin of the same name, on arguments widened to the call's type.
+        B::Sin
+        | B::Cos
+        | B::Tan
+        | B::Asin
+        | B::Acos
+        | B::Atan
+        | B::Atan2
+        | B::Sqrt
+        | B::Abs
+        | B::Floor
+        | B::Ceil
+        | B::Fract
+        | B::Sign
+        | B::Exp
+        | B::Log
+        | B::Pow
+        | B::Min
+        | B::Max
+        | B::Clamp
+        | B::Mix
+        | B::Smoothstep
+        | B::Step
+        | B::Distance
+        | B::Dot
+        | B::Radians
+        | B::Degrees => format!(
             "{name}({})",
             args.iter()
                 .map(|a| widen(a, &t_ty, tex))
                 .collect::<Result<Vec<_>, _>>()?
                 .join(", ")
         ),
+        B::Sphere
+        | B::Box
+        | B::RoundBox
+        | B::BoxFrame
+        | B::Torus
+        | B::Capsule
+        | B::Cylinder
+        | B::Cone
+        | B::CappedCone
+        | B::Plane
+        | B::Ellipsoid
+        | B::Octahedron
+        | B::HexPrism
+        | B::TriPrism
+        | B::Pyramid
+        | B::Link
+        | B::Union
+        | B::Intersection
+        | B::Difference
+        | B::SmoothUnion
+        | B::SmoothIntersection
+        | B::SmoothDifference
+        | B::Translate
+        | B::Rotate
+        | B::RotateX
+        | B::RotateY
+        | B::RotateZ
+        | B::Scale
+        | B::Paint
+        | B::Twist
+        | B::Bend
+        | B::Repeat
+        | B::Mirror
+        | B::Elongate
+        | B::Round
+        | B::Shell
+        | B::Image
+        | B::Orbit
+        | B::LookAt
+        | B::Sun => return Err(Unsupported(format!("`{name}` is not a surface field"))),
     })
 }

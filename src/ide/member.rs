@@ -85,23 +85,6 @@ fn receiver_type(doc: &Document, toks: &[(Token, Span)], dot: usize) -> Option<T
     (def.kind == DefKind::Let && def.name == NAME && def.ty != Ty::Error).then(|| def.ty.clone())
 }
 
-/// Whether a parameter of type `p` takes a value of type `t` (a surface field's
-/// values for a field): the checker's rule for arguments.
-fn accepts(p: PTy, t: &Ty) -> bool {
-    match p {
-        PTy::Float => *t == Ty::Float,
-        PTy::Vec2 => *t == Ty::Vec(2),
-        PTy::Vec3 => *t == Ty::Vec(3),
-        PTy::Bool => *t == Ty::Bool,
-        PTy::Str => *t == Ty::Str,
-        PTy::Shape => *t == Ty::Shape,
-        PTy::Texture => *t == Ty::Texture,
-        PTy::Material => *t == Ty::Material,
-        PTy::FloatOrVec3 => matches!(t, Ty::Float | Ty::Vec(3)),
-        PTy::T => t.is_numeric(),
-    }
-}
-
 /// Whether `receiver.name(…)` makes sense: the builtin takes the receiver as its first
 /// argument, and does not build a scene object out of plain values.
 fn is_method_of(b: &Builtin, receiver: &Ty) -> bool {
@@ -112,7 +95,7 @@ fn is_method_of(b: &Builtin, receiver: &Ty) -> bool {
         && !matches!(first.ty, PTy::Shape | PTy::Texture);
     !constructor
         && (!receiver.is_field() || b.kind.lifts_fields())
-        && accepts(first.ty, receiver.base())
+        && PTy::accepts(first.ty, receiver.base())
 }
 
 /// Swizzles of a vector with `n` components: single components and the leading runs

@@ -110,12 +110,13 @@ impl Lowerer<'_> {
     fn node(&mut self, value: &Value) -> Option<NodeId> {
         let Value::Shape(n) = value else { return None };
         let a = &n.args;
+        use crate::sema::builtins::BuiltinId as B;
         match n.builtin {
-            "sphere" => self.prim(Prim::Sphere { r: f(&a[0])? }),
-            "box" => self.prim(Prim::Box {
+            B::Sphere => self.prim(Prim::Sphere { r: f(&a[0])? }),
+            B::Box => self.prim(Prim::Box {
                 half: fv3(&a[0])? * 0.5,
             }),
-            "round_box" => {
+            B::RoundBox => {
                 let r = f(&a[1])?;
                 let half = fv3(&a[0])? * 0.5;
                 let r = r.min(half.min_element());
@@ -128,24 +129,24 @@ impl Lowerer<'_> {
                     id
                 })
             }
-            "box_frame" => self.prim(Prim::BoxFrame {
+            B::BoxFrame => self.prim(Prim::BoxFrame {
                 half: fv3(&a[0])? * 0.5,
                 e: f(&a[1])? * 0.5,
             }),
-            "torus" => self.prim(Prim::Torus {
+            B::Torus => self.prim(Prim::Torus {
                 major: f(&a[0])?,
                 minor: f(&a[1])?,
             }),
-            "capsule" => self.prim(Prim::Capsule {
+            B::Capsule => self.prim(Prim::Capsule {
                 a: v3(&a[0])?,
                 b: v3(&a[1])?,
                 r: f(&a[2])?,
             }),
-            "cylinder" => self.prim(Prim::Cylinder {
+            B::Cylinder => self.prim(Prim::Cylinder {
                 r: f(&a[0])?,
                 half_h: f(&a[1])? * 0.5,
             }),
-            "cone" => {
+            B::Cone => {
                 let (r, h) = (f(&a[0])?, f(&a[1])?);
                 let cone = self.prim(Prim::CappedCone {
                     half_h: h * 0.5,
@@ -154,47 +155,47 @@ impl Lowerer<'_> {
                 })?;
                 self.translate(DVec3::new(0.0, h * 0.5, 0.0), cone)
             }
-            "capped_cone" => self.prim(Prim::CappedCone {
+            B::CappedCone => self.prim(Prim::CappedCone {
                 half_h: f(&a[0])? * 0.5,
                 r1: f(&a[1])?,
                 r2: f(&a[2])?,
             }),
-            "plane" => self.prim(Prim::Plane {
+            B::Plane => self.prim(Prim::Plane {
                 n: v3(&a[0])?.normalize(),
                 offset: f(&a[1])?,
             }),
-            "ellipsoid" => self.prim(Prim::Ellipsoid { radii: v3(&a[0])? }),
-            "octahedron" => self.prim(Prim::Octahedron { s: f(&a[0])? }),
-            "hex_prism" => self.prim(Prim::HexPrism {
+            B::Ellipsoid => self.prim(Prim::Ellipsoid { radii: v3(&a[0])? }),
+            B::Octahedron => self.prim(Prim::Octahedron { s: f(&a[0])? }),
+            B::HexPrism => self.prim(Prim::HexPrism {
                 r: f(&a[0])?,
                 half_h: f(&a[1])? * 0.5,
             }),
-            "tri_prism" => self.prim(Prim::TriPrism {
+            B::TriPrism => self.prim(Prim::TriPrism {
                 r: f(&a[0])?,
                 half_h: f(&a[1])? * 0.5,
             }),
-            "pyramid" => self.prim(Prim::Pyramid { h: f(&a[0])? }),
-            "link" => self.prim(Prim::Link {
+            B::Pyramid => self.prim(Prim::Pyramid { h: f(&a[0])? }),
+            B::Link => self.prim(Prim::Link {
                 le: f(&a[0])?,
                 r1: f(&a[1])?,
                 r2: f(&a[2])?,
             }),
-            "union"
-            | "intersection"
-            | "difference"
-            | "smooth_union"
-            | "smooth_intersection"
-            | "smooth_difference" => {
+            B::Union
+            | B::Intersection
+            | B::Difference
+            | B::SmoothUnion
+            | B::SmoothIntersection
+            | B::SmoothDifference => {
                 let x = self.node(&a[0])?;
                 let y = self.node(&a[1])?;
-                let k = if n.builtin.starts_with("smooth_") {
-                    f(&a[2])?
-                } else {
-                    0.0
-                };
-                let op = match n.builtin.trim_start_matches("smooth_") {
-                    "union" => Csg::Union,
-                    "intersection" => Csg::Intersection,
+                let smooth = matches!(
+                    n.builtin,
+                    B::SmoothUnion | B::SmoothIntersection | B::SmoothDifference
+                );
+                let k = if smooth { f(&a[2])? } else { 0.0 };
+                let op = match n.builtin {
+                    B::Union | B::SmoothUnion => Csg::Union,
+                    B::Intersection | B::SmoothIntersection => Csg::Intersection,
                     _ => Csg::Difference,
                 };
                 let ((ba, la), (bb, lb)) = (self.info(x), self.info(y));
@@ -205,16 +206,16 @@ impl Lowerer<'_> {
                 };
                 self.push(Op::Csg { op, k, a: x, b: y }, bounds, la.max(lb))
             }
-            "translate" => {
+            B::Translate => {
                 let child = self.node(&a[0])?;
                 self.translate(v3(&a[1])?, child)
             }
-            "rotate" | "rotate_x" | "rotate_y" | "rotate_z" => {
+            B::Rotate | B::RotateX | B::RotateY | B::RotateZ => {
                 let child = self.node(&a[0])?;
                 let (axis, angle) = match n.builtin {
-                    "rotate" => (v3(&a[1])?.normalize(), f(&a[2])?),
-                    "rotate_x" => (DVec3::X, f(&a[1])?),
-                    "rotate_y" => (DVec3::Y, f(&a[1])?),
+                    B::Rotate => (v3(&a[1])?.normalize(), f(&a[2])?),
+                    B::RotateX => (DVec3::X, f(&a[1])?),
+                    B::RotateY => (DVec3::Y, f(&a[1])?),
                     _ => (DVec3::Z, f(&a[1])?),
                 };
                 let forward = DMat3::from_axis_angle(axis, angle);
@@ -228,7 +229,7 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            "scale" => {
+            B::Scale => {
                 let child = self.node(&a[0])?;
                 let factor = fv3(&a[1])?;
                 let (b, l) = self.info(child);
@@ -239,7 +240,7 @@ impl Lowerer<'_> {
                     l * stretch,
                 )
             }
-            "twist" | "bend" => {
+            B::Twist | B::Bend => {
                 let child = self.node(&a[0])?;
                 let axis = v3(&a[1])?.normalize();
                 let rate = f(&a[2])?;
@@ -255,7 +256,7 @@ impl Lowerer<'_> {
                 let radius = bounded;
                 let stretch = (1.0 + (rate * r).powi(2)).sqrt();
                 let bounds = Aabb::centered(DVec3::splat(r));
-                if n.builtin == "twist" {
+                if n.builtin == B::Twist {
                     self.push(
                         Op::Twist {
                             frame: align(axis, DVec3::Y),
@@ -279,7 +280,7 @@ impl Lowerer<'_> {
                     )
                 }
             }
-            "repeat" => {
+            B::Repeat => {
                 let child = self.node(&a[0])?;
                 let (_, l) = self.info(child);
                 self.push(
@@ -291,7 +292,7 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            "mirror" => {
+            B::Mirror => {
                 let child = self.node(&a[0])?;
                 let normal = v3(&a[1])?.normalize();
                 let (b, l) = self.info(child);
@@ -304,7 +305,7 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            "elongate" => {
+            B::Elongate => {
                 let child = self.node(&a[0])?;
                 let h = v3(&a[1])?;
                 let (b, l) = self.info(child);
@@ -317,13 +318,13 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            "round" => {
+            B::Round => {
                 let child = self.node(&a[0])?;
                 let r = f(&a[1])?;
                 let (b, l) = self.info(child);
                 self.push(Op::Round { r, child }, b.expand(r), l)
             }
-            "shell" => {
+            B::Shell => {
                 let child = self.node(&a[0])?;
                 let t = f(&a[1])?;
                 let (b, l) = self.info(child);
@@ -336,7 +337,7 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            "paint" => {
+            B::Paint => {
                 let child = self.node(&a[0])?;
                 let Value::Material(m) = a[1] else {
                     return None;
@@ -351,7 +352,43 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            _ => None,
+            // Not shapes: they never appear as a shape node.
+            B::Image
+            | B::Sample
+            | B::Checker
+            | B::Grid
+            | B::Orbit
+            | B::LookAt
+            | B::Sun
+            | B::Sin
+            | B::Cos
+            | B::Tan
+            | B::Asin
+            | B::Acos
+            | B::Atan
+            | B::Atan2
+            | B::Sqrt
+            | B::Abs
+            | B::Floor
+            | B::Ceil
+            | B::Fract
+            | B::Sign
+            | B::Exp
+            | B::Log
+            | B::Pow
+            | B::Min
+            | B::Max
+            | B::Clamp
+            | B::Mix
+            | B::Smoothstep
+            | B::Step
+            | B::Length
+            | B::Distance
+            | B::Dot
+            | B::Cross
+            | B::Normalize
+            | B::Radians
+            | B::Degrees => None,
         }
     }
 
@@ -367,43 +404,3 @@ impl Lowerer<'_> {
         )
     }
 }
-
-/// Every builtin the lowering handles, for a test that none is forgotten.
-pub const LOWERED: &[&str] = &[
-    "sphere",
-    "box",
-    "round_box",
-    "box_frame",
-    "torus",
-    "capsule",
-    "cylinder",
-    "cone",
-    "capped_cone",
-    "plane",
-    "ellipsoid",
-    "octahedron",
-    "hex_prism",
-    "tri_prism",
-    "pyramid",
-    "link",
-    "union",
-    "intersection",
-    "difference",
-    "smooth_union",
-    "smooth_intersection",
-    "smooth_difference",
-    "translate",
-    "rotate",
-    "rotate_x",
-    "rotate_y",
-    "rotate_z",
-    "scale",
-    "twist",
-    "bend",
-    "repeat",
-    "mirror",
-    "elongate",
-    "round",
-    "shell",
-    "paint",
-];

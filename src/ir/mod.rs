@@ -11,7 +11,7 @@
 pub mod eval;
 mod lower;
 
-pub use lower::{lower, lower_shape, LOWERED};
+pub use lower::{lower, lower_shape};
 
 use glam::{DMat3, DVec3};
 

@@ -22,6 +22,23 @@ pub enum PTy {
 }
 
 impl PTy {
+    /// Whether a parameter of this type takes a value of type `t` (for a surface field,
+    /// of its values' type): the checker's rule for arguments.
+    pub fn accepts(self, t: &Ty) -> bool {
+        match self {
+            PTy::Float => *t == Ty::Float,
+            PTy::Vec2 => *t == Ty::Vec(2),
+            PTy::Vec3 => *t == Ty::Vec(3),
+            PTy::Bool => *t == Ty::Bool,
+            PTy::Str => *t == Ty::Str,
+            PTy::Shape => *t == Ty::Shape,
+            PTy::Texture => *t == Ty::Texture,
+            PTy::Material => *t == Ty::Material,
+            PTy::FloatOrVec3 => matches!(t, Ty::Float | Ty::Vec(3)),
+            PTy::T => t.is_numeric(),
+        }
+    }
+
     pub fn describe(self) -> &'static str {
         match self {
             PTy::Float => "float",
@@ -174,6 +191,7 @@ impl Kind {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Builtin {
+    pub id: BuiltinId,
     pub name: &'static str,
     pub params: &'static [Param],
     pub ret: Ret,
@@ -219,94 +237,118 @@ const B: Param = p("b", Shape);
 const K: Param = pos("k", Float);
 const TX: Param = p("x", T);
 
-macro_rules! b {
-    ($name:literal, [$($param:expr),*], $ret:ident, $kind:ident, $doc:literal) => {
-        Builtin { name: $name, params: &[$($param),*], ret: Ret::$ret, kind: Kind::$kind, doc: $doc }
+/// The table: each row names its [`BuiltinId`] variant, so the enum and the table are
+/// one list and cannot drift apart.
+macro_rules! builtins {
+    ($($(#[$attr:meta])* $id:ident: $name:literal, [$($param:expr),*], $ret:ident, $kind:ident, $doc:literal;)*) => {
+        /// Every builtin function by ID, generated from the one table ([`BUILTINS`]).
+        /// Lowering, folding and WGSL emission match on it exhaustively, so a new builtin
+        /// that some stage does not handle fails to compile.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum BuiltinId {
+            $($id,)*
+        }
+
+        /// Every builtin function, in [`BuiltinId`] order.
+        pub static BUILTINS: &[Builtin] = &[
+            $(Builtin { id: BuiltinId::$id, name: $name, params: &[$($param),*], ret: Ret::$ret, kind: Kind::$kind, doc: $doc },)*
+        ];
     };
 }
 
-/// Every builtin function.
-pub static BUILTINS: &[Builtin] = &[
+impl BuiltinId {
+    /// The builtin's row of the table.
+    pub fn builtin(self) -> &'static Builtin {
+        &BUILTINS[self as usize]
+    }
+
+    /// The name as written in scenes.
+    pub fn name(self) -> &'static str {
+        self.builtin().name
+    }
+}
+
+builtins! {
     // Primitives, centred at the origin.
-    b!("sphere", [posd("radius", Float, F(1.0))], Shape, Primitive, "A sphere of `radius` centred at the origin."),
-    b!("box", [posd("size", FloatOrVec3, F(1.0))], Shape, Primitive, "An axis-aligned box with full edge lengths `size` (a float for a cube)."),
-    b!("round_box", [posd("size", FloatOrVec3, F(1.0)), posd("radius", Float, F(0.1))], Shape, Primitive, "A box with edges rounded by `radius`; `size` is the outer size."),
-    b!("box_frame", [posd("size", FloatOrVec3, F(1.0)), posd("thickness", Float, F(0.05))], Shape, Primitive, "The edges of a box, as bars of `thickness`."),
-    b!("torus", [posd("major", Float, F(1.0)), posd("minor", Float, F(0.25))], Shape, Primitive, "A torus in the xz-plane: ring radius `major`, tube radius `minor`."),
-    b!("capsule", [d("a", Vec3, V(&[0.0, -0.5, 0.0])), d("b", Vec3, V(&[0.0, 0.5, 0.0])), posd("radius", Float, F(0.25))], Shape, Primitive, "A capsule: all points within `radius` of the segment from `a` to `b`."),
-    b!("cylinder", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cylinder along y of `radius` and total `height`."),
-    b!("cone", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cone along y: base of `radius` at y = 0, apex at y = `height`."),
-    b!("capped_cone", [posd("height", Float, F(1.0)), Param { name: "bottom", ty: Float, default: Some(F(0.5)), check: Check::NonNegative }, Param { name: "top", ty: Float, default: Some(F(0.25)), check: Check::NonNegative }], Shape, Primitive, "A truncated cone along y of total `height`, with radii `bottom` and `top`."),
-    b!("plane", [dir("normal", &[0.0, 1.0, 0.0]), d("offset", Float, F(0.0))], Shape, Primitive, "The half-space below the plane `dot(p, normal) = offset`."),
-    b!("ellipsoid", [posd("radii", Vec3, V(&[1.0, 0.5, 0.5]))], Shape, Primitive, "An ellipsoid with semi-axes `radii` (a bound, not an exact distance)."),
-    b!("octahedron", [posd("radius", Float, F(1.0))], Shape, Primitive, "A regular octahedron with vertices at distance `radius`."),
-    b!("hex_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A hexagonal prism along z: inradius `radius`, total `height`."),
-    b!("tri_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A triangular prism along z: inradius `radius`, total `height`."),
-    b!("pyramid", [posd("height", Float, F(1.0))], Shape, Primitive, "A square pyramid with a unit base in the xz-plane and apex at y = `height`."),
-    b!("link", [posd("length", Float, F(0.5)), posd("major", Float, F(0.4)), posd("minor", Float, F(0.1))], Shape, Primitive, "A chain link: a torus stretched along y by `length`."),
+    Sphere: "sphere", [posd("radius", Float, F(1.0))], Shape, Primitive, "A sphere of `radius` centred at the origin.";
+    Box: "box", [posd("size", FloatOrVec3, F(1.0))], Shape, Primitive, "An axis-aligned box with full edge lengths `size` (a float for a cube).";
+    RoundBox: "round_box", [posd("size", FloatOrVec3, F(1.0)), posd("radius", Float, F(0.1))], Shape, Primitive, "A box with edges rounded by `radius`; `size` is the outer size.";
+    BoxFrame: "box_frame", [posd("size", FloatOrVec3, F(1.0)), posd("thickness", Float, F(0.05))], Shape, Primitive, "The edges of a box, as bars of `thickness`.";
+    Torus: "torus", [posd("major", Float, F(1.0)), posd("minor", Float, F(0.25))], Shape, Primitive, "A torus in the xz-plane: ring radius `major`, tube radius `minor`.";
+    Capsule: "capsule", [d("a", Vec3, V(&[0.0, -0.5, 0.0])), d("b", Vec3, V(&[0.0, 0.5, 0.0])), posd("radius", Float, F(0.25))], Shape, Primitive, "A capsule: all points within `radius` of the segment from `a` to `b`.";
+    Cylinder: "cylinder", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cylinder along y of `radius` and total `height`.";
+    Cone: "cone", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A capped cone along y: base of `radius` at y = 0, apex at y = `height`.";
+    CappedCone: "capped_cone", [posd("height", Float, F(1.0)), Param { name: "bottom", ty: Float, default: Some(F(0.5)), check: Check::NonNegative }, Param { name: "top", ty: Float, default: Some(F(0.25)), check: Check::NonNegative }], Shape, Primitive, "A truncated cone along y of total `height`, with radii `bottom` and `top`.";
+    Plane: "plane", [dir("normal", &[0.0, 1.0, 0.0]), d("offset", Float, F(0.0))], Shape, Primitive, "The half-space below the plane `dot(p, normal) = offset`.";
+    Ellipsoid: "ellipsoid", [posd("radii", Vec3, V(&[1.0, 0.5, 0.5]))], Shape, Primitive, "An ellipsoid with semi-axes `radii` (a bound, not an exact distance).";
+    Octahedron: "octahedron", [posd("radius", Float, F(1.0))], Shape, Primitive, "A regular octahedron with vertices at distance `radius`.";
+    HexPrism: "hex_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A hexagonal prism along z: inradius `radius`, total `height`.";
+    TriPrism: "tri_prism", [posd("radius", Float, F(0.5)), posd("height", Float, F(1.0))], Shape, Primitive, "A triangular prism along z: inradius `radius`, total `height`.";
+    Pyramid: "pyramid", [posd("height", Float, F(1.0))], Shape, Primitive, "A square pyramid with a unit base in the xz-plane and apex at y = `height`.";
+    Link: "link", [posd("length", Float, F(0.5)), posd("major", Float, F(0.4)), posd("minor", Float, F(0.1))], Shape, Primitive, "A chain link: a torus stretched along y by `length`.";
     // CSG.
-    b!("union", [A, B], Shape, Csg, "Everything in `a` or `b` (also `a | b`). Each hit keeps the material of the nearer operand."),
-    b!("intersection", [A, B], Shape, Csg, "Everything in both `a` and `b` (also `a & b`)."),
-    b!("difference", [A, B], Shape, Csg, "`a` with `b` carved out (also `a - b`)."),
-    b!("smooth_union", [A, B, K], Shape, Csg, "Union blended over a fillet of size `k` (polynomial smooth minimum)."),
-    b!("smooth_intersection", [A, B, K], Shape, Csg, "Intersection blended over a fillet of size `k`."),
-    b!("smooth_difference", [A, B, K], Shape, Csg, "Difference blended over a fillet of size `k`."),
+    Union: "union", [A, B], Shape, Csg, "Everything in `a` or `b` (also `a | b`). Each hit keeps the material of the nearer operand.";
+    Intersection: "intersection", [A, B], Shape, Csg, "Everything in both `a` and `b` (also `a & b`).";
+    Difference: "difference", [A, B], Shape, Csg, "`a` with `b` carved out (also `a - b`).";
+    SmoothUnion: "smooth_union", [A, B, K], Shape, Csg, "Union blended over a fillet of size `k` (polynomial smooth minimum).";
+    SmoothIntersection: "smooth_intersection", [A, B, K], Shape, Csg, "Intersection blended over a fillet of size `k`.";
+    SmoothDifference: "smooth_difference", [A, B, K], Shape, Csg, "Difference blended over a fillet of size `k`.";
     // Transforms.
-    b!("translate", [S, p("offset", Vec3)], Shape, Transform, "Moves the shape by `offset`."),
-    b!("rotate", [S, dir("axis", &[0.0, 1.0, 0.0]), p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about `axis` through the origin."),
-    b!("rotate_x", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the x axis."),
-    b!("rotate_y", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the y axis."),
-    b!("rotate_z", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the z axis."),
-    b!("scale", [S, pos("factor", FloatOrVec3)], Shape, Transform, "Scales the shape about the origin; a vec3 scales per axis (the sphere tracer compensates for the stretched distance)."),
+    Translate: "translate", [S, p("offset", Vec3)], Shape, Transform, "Moves the shape by `offset`.";
+    Rotate: "rotate", [S, dir("axis", &[0.0, 1.0, 0.0]), p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about `axis` through the origin.";
+    RotateX: "rotate_x", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the x axis.";
+    RotateY: "rotate_y", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the y axis.";
+    RotateZ: "rotate_z", [S, p("angle", Float)], Shape, Transform, "Rotates the shape by `angle` about the z axis.";
+    Scale: "scale", [S, pos("factor", FloatOrVec3)], Shape, Transform, "Scales the shape about the origin; a vec3 scales per axis (the sphere tracer compensates for the stretched distance).";
     // Warps.
-    b!("twist", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Twists the shape about `axis` by `rate` radians per unit length."),
-    b!("bend", [S, dir("axis", &[1.0, 0.0, 0.0]), p("rate", Float)], Shape, Warp, "Bends the shape in the xy-plane: each point turns about z by `rate` times its coordinate along `axis`."),
-    b!("repeat", [S, posd("period", FloatOrVec3, F(2.0))], Shape, Warp, "Repeats the shape forever on a grid with cell size `period`."),
-    b!("mirror", [S, dir("normal", &[1.0, 0.0, 0.0])], Shape, Warp, "Mirrors the half on the positive side of the plane through the origin with `normal` onto the other side."),
-    b!("elongate", [S, Param { name: "amount", ty: Vec3, default: None, check: Check::NonNegative }], Shape, Warp, "Stretches the shape by inserting `amount` of straight extrusion along each axis."),
-    b!("round", [S, Param { name: "radius", ty: Float, default: None, check: Check::NonNegative }], Shape, Warp, "Rounds the shape by offsetting its surface outwards by `radius`."),
-    b!("shell", [S, pos("thickness", Float)], Shape, Warp, "Hollows the shape into a shell of `thickness` around its surface."),
-    b!("paint", [S, p("material", Material)], Shape, Transform, "Gives the shape a material. Unions keep each operand's material."),
+    Twist: "twist", [S, dir("axis", &[0.0, 1.0, 0.0]), p("rate", Float)], Shape, Warp, "Twists the shape about `axis` by `rate` radians per unit length.";
+    Bend: "bend", [S, dir("axis", &[1.0, 0.0, 0.0]), p("rate", Float)], Shape, Warp, "Bends the shape in the xy-plane: each point turns about z by `rate` times its coordinate along `axis`.";
+    Repeat: "repeat", [S, posd("period", FloatOrVec3, F(2.0))], Shape, Warp, "Repeats the shape forever on a grid with cell size `period`.";
+    Mirror: "mirror", [S, dir("normal", &[1.0, 0.0, 0.0])], Shape, Warp, "Mirrors the half on the positive side of the plane through the origin with `normal` onto the other side.";
+    Elongate: "elongate", [S, Param { name: "amount", ty: Vec3, default: None, check: Check::NonNegative }], Shape, Warp, "Stretches the shape by inserting `amount` of straight extrusion along each axis.";
+    Round: "round", [S, Param { name: "radius", ty: Float, default: None, check: Check::NonNegative }], Shape, Warp, "Rounds the shape by offsetting its surface outwards by `radius`.";
+    Shell: "shell", [S, pos("thickness", Float)], Shape, Warp, "Hollows the shape into a shell of `thickness` around its surface.";
+    Paint: "paint", [S, p("material", Material)], Shape, Transform, "Gives the shape a material. Unions keep each operand's material.";
     // Textures and procedural patterns.
-    b!("image", [p("path", Str)], Texture, Texture, "Loads a PNG or JPEG image; the path is relative to the scene file."),
-    b!("sample", [p("texture", Texture), p("uv", Vec2), Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec4, Texture, "Samples `texture` at `uv` (rgba, linear), with mip-mapping and the `wrap` mode `repeat`, `mirror` or `clamp`."),
-    b!("checker", [p("uv", Vec2), posd("n", Float, F(8.0))], Float, Texture, "A checkerboard of `n` squares per unit of uv: 0 or 1."),
-    b!("grid", [p("uv", Vec2), posd("n", Float, F(8.0)), posd("width", Float, F(0.05))], Float, Texture, "Grid lines, `n` per unit of uv, of relative `width`: 1 on a line, 0 elsewhere."),
+    Image: "image", [p("path", Str)], Texture, Texture, "Loads a PNG or JPEG image; the path is relative to the scene file.";
+    Sample: "sample", [p("texture", Texture), p("uv", Vec2), Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec4, Texture, "Samples `texture` at `uv` (rgba, linear), with mip-mapping and the `wrap` mode `repeat`, `mirror` or `clamp`.";
+    Checker: "checker", [p("uv", Vec2), posd("n", Float, F(8.0))], Float, Texture, "A checkerboard of `n` squares per unit of uv: 0 or 1.";
+    Grid: "grid", [p("uv", Vec2), posd("n", Float, F(8.0)), posd("width", Float, F(0.05))], Float, Texture, "Grid lines, `n` per unit of uv, of relative `width`: 1 on a line, 0 elsewhere.";
     // Render settings.
-    b!("orbit", [d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("distance", Float, F(5.0)), d("yaw", Float, F(0.0)), d("pitch", Float, F(0.0)), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera looking at `target` from `distance`, turned by `yaw` about y and raised by `pitch`; `fov` is the vertical field of view."),
-    b!("look_at", [p("eye", Vec3), d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera at `eye` looking at `target`; `fov` is the vertical field of view."),
-    b!("sun", [dir("direction", &[0.5, 1.0, 0.3]), Param { name: "color", ty: Vec3, default: Some(V(&[1.0, 1.0, 1.0])), check: Check::NonNegative }, Param { name: "intensity", ty: Float, default: Some(F(3.0)), check: Check::NonNegative }], Light, Render, "A directional light; `direction` points from the surface towards the sun."),
+    Orbit: "orbit", [d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("distance", Float, F(5.0)), d("yaw", Float, F(0.0)), d("pitch", Float, F(0.0)), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera looking at `target` from `distance`, turned by `yaw` about y and raised by `pitch`; `fov` is the vertical field of view.";
+    LookAt: "look_at", [p("eye", Vec3), d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera at `eye` looking at `target`; `fov` is the vertical field of view.";
+    Sun: "sun", [dir("direction", &[0.5, 1.0, 0.3]), Param { name: "color", ty: Vec3, default: Some(V(&[1.0, 1.0, 1.0])), check: Check::NonNegative }, Param { name: "intensity", ty: Float, default: Some(F(3.0)), check: Check::NonNegative }], Light, Render, "A directional light; `direction` points from the surface towards the sun.";
     // Math; all of these also work on surface fields.
-    b!("sin", [TX], T, Math, "Sine, per component."),
-    b!("cos", [TX], T, Math, "Cosine, per component."),
-    b!("tan", [TX], T, Math, "Tangent, per component."),
-    b!("asin", [TX], T, Math, "Arc sine, per component."),
-    b!("acos", [TX], T, Math, "Arc cosine, per component."),
-    b!("atan", [TX], T, Math, "Arc tangent, per component."),
-    b!("atan2", [p("y", T), TX], T, Math, "Arc tangent of y/x using both signs, per component."),
-    b!("sqrt", [TX], T, Math, "Square root, per component."),
-    b!("abs", [TX], T, Math, "Absolute value, per component."),
-    b!("floor", [TX], T, Math, "Rounds down, per component."),
-    b!("ceil", [TX], T, Math, "Rounds up, per component."),
-    b!("fract", [TX], T, Math, "`x - floor(x)`, per component."),
-    b!("sign", [TX], T, Math, "-1, 0 or 1, per component."),
-    b!("exp", [TX], T, Math, "e to the power x, per component."),
-    b!("log", [TX], T, Math, "Natural logarithm, per component."),
-    b!("pow", [TX, p("y", T)], T, Math, "x to the power y, per component."),
-    b!("min", [p("a", T), p("b", T)], T, Math, "The smaller value, per component."),
-    b!("max", [p("a", T), p("b", T)], T, Math, "The larger value, per component."),
-    b!("clamp", [TX, p("lo", T), p("hi", T)], T, Math, "`x` limited to `[lo, hi]`, per component."),
-    b!("mix", [p("a", T), p("b", T), p("t", T)], T, Math, "Linear interpolation `a + (b - a) * t`."),
-    b!("smoothstep", [p("edge0", T), p("edge1", T), TX], T, Math, "Hermite step from 0 at `edge0` to 1 at `edge1`."),
-    b!("step", [p("edge", T), TX], T, Math, "0 where `x < edge`, else 1."),
-    b!("length", [TX], Float, Math, "Euclidean length of a vector."),
-    b!("distance", [p("a", T), p("b", T)], Float, Math, "Euclidean distance between two points."),
-    b!("dot", [p("a", T), p("b", T)], Float, Math, "Dot product."),
-    b!("cross", [p("a", Vec3), p("b", Vec3)], Vec3, Math, "Cross product of two vec3."),
-    b!("normalize", [TX], T, Math, "The vector scaled to unit length."),
-    b!("radians", [TX], T, Math, "Degrees to radians (or write `90deg`)."),
-    b!("degrees", [TX], T, Math, "Radians to degrees."),
-];
+    Sin: "sin", [TX], T, Math, "Sine, per component.";
+    Cos: "cos", [TX], T, Math, "Cosine, per component.";
+    Tan: "tan", [TX], T, Math, "Tangent, per component.";
+    Asin: "asin", [TX], T, Math, "Arc sine, per component.";
+    Acos: "acos", [TX], T, Math, "Arc cosine, per component.";
+    Atan: "atan", [TX], T, Math, "Arc tangent, per component.";
+    Atan2: "atan2", [p("y", T), TX], T, Math, "Arc tangent of y/x using both signs, per component.";
+    Sqrt: "sqrt", [TX], T, Math, "Square root, per component.";
+    Abs: "abs", [TX], T, Math, "Absolute value, per component.";
+    Floor: "floor", [TX], T, Math, "Rounds down, per component.";
+    Ceil: "ceil", [TX], T, Math, "Rounds up, per component.";
+    Fract: "fract", [TX], T, Math, "`x - floor(x)`, per component.";
+    Sign: "sign", [TX], T, Math, "-1, 0 or 1, per component.";
+    Exp: "exp", [TX], T, Math, "e to the power x, per component.";
+    Log: "log", [TX], T, Math, "Natural logarithm, per component.";
+    Pow: "pow", [TX, p("y", T)], T, Math, "x to the power y, per component.";
+    Min: "min", [p("a", T), p("b", T)], T, Math, "The smaller value, per component.";
+    Max: "max", [p("a", T), p("b", T)], T, Math, "The larger value, per component.";
+    Clamp: "clamp", [TX, p("lo", T), p("hi", T)], T, Math, "`x` limited to `[lo, hi]`, per component.";
+    Mix: "mix", [p("a", T), p("b", T), p("t", T)], T, Math, "Linear interpolation `a + (b - a) * t`.";
+    Smoothstep: "smoothstep", [p("edge0", T), p("edge1", T), TX], T, Math, "Hermite step from 0 at `edge0` to 1 at `edge1`.";
+    Step: "step", [p("edge", T), TX], T, Math, "0 where `x < edge`, else 1.";
+    Length: "length", [TX], Float, Math, "Euclidean length of a vector.";
+    Distance: "distance", [p("a", T), p("b", T)], Float, Math, "Euclidean distance between two points.";
+    Dot: "dot", [p("a", T), p("b", T)], Float, Math, "Dot product.";
+    Cross: "cross", [p("a", Vec3), p("b", Vec3)], Vec3, Math, "Cross product of two vec3.";
+    Normalize: "normalize", [TX], T, Math, "The vector scaled to unit length.";
+    Radians: "radians", [TX], T, Math, "Degrees to radians (or write `90deg`).";
+    Degrees: "degrees", [TX], T, Math, "Radians to degrees.";
+}
 
 /// A builtin constant or surface input.
 #[derive(Debug, Clone, Copy, PartialEq)]

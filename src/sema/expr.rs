@@ -196,13 +196,7 @@ impl Checker<'_> {
             return Value::Error;
         }
         if values.iter().any(|v| v.ty().is_field()) {
-            return Value::field(
-                FieldExpr::Call {
-                    builtin: "vec",
-                    args: values,
-                },
-                Ty::Vec(count as u8),
-            );
+            return Value::field(FieldExpr::Vector(values), Ty::Vec(count as u8));
         }
         Value::Vec(
             values
@@ -246,9 +240,9 @@ impl Checker<'_> {
             }
             Ok(Ty::Shape) => {
                 let builtin = match op {
-                    BinaryOp::Or => "union",
-                    BinaryOp::And => "intersection",
-                    _ => "difference",
+                    BinaryOp::Or => builtins::BuiltinId::Union,
+                    BinaryOp::And => builtins::BuiltinId::Intersection,
+                    _ => builtins::BuiltinId::Difference,
                 };
                 Value::Shape(Rc::new(Node {
                     builtin,
@@ -548,18 +542,7 @@ impl Checker<'_> {
                 continue;
             }
             let base = ty.base();
-            let accepted = match p.ty {
-                PTy::Float => *base == Ty::Float,
-                PTy::Vec2 => *base == Ty::Vec(2),
-                PTy::Vec3 => *base == Ty::Vec(3),
-                PTy::Bool => *base == Ty::Bool,
-                PTy::Str => *base == Ty::Str,
-                PTy::Shape => *base == Ty::Shape,
-                PTy::Texture => *base == Ty::Texture,
-                PTy::Material => *base == Ty::Material,
-                PTy::FloatOrVec3 => matches!(base, Ty::Float | Ty::Vec(3)),
-                PTy::T => base.is_numeric(),
-            };
+            let accepted = p.ty.accepts(base);
             if !accepted {
                 let mut d = Diagnostic::error(
                     codes::E_TYPE_MISMATCH,
@@ -630,7 +613,7 @@ impl Checker<'_> {
         };
         let node = || {
             Rc::new(Node {
-                builtin: b.name,
+                builtin: b.id,
                 args: args.clone(),
                 span,
             })
@@ -642,13 +625,13 @@ impl Checker<'_> {
             Ret::Light => Value::Light(node()),
             _ if b.kind == Kind::Texture || args.iter().any(|a| a.ty().is_field()) => Value::field(
                 FieldExpr::Call {
-                    builtin: b.name,
+                    builtin: b.id,
                     args,
                 },
                 ret_ty,
             ),
             _ => {
-                let v = fold::math(b.name, &args, n as usize);
+                let v = fold::math(b.id, &args, n as usize);
                 self.finite(v, span)
             }
         }

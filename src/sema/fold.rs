@@ -1,5 +1,6 @@
 //! Constant folding: operators and math builtins on constant floats and vectors.
 
+use super::builtins::BuiltinId;
 use super::types::{Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 
@@ -99,7 +100,8 @@ fn pack(v: Vec<f64>) -> Value {
 
 /// Folds a math builtin on constant arguments (already type-checked; `T` arguments may be
 /// floats that broadcast to the call's vector size `n`).
-pub fn math(name: &str, args: &[Value], n: usize) -> Value {
+pub fn math(builtin: BuiltinId, args: &[Value], n: usize) -> Value {
+    use BuiltinId as B;
     let comps: Vec<Vec<f64>> = args
         .iter()
         .map(|a| match a.components() {
@@ -121,20 +123,20 @@ pub fn math(name: &str, args: &[Value], n: usize) -> Value {
         )
     };
     let x = &comps[0];
-    match name {
-        "sin" => pack(map1(x, f64::sin)),
-        "cos" => pack(map1(x, f64::cos)),
-        "tan" => pack(map1(x, f64::tan)),
-        "asin" => pack(map1(x, f64::asin)),
-        "acos" => pack(map1(x, f64::acos)),
-        "atan" => pack(map1(x, f64::atan)),
-        "atan2" => zip2(f64::atan2),
-        "sqrt" => pack(map1(x, f64::sqrt)),
-        "abs" => pack(map1(x, f64::abs)),
-        "floor" => pack(map1(x, f64::floor)),
-        "ceil" => pack(map1(x, f64::ceil)),
-        "fract" => pack(map1(x, |v| v - v.floor())),
-        "sign" => pack(map1(x, |v| {
+    match builtin {
+        B::Sin => pack(map1(x, f64::sin)),
+        B::Cos => pack(map1(x, f64::cos)),
+        B::Tan => pack(map1(x, f64::tan)),
+        B::Asin => pack(map1(x, f64::asin)),
+        B::Acos => pack(map1(x, f64::acos)),
+        B::Atan => pack(map1(x, f64::atan)),
+        B::Atan2 => zip2(f64::atan2),
+        B::Sqrt => pack(map1(x, f64::sqrt)),
+        B::Abs => pack(map1(x, f64::abs)),
+        B::Floor => pack(map1(x, f64::floor)),
+        B::Ceil => pack(map1(x, f64::ceil)),
+        B::Fract => pack(map1(x, |v| v - v.floor())),
+        B::Sign => pack(map1(x, |v| {
             if v > 0.0 {
                 1.0
             } else if v < 0.0 {
@@ -143,25 +145,25 @@ pub fn math(name: &str, args: &[Value], n: usize) -> Value {
                 0.0
             }
         })),
-        "exp" => pack(map1(x, f64::exp)),
-        "log" => pack(map1(x, f64::ln)),
-        "pow" => zip2(f64::powf),
-        "min" => zip2(f64::min),
-        "max" => zip2(f64::max),
-        "step" => zip2(|e, v| if v < e { 0.0 } else { 1.0 }),
-        "radians" => pack(map1(x, f64::to_radians)),
-        "degrees" => pack(map1(x, f64::to_degrees)),
-        "clamp" => pack(
+        B::Exp => pack(map1(x, f64::exp)),
+        B::Log => pack(map1(x, f64::ln)),
+        B::Pow => zip2(f64::powf),
+        B::Min => zip2(f64::min),
+        B::Max => zip2(f64::max),
+        B::Step => zip2(|e, v| if v < e { 0.0 } else { 1.0 }),
+        B::Radians => pack(map1(x, f64::to_radians)),
+        B::Degrees => pack(map1(x, f64::to_degrees)),
+        B::Clamp => pack(
             (0..x.len())
                 .map(|i| x[i].max(comps[1][i]).min(comps[2][i]))
                 .collect(),
         ),
-        "mix" => pack(
+        B::Mix => pack(
             (0..x.len())
                 .map(|i| x[i] + (comps[1][i] - x[i]) * comps[2][i])
                 .collect(),
         ),
-        "smoothstep" => pack(
+        B::Smoothstep => pack(
             (0..comps[2].len())
                 .map(|i| {
                     let t = ((comps[2][i] - x[i]) / (comps[1][i] - x[i])).clamp(0.0, 1.0);
@@ -169,20 +171,20 @@ pub fn math(name: &str, args: &[Value], n: usize) -> Value {
                 })
                 .collect(),
         ),
-        "length" => Value::Float(x.iter().map(|v| v * v).sum::<f64>().sqrt()),
-        "distance" => Value::Float(
+        B::Length => Value::Float(x.iter().map(|v| v * v).sum::<f64>().sqrt()),
+        B::Distance => Value::Float(
             x.iter()
                 .zip(&comps[1])
                 .map(|(a, b)| (a - b) * (a - b))
                 .sum::<f64>()
                 .sqrt(),
         ),
-        "dot" => Value::Float(x.iter().zip(&comps[1]).map(|(a, b)| a * b).sum()),
-        "normalize" => {
+        B::Dot => Value::Float(x.iter().zip(&comps[1]).map(|(a, b)| a * b).sum()),
+        B::Normalize => {
             let len = x.iter().map(|v| v * v).sum::<f64>().sqrt();
             pack(map1(x, |v| v / len))
         }
-        "cross" => {
+        B::Cross => {
             let (a, b) = (x, &comps[1]);
             Value::Vec(vec![
                 a[1] * b[2] - a[2] * b[1],
@@ -190,7 +192,50 @@ pub fn math(name: &str, args: &[Value], n: usize) -> Value {
                 a[0] * b[1] - a[1] * b[0],
             ])
         }
-        _ => Value::Error,
+        // Not math: shapes, textures and render settings are never folded.
+        B::Sphere
+        | B::Box
+        | B::RoundBox
+        | B::BoxFrame
+        | B::Torus
+        | B::Capsule
+        | B::Cylinder
+        | B::Cone
+        | B::CappedCone
+        | B::Plane
+        | B::Ellipsoid
+        | B::Octahedron
+        | B::HexPrism
+        | B::TriPrism
+        | B::Pyramid
+        | B::Link
+        | B::Union
+        | B::Intersection
+        | B::Difference
+        | B::SmoothUnion
+        | B::SmoothIntersection
+        | B::SmoothDifference
+        | B::Translate
+        | B::Rotate
+        | B::RotateX
+        | B::RotateY
+        | B::RotateZ
+        | B::Scale
+        | B::Paint
+        | B::Twist
+        | B::Bend
+        | B::Repeat
+        | B::Mirror
+        | B::Elongate
+        | B::Round
+        | B::Shell
+        | B::Image
+        | B::Sample
+        | B::Checker
+        | B::Grid
+        | B::Orbit
+        | B::LookAt
+        | B::Sun => Value::Error,
     }
 }
 

@@ -83,7 +83,7 @@ pub type MaterialId = usize;
 /// Shapes, textures, cameras and lights are trees of these; the IR lowers them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Node {
-    pub builtin: &'static str,
+    pub builtin: super::builtins::BuiltinId,
     pub args: Vec<Value>,
     /// The source that produced this node (the call or the operator).
     pub span: Span,
@@ -151,11 +151,12 @@ pub enum FieldExpr {
         attr: AtlasAttr,
     },
     /// A builtin applied to arguments, some of them fields (`sin`, `mix`, `sample`, …).
-    /// `vec` builds a vector from its components.
     Call {
-        builtin: &'static str,
+        builtin: super::builtins::BuiltinId,
         args: Vec<Value>,
     },
+    /// A vector built from its components (`[x, y, z]` with a field among them).
+    Vector(Vec<Value>),
     Unary {
         op: UnaryOp,
         operand: Value,
@@ -251,7 +252,7 @@ impl Value {
             Value::Bool(b) => b.to_string(),
             Value::Str(s) => format!("{s:?}"),
             Value::Shape(n) | Value::Texture(n) | Value::Camera(n) | Value::Light(n) => {
-                format!("{}(…)", n.builtin)
+                format!("{}(…)", n.builtin.name())
             }
             other => other.ty().to_string(),
         }

@@ -187,16 +187,15 @@ pub fn suggest<'a>(name: &str, choices: impl IntoIterator<Item = &'a str>) -> St
 
 /// The shape to render or evaluate: the named one, else the render target, else the
 /// only shape. An error is a usage message (the choice was made outside the scene).
-pub fn pick_shape(scene: &Scene, name: Option<&str>) -> Result<ir::Shape, String> {
+pub fn pick_shape<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a ir::Shape, String> {
     let names = || scene.shapes.iter().map(|s| s.name.as_str());
     match name {
         Some(n) => scene
             .shape(n)
-            .cloned()
             .ok_or_else(|| format!("the scene has no shape `{n}`; {}", suggest(n, names()))),
         None => match (&scene.render, scene.shapes.as_slice()) {
-            (Some(r), _) => Ok(r.clone()),
-            (None, [only]) => Ok(only.shape.clone()),
+            (Some(r), _) => Ok(r),
+            (None, [only]) => Ok(&only.shape),
             (None, []) => Err(String::from("the scene has no shape")),
             (None, _) => Err(format!(
                 "the scene has no render item; choose a shape with --shape: {}",

@@ -285,5 +285,5 @@ pub fn view_for(
     } else {
         analysis.program.render.as_ref()
     };
-    Ok(sdfc::view::View::new(render_item, &target))
+    Ok(sdfc::view::View::new(render_item, target))
 }

@@ -14,6 +14,8 @@ codes! {
     E_UNTERMINATED_STRING = "E0002": "a string literal without its closing quote";
     E_UNTERMINATED_COMMENT = "E0003": "a block comment without its closing `*/`";
     E_BAD_NUMBER = "E0004": "a malformed number literal";
+    E_INVALID_UTF8 = "E0005": "bytes that are not valid UTF-8";
+    E_TOO_LARGE = "E0006": "a file larger than the limit sdfc reads";
     E_SYNTAX = "E0010": "a syntax error: the parser expected something else";
     E_TOO_DEEP = "E0011": "an expression nested deeper than the limit";
     E_UNKNOWN_NAME = "E0100": "a name that is not defined";
@@ -45,6 +47,7 @@ codes! {
     E_MISSING_FILE = "E0303": "a texture file that does not exist";
     E_IMAGE_FORMAT = "E0304": "a texture file in a format sdfc cannot read";
     E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
+    E_FILE_REFUSED = "E0306": "a file the scene may not read: outside its folder, a folder, a device or FIFO, or too large";
     E_CODEGEN = "E0400": "a scene the code generator cannot compile yet";
     E_SEED_PROJECTION = "E0401": "a seed that cannot be projected onto its atlas's surface";
     E_UNREACHABLE_MERGE = "E0402": "a merge whose seeds cannot reach each other by the geodesic walk";
@@ -56,4 +59,5 @@ codes! {
     W_OBSTRUCTION = "W0005": "a cycle of merges that cannot close into one uv chart (a topological obstruction)";
     W_SEED_JUMP = "W0006": "a seed that projection moved onto another part of the surface";
     N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
+    N_TRUNCATED = "N0002": "more diagnostics than a file may report; the rest are counted, not shown";
 }

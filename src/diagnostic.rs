@@ -6,6 +6,7 @@
 //! codespan-reporting, [`to_json`] turns it into the machine-readable form of
 //! `sdfc check --format json`.
 
+use crate::codes;
 use crate::span::{LineIndex, Span};
 use codespan_reporting::diagnostic as cs;
 use codespan_reporting::files::SimpleFile;
@@ -181,6 +182,43 @@ impl Diagnostic {
     }
 }
 
+/// The most characters of the user's text a message quotes.
+pub const MAX_QUOTED: usize = 40;
+
+/// The most diagnostics reported for one file; the rest are counted in a final note.
+pub const MAX_DIAGNOSTICS: usize = 1000;
+
+/// The user's text as a message quotes it: in quotes with escapes, and cut after
+/// [`MAX_QUOTED`] characters, saying how many more there were.
+pub fn quote(text: &str) -> String {
+    let total = text.chars().count();
+    if total <= MAX_QUOTED {
+        return format!("{text:?}");
+    }
+    let head: String = text.chars().take(MAX_QUOTED).collect();
+    format!("{head:?}… ({} more characters)", total - MAX_QUOTED)
+}
+
+/// Keeps the first [`MAX_DIAGNOSTICS`] diagnostics (already sorted) and replaces the rest
+/// with one note that counts them.
+pub fn cap(diags: &mut Vec<Diagnostic>) {
+    if diags.len() <= MAX_DIAGNOSTICS {
+        return;
+    }
+    let dropped = &diags[MAX_DIAGNOSTICS..];
+    let errors = dropped.iter().filter(|d| d.is_error()).count();
+    let message = format!(
+        "{} more diagnostics ({errors} of them errors) not shown: sdfc reports at most {MAX_DIAGNOSTICS} per file",
+        dropped.len()
+    );
+    diags.truncate(MAX_DIAGNOSTICS);
+    diags.push(Diagnostic::unlocated(
+        Severity::Note,
+        codes::N_TRUNCATED,
+        message,
+    ));
+}
+
 /// Sorts diagnostics by position (unlocated ones first), then severity, so output is
 /// stable.
 pub fn sort(diags: &mut [Diagnostic]) {
@@ -214,8 +252,50 @@ fn to_codespan(d: &Diagnostic, len: usize) -> cs::Diagnostic<()> {
         .with_notes(notes)
 }
 
+/// The longest source line a rendered diagnostic quotes, in bytes; a diagnostic on a
+/// longer line gives its position in a note instead.
+pub const MAX_SNIPPET_LINE: usize = 1000;
+
+/// A diagnostic whose labels sit on over-long lines, without the labels that do, and with
+/// their positions in a note (so a 10 MB line is not printed).
+fn without_long_lines(d: &Diagnostic, source: &str, index: &LineIndex) -> Option<Diagnostic> {
+    let long = |span: Span| {
+        let (line, _) = index.line_col(source, span.start.min(source.len()));
+        index.line_len(source, line) > MAX_SNIPPET_LINE
+    };
+    let any = d.primary.iter().chain(&d.secondary).any(|l| long(l.span));
+    if !any {
+        return None;
+    }
+    let mut short = d.clone();
+    if let Some(p) = short.primary.take_if(|p| long(p.span)) {
+        let (line, col) = index.line_col(source, p.span.start.min(source.len()));
+        short.notes.insert(
+            0,
+            format!(
+                "at line {}, column {} ({}; the line is too long to show)",
+                line + 1,
+                col + 1,
+                p.message
+            ),
+        );
+    }
+    short.secondary.retain(|l| !long(l.span));
+    Some(short)
+}
+
 /// Renders diagnostics as text, the way `sdfc check` prints them.
 pub fn render(file_name: &str, source: &str, diags: &[Diagnostic], color: bool) -> String {
+    let index = LineIndex::new(source);
+    let shortened: Vec<Option<Diagnostic>> = diags
+        .iter()
+        .map(|d| without_long_lines(d, source, &index))
+        .collect();
+    let diags: Vec<&Diagnostic> = diags
+        .iter()
+        .zip(&shortened)
+        .map(|(d, s)| s.as_ref().unwrap_or(d))
+        .collect();
     let file = SimpleFile::new(file_name, source);
     let config = term::Config::default();
     let mut out = Vec::new();
@@ -277,7 +357,20 @@ struct JsonDiagnostic<'a> {
 /// One JSON object (a single line) for a diagnostic, as `sdfc check --format json` prints it.
 /// Lines and columns are 1-based; columns count Unicode scalar values.
 pub fn to_json(file_name: &str, source: &str, d: &Diagnostic) -> String {
+    to_json_indexed(file_name, source, &LineIndex::new(source), d)
+}
+
+/// [`to_json`] for every diagnostic of a file, indexing its lines once (linear in the
+/// file and the number of diagnostics).
+pub fn to_json_all(file_name: &str, source: &str, diags: &[Diagnostic]) -> Vec<String> {
     let index = LineIndex::new(source);
+    diags
+        .iter()
+        .map(|d| to_json_indexed(file_name, source, &index, d))
+        .collect()
+}
+
+fn to_json_indexed(file_name: &str, source: &str, index: &LineIndex, d: &Diagnostic) -> String {
     let pos = |offset: usize| {
         let (line, column) = index.line_col(source, offset);
         JsonPos {

@@ -11,12 +11,14 @@
 //! is both with the default options, as `sdfc check` and the language server run them,
 //! and keeps the validated module. Every command goes through these three.
 
+use crate::access::Access;
 use crate::codegen::{self, Module, Validated};
 use crate::diagnostic::{self, Diagnostic};
 use crate::ir::{self, Scene};
 use crate::sema::{self, Program};
 use crate::syntax::{self, Parsed};
 use crate::uv::Atlas;
+use std::collections::HashSet;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -37,6 +39,35 @@ pub struct Analysis {
 }
 
 impl Analysis {
+    /// Adds the diagnostics of decoding the file's bytes ([`syntax::decode`]). An invalid
+    /// sequence is reported once, by its byte offset, and not again as an unexpected
+    /// character.
+    pub fn add_decoding(&mut self, decoding: Vec<Diagnostic>) {
+        if decoding.is_empty() {
+            return;
+        }
+        // A run of unexpected characters made only of replaced sequences starts at one
+        // and ends at one.
+        let starts: HashSet<usize> = decoding
+            .iter()
+            .filter_map(|d| d.span())
+            .map(|s| s.start)
+            .collect();
+        let ends: HashSet<usize> = decoding
+            .iter()
+            .filter_map(|d| d.span())
+            .map(|s| s.end)
+            .collect();
+        let covered = |d: &Diagnostic| {
+            d.code == crate::codes::E_UNEXPECTED_CHAR
+                && d.span()
+                    .is_some_and(|s| starts.contains(&s.start) && ends.contains(&s.end))
+        };
+        self.diagnostics.retain(|d| !covered(d));
+        self.diagnostics.extend(decoding);
+        diagnostic::sort(&mut self.diagnostics);
+    }
+
     pub fn has_errors(&self) -> bool {
         self.diagnostics.iter().any(Diagnostic::is_error)
     }
@@ -80,11 +111,27 @@ pub enum CompileError {
 }
 
 /// Parses and checks a scene: the front end only. `base_dir` is the folder of the
-/// scene file, for texture paths.
+/// scene file: texture paths are relative to it, and confined to it.
 pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
+    analyze_with(source, &Access::new(base_dir))
+}
+
+/// [`analyze`] with the folders the scene may read given explicitly.
+pub fn analyze_with(source: &str, access: &Access) -> Analysis {
     let mut diagnostics = Vec::new();
+    if let Some(d) = syntax::source::too_large(source) {
+        diagnostics.push(d);
+        return Analysis {
+            parsed: syntax::parse("", &mut Vec::new()),
+            program: Program::default(),
+            diagnostics,
+            atlases: Vec::new(),
+            scene: None,
+            compiled: None,
+        };
+    }
     let parsed = syntax::parse(source, &mut diagnostics);
-    let program = sema::check(&parsed.file, base_dir, &mut diagnostics);
+    let program = sema::check(&parsed.file, access, &mut diagnostics);
     diagnostic::sort(&mut diagnostics);
     Analysis {
         parsed,
@@ -100,7 +147,12 @@ pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
 /// geometry of the atlases (seed projection, merge walks, frame and offset solves,
 /// obstruction tests) with its diagnostics, and the lowered scene.
 pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
-    let mut analysis = analyze(source, base_dir);
+    check_with(source, &Access::new(base_dir))
+}
+
+/// [`check`] with the folders the scene may read given explicitly.
+pub fn check_with(source: &str, access: &Access) -> Analysis {
+    let mut analysis = analyze_with(source, access);
     if !analysis.has_errors() {
         let (atlases, diags) = crate::uv::diagnose::prepare_all(&analysis.program);
         analysis.atlases = atlases;
@@ -118,7 +170,12 @@ pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
 /// [`Analysis::compiled`]; a library file (shapes, no `render`) is built for its first
 /// shape.
 pub fn check_all(source: &str, base_dir: Option<&Path>) -> Analysis {
-    let mut analysis = check(source, base_dir);
+    check_all_with(source, &Access::new(base_dir))
+}
+
+/// [`check_all`] with the folders the scene may read given explicitly.
+pub fn check_all_with(source: &str, access: &Access) -> Analysis {
+    let mut analysis = check_with(source, access);
     let Some(scene) = &analysis.scene else {
         return analysis;
     };

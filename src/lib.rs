@@ -17,6 +17,7 @@
 //! Every stage reports problems as [`diagnostic::Diagnostic`]s and keeps going,
 //! so one run shows every independent problem. No input makes any stage panic.
 
+pub mod access;
 pub mod bench;
 pub mod codegen;
 pub mod codes;

@@ -19,6 +19,7 @@ fn main() -> ExitCode {
             };
         }
     };
+    cli::set_allowed_paths(cli.allow_path);
     match cli.command {
         Command::Check(args) => cli::check::run(args),
         Command::Eval(args) => cli::eval::run(args),
@@ -27,7 +28,9 @@ fn main() -> ExitCode {
         Command::Bench(args) => cli::bench::run(args),
         Command::Fmt(args) => cli::fmt::run(args),
         Command::Lsp => match sdfc::lsp::run_stdio() {
-            Ok(()) => ExitCode::SUCCESS,
+            Ok(sdfc::lsp::Ended::Clean) => ExitCode::SUCCESS,
+            // `exit` without `shutdown`: 1, as the specification asks.
+            Ok(sdfc::lsp::Ended::WithoutShutdown) => ExitCode::from(1),
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)

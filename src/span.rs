@@ -63,6 +63,17 @@ impl LineIndex {
         LineIndex { starts }
     }
 
+    /// The length of 0-based `line` in bytes, without its line break.
+    pub fn line_len(&self, text: &str, line: usize) -> usize {
+        let start = self.starts.get(line).copied().unwrap_or(text.len());
+        let end = self
+            .starts
+            .get(line + 1)
+            .map(|s| s - 1)
+            .unwrap_or(text.len());
+        end.saturating_sub(start)
+    }
+
     /// 0-based line and 0-based column in Unicode scalar values.
     pub fn line_col(&self, text: &str, offset: usize) -> (usize, usize) {
         let offset = offset.min(text.len());

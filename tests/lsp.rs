@@ -11,7 +11,7 @@ struct Client {
 }
 
 impl Client {
-    fn start() -> (Client, std::thread::JoinHandle<()>) {
+    fn start() -> (Client, std::thread::JoinHandle<sdfc::lsp::Ended>) {
         let (server, client) = Connection::memory();
         let handle = std::thread::spawn(move || sdfc::lsp::serve(server).unwrap());
         let mut c = Client {
@@ -115,10 +115,10 @@ impl Client {
 const URI: &str = "file:///tmp/sdfc-lsp-test/scene.sdf";
 
 /// Shuts the server down as a client does, and waits for it to exit.
-fn stop(mut c: Client, handle: std::thread::JoinHandle<()>) {
+fn stop(mut c: Client, handle: std::thread::JoinHandle<sdfc::lsp::Ended>) {
     c.request("shutdown", json!(null));
     c.notify("exit", json!(null));
-    handle.join().unwrap();
+    assert_eq!(handle.join().unwrap(), sdfc::lsp::Ended::Clean);
 }
 
 #[path = "lsp/actions.rs"]
@@ -242,7 +242,7 @@ fn utf16_positions() {
     assert_eq!(e["range"]["start"], json!({ "line": 0, "character": 36 }));
     c.request("shutdown", json!(null));
     c.notify("exit", json!(null));
-    handle.join().unwrap();
+    assert_eq!(handle.join().unwrap(), sdfc::lsp::Ended::Clean);
 }
 
 #[test]

@@ -58,19 +58,18 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(super::render::GPU_EXIT);
+            return ExitCode::from(super::exit::gpu(&e));
         }
     };
     let dir = super::base_dir(&scene);
-    let measure =
-        |module: &sdfc::codegen::Module, mode: ViewMode| -> Result<(Duration, Duration), String> {
-            // One pipeline per module; a warm-up frame, then the measured ones.
-            let renderer = gpu::Renderer::new(&gpu, module, &dir).map_err(|e| e.to_string())?;
-            let (_, frames) = renderer
-                .frames(&gpu, &view, mode, 1, args.frames.max(1))
-                .map_err(|e| e.to_string())?;
-            Ok((renderer.pipeline_time, median(frames)))
-        };
+    let measure = |module: &sdfc::codegen::Module,
+                   mode: ViewMode|
+     -> Result<(Duration, Duration), gpu::GpuError> {
+        // One pipeline per module; a warm-up frame, then the measured ones.
+        let renderer = gpu::Renderer::new(&gpu, module, &dir)?;
+        let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
+        Ok((renderer.pipeline_time, median(frames)))
+    };
     let rows = [
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
@@ -82,7 +81,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
             Ok(r) => results.push((name, r)),
             Err(e) => {
                 eprintln!("error: {e}");
-                return ExitCode::from(super::render::GPU_EXIT);
+                return ExitCode::from(super::exit::gpu(&e));
             }
         }
     }

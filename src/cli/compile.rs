@@ -4,15 +4,10 @@
 use super::{load, CompileArgs};
 use sdfc::codegen::{self, targets::Output, Target};
 use sdfc::driver::{self, Analysis, CompileError, Compiled};
-use sdfc::fsutil::write_atomic;
+use sdfc::fsutil::write_output;
 use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
-
-/// Exit status for an internal compiler error.
-pub const ICE_EXIT: u8 = 3;
-/// Exit status for usage problems (a `--shape` that names nothing, say).
-pub const USAGE_EXIT: u8 = 2;
 
 /// Reads, checks and compiles a scene through the driver; problems are printed and
 /// come back as the exit status.
@@ -33,11 +28,11 @@ pub fn report(name: &str, source: &str, error: CompileError) -> ExitCode {
     match error {
         CompileError::Scene(diags) => {
             eprint!("{}", sdfc::diagnostic::render(name, source, &diags, false));
-            ExitCode::from(1)
+            ExitCode::from(super::exit::SCENE)
         }
         CompileError::Usage(message) => {
             eprintln!("error: {message}");
-            ExitCode::from(USAGE_EXIT)
+            ExitCode::from(super::exit::USAGE)
         }
         CompileError::Internal {
             diagnostic,
@@ -52,7 +47,7 @@ pub fn report(name: &str, source: &str, error: CompileError) -> ExitCode {
             );
             eprintln!("{naga}");
             save_for_report(name, &module.wgsl);
-            ExitCode::from(ICE_EXIT)
+            ExitCode::from(super::exit::ICE)
         }
     }
 }
@@ -76,7 +71,7 @@ fn save_for_report(name: &str, wgsl: &str) {
         })
         .collect();
     let path = std::env::temp_dir().join(format!("sdfc-ice-{stem}.wgsl"));
-    if write_atomic(&path, wgsl.as_bytes()).is_ok() {
+    if write_output(&path, wgsl.as_bytes()).is_ok() {
         eprintln!(
             "note: the generated WGSL is saved at {}; please attach it to a bug report",
             path.display()
@@ -99,7 +94,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
             args.entry,
             driver::suggest(&args.entry, names)
         );
-        return ExitCode::from(USAGE_EXIT);
+        return ExitCode::from(super::exit::USAGE);
     }
     let (_, _, compiled) = match build(&args.scene, &options) {
         Ok(x) => x,
@@ -118,7 +113,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
                 args.target
             );
             save_for_report(&args.scene.display().to_string(), &compiled.module.wgsl);
-            return ExitCode::from(ICE_EXIT);
+            return ExitCode::from(super::exit::ICE);
         }
     };
     let bytes = match output {
@@ -127,25 +122,25 @@ pub fn run(args: CompileArgs) -> ExitCode {
     };
     if let Some(path) = &args.manifest {
         let json = serde_json::to_string_pretty(&compiled.module.manifest).unwrap_or_default();
-        if let Err(e) = write_atomic(path, json.as_bytes()) {
+        if let Err(e) = write_output(path, json.as_bytes()) {
             eprintln!("error: cannot write {}: {e}", path.display());
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     }
     match &args.output {
         Some(path) => {
-            if let Err(e) = write_atomic(path, &bytes) {
+            if let Err(e) = write_output(path, &bytes) {
                 eprintln!("error: cannot write {}: {e}", path.display());
-                return ExitCode::from(2);
+                return ExitCode::from(super::exit::USAGE);
             }
         }
         None if args.target == Target::Spirv => {
             eprintln!("error: SPIR-V is binary; write it to a file with -o");
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
         None => {
             if std::io::stdout().write_all(&bytes).is_err() {
-                return ExitCode::from(2);
+                return ExitCode::from(super::exit::USAGE);
             }
         }
     }

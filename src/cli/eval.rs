@@ -1,7 +1,7 @@
 //! `sdfc eval`: signed distances, gradients and surface projections at points.
 
-use super::compile::USAGE_EXIT;
-use super::{load, read_source, EvalArgs};
+use super::exit;
+use super::{load, read_text, EvalArgs};
 use glam::DVec3;
 use sdfc::driver;
 use sdfc::ir::eval;
@@ -9,12 +9,23 @@ use std::io::Write;
 use std::process::ExitCode;
 
 /// Parses `[[x, y, z], …]`.
+/// The most points one `eval` takes.
+pub const MAX_POINTS: usize = 1_000_000;
+/// The largest points file, in bytes.
+pub const MAX_POINTS_BYTES: usize = 128 << 20;
+
 pub fn parse_points(text: &str) -> Result<Vec<DVec3>, String> {
     let value: serde_json::Value =
         serde_json::from_str(text).map_err(|e| format!("the points are not valid JSON: {e}"))?;
     let list = value
         .as_array()
         .ok_or("the points must be a JSON array of [x, y, z] arrays")?;
+    if list.len() > MAX_POINTS {
+        return Err(format!(
+            "{} points; the limit is {MAX_POINTS} per run",
+            list.len()
+        ));
+    }
     list.iter()
         .enumerate()
         .map(|(i, p)| {
@@ -72,23 +83,23 @@ pub fn run(args: EvalArgs) -> ExitCode {
         Err(code) => return code,
     };
     let Some(scene) = &analysis.scene else {
-        return ExitCode::from(1);
+        return ExitCode::from(super::exit::SCENE);
     };
     let shape = match driver::pick_shape(scene, args.shape.as_deref()) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(USAGE_EXIT);
+            return ExitCode::from(exit::USAGE);
         }
     };
-    let points = match read_source(&args.points)
+    let points = match read_text(&args.points, MAX_POINTS_BYTES)
         .map_err(|e| format!("cannot read {}: {e}", args.points.display()))
         .and_then(|t| parse_points(&t))
     {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     };
     // The atlas as the check prepared it (projected seeds, solved merge graph).
@@ -96,7 +107,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
         Ok(def) => def.and_then(|def| analysis.atlas(&def.name)),
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(USAGE_EXIT);
+            return ExitCode::from(exit::USAGE);
         }
     };
     // Atlas queries happen at each point's projection onto the atlas's own surface.
@@ -151,7 +162,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
             Ok(g) => g,
             Err(e) => {
                 eprintln!("error: {e}");
-                return ExitCode::from(super::render::GPU_EXIT);
+                return ExitCode::from(super::exit::gpu(&e));
             }
         };
         match sdfc::gpu::eval_points(&gpu, &module.wgsl, &points) {
@@ -163,7 +174,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
             }
             Err(e) => {
                 eprintln!("error: {e}");
-                return ExitCode::from(super::render::GPU_EXIT);
+                return ExitCode::from(super::exit::gpu(&e));
             }
         }
         if let Some(a) = atlas {
@@ -192,7 +203,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("error: {e}");
-                    return ExitCode::from(super::render::GPU_EXIT);
+                    return ExitCode::from(super::exit::gpu(&e));
                 }
             }
         }
@@ -223,7 +234,7 @@ pub fn run(args: EvalArgs) -> ExitCode {
         };
         let text = serde_json::to_string(&line).unwrap_or_default();
         if writeln!(out, "{text}").is_err() {
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     }
     ExitCode::SUCCESS

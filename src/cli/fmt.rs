@@ -21,7 +21,16 @@ pub fn run(args: FmtArgs) -> ExitCode {
     for path in &args.files {
         let name = path.display().to_string();
         let source = match read_source(path) {
-            Ok(s) => s,
+            Ok(s) if !s.decoding.is_empty() => {
+                eprint!(
+                    "{}",
+                    sdfc::diagnostic::render(&name, &s.text, &s.decoding, color)
+                );
+                eprintln!("error: {name} is not UTF-8 text; it was not formatted");
+                errors = true;
+                continue;
+            }
+            Ok(s) => s.text,
             Err(e) => {
                 eprintln!("error: cannot read {name}: {e}");
                 io_failed = true;
@@ -49,7 +58,7 @@ pub fn run(args: FmtArgs) -> ExitCode {
         } else if stdin {
             let _ = std::io::stdout().write_all(formatted.as_bytes());
         } else if formatted != source {
-            if let Err(e) = sdfc::fsutil::write_atomic(path, formatted.as_bytes()) {
+            if let Err(e) = sdfc::fsutil::write_output(path, formatted.as_bytes()) {
                 eprintln!("error: cannot write {name}: {e}");
                 io_failed = true;
             }
@@ -60,9 +69,9 @@ pub fn run(args: FmtArgs) -> ExitCode {
         eprintln!("{unformatted} file{s} would be reformatted (run `sdfc fmt` without --check)");
     }
     if io_failed {
-        ExitCode::from(2)
+        ExitCode::from(super::exit::USAGE)
     } else if errors || unformatted > 0 {
-        ExitCode::from(1)
+        ExitCode::from(super::exit::SCENE)
     } else {
         ExitCode::SUCCESS
     }

@@ -83,17 +83,17 @@ fn measure(path: &Path, text: &str, edits: u32) -> Result<(Vec<Duration>, usize)
 
 pub fn run(path: &Path, edits: u32) -> ExitCode {
     let text = match read_source(path) {
-        Ok(t) => t,
+        Ok(t) => t.text,
         Err(e) => {
             eprintln!("error: cannot read {}: {e}", path.display());
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     };
     let (mut times, count) = match measure(path, &text, edits.max(1)) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: the language server failed: {e}");
-            return ExitCode::from(1);
+            return ExitCode::from(super::exit::SCENE);
         }
     };
     times.sort();

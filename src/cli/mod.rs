@@ -9,14 +9,62 @@ pub mod latency;
 pub mod render;
 pub mod sweep;
 
+/// The exit statuses, one meaning each (the README's table).
+pub mod exit {
+    /// The scene has errors.
+    pub const SCENE: u8 = 1;
+    /// Usage or I/O problems: bad flags, unknown `--shape`/`--atlas`/`--entry`, unreadable
+    /// or unwritable files.
+    pub const USAGE: u8 = 2;
+    /// An internal compiler error: naga rejected generated code.
+    pub const ICE: u8 = 3;
+    /// No usable GPU adapter.
+    pub const GPU: u8 = 4;
+    /// A resource limit: the GPU ran out of memory, or a size is over the adapter's or
+    /// sdfc's limits. The message names the limit.
+    pub const RESOURCE: u8 = 5;
+
+    /// The status for a GPU failure.
+    pub fn gpu(e: &sdfc::gpu::GpuError) -> u8 {
+        use sdfc::gpu::GpuError;
+        match e {
+            GpuError::NoAdapter(_) | GpuError::Device(_) => GPU,
+            GpuError::Resource(_) => RESOURCE,
+            // A texture the check accepted that then failed to decode (changed since).
+            GpuError::Texture(_) => SCENE,
+            GpuError::Validation(_) => ICE,
+        }
+    }
+}
+
+static ALLOWED: std::sync::OnceLock<Vec<PathBuf>> = std::sync::OnceLock::new();
+
+/// Records the folders `--allow-path` adds to what scenes may read (once, at start).
+pub fn set_allowed_paths(dirs: Vec<PathBuf>) {
+    let _ = ALLOWED.set(dirs);
+}
+
+/// The folders the scene at `path` may read: its own, and `--allow-path`'s.
+pub fn access(path: &Path) -> sdfc::access::Access {
+    let mut access = sdfc::access::Access::new(Some(&base_dir(path)));
+    for dir in ALLOWED.get().into_iter().flatten() {
+        access.allow(dir);
+    }
+    access
+}
+
 use clap::{Parser, Subcommand, ValueEnum};
-use std::io::Read;
+use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 /// sdfc compiles signed-distance scenes with Implicit UVs.
 #[derive(Parser)]
 #[command(name = "sdfc", version, about, long_about = None, propagate_version = true)]
 pub struct Cli {
+    /// Also let scenes read textures below DIR (repeatable). By default a scene reads
+    /// only files in its own folder and its subfolders, after following symbolic links.
+    #[arg(long, global = true, value_name = "DIR")]
+    pub allow_path: Vec<PathBuf>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -186,7 +234,8 @@ pub enum Color {
 
 #[derive(clap::Args)]
 pub struct CheckArgs {
-    /// Scene files to check (`-` reads standard input).
+    /// Scene files to check, or folders to check every `.sdf` file below (`-` reads
+    /// standard input).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// Output format.
@@ -226,14 +275,52 @@ pub struct EvalArgs {
     pub brute_force: bool,
 }
 
-pub fn read_source(path: &Path) -> std::io::Result<String> {
+/// A scene as read: its text, and the diagnostics of decoding its bytes (invalid UTF-8).
+pub struct Source {
+    pub text: String,
+    pub decoding: Vec<sdfc::Diagnostic>,
+}
+
+/// Reads at most `limit + 1` bytes of a file (`-`: standard input), so an over-long
+/// input is known to be one without reading all of it. A folder is an error.
+pub fn read_bytes(path: &Path, limit: usize) -> std::io::Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    let take = limit as u64 + 1;
     if path == Path::new("-") {
-        let mut s = String::new();
-        std::io::stdin().read_to_string(&mut s)?;
-        Ok(s)
+        std::io::stdin().lock().take(take).read_to_end(&mut bytes)?;
     } else {
-        std::fs::read_to_string(path)
+        if std::fs::metadata(path)?.is_dir() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "it is a folder",
+            ));
+        }
+        std::fs::File::open(path)?
+            .take(take)
+            .read_to_end(&mut bytes)?;
     }
+    Ok(bytes)
+}
+
+/// Reads a scene file (`-`: standard input). Text over the size limit is read only up to
+/// just past it, for the checker to report.
+pub fn read_source(path: &Path) -> std::io::Result<Source> {
+    let bytes = read_bytes(path, sdfc::syntax::MAX_SOURCE_BYTES)?;
+    let (text, decoding) = sdfc::syntax::decode(&bytes);
+    Ok(Source { text, decoding })
+}
+
+/// Reads a UTF-8 text file of at most `limit` bytes (the `eval` points).
+pub fn read_text(path: &Path, limit: usize) -> std::io::Result<String> {
+    let bytes = read_bytes(path, limit)?;
+    if bytes.len() > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("it is larger than the limit of {limit} bytes"),
+        ));
+    }
+    String::from_utf8(bytes)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()))
 }
 
 /// The folder texture paths are relative to.
@@ -251,11 +338,16 @@ pub fn base_dir(path: &Path) -> PathBuf {
 /// diagnostics, and gives the exit code to return when it cannot be used.
 pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::process::ExitCode> {
     let name = path.display().to_string();
-    let source = read_source(path).map_err(|e| {
+    let Source {
+        text: source,
+        decoding,
+    } = read_source(path).map_err(|e| {
         eprintln!("error: cannot read {name}: {e}");
-        std::process::ExitCode::from(2)
+        std::process::ExitCode::from(exit::USAGE)
     })?;
-    let analysis = sdfc::driver::check(&source, Some(&base_dir(path)));
+    let mut analysis = sdfc::driver::check_with(&source, &access(path));
+    analysis.add_decoding(decoding);
+    sdfc::diagnostic::cap(&mut analysis.diagnostics);
     let color = std::io::IsTerminal::is_terminal(&std::io::stderr())
         && std::env::var_os("NO_COLOR").is_none();
     eprint!(
@@ -263,7 +355,7 @@ pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::proces
         sdfc::diagnostic::render(&name, &source, &analysis.diagnostics, color)
     );
     if analysis.has_errors() {
-        return Err(std::process::ExitCode::from(1));
+        return Err(std::process::ExitCode::from(exit::SCENE));
     }
     Ok((source, analysis))
 }
@@ -274,11 +366,11 @@ pub fn view_for(
     shape: Option<&str>,
 ) -> Result<sdfc::view::View, std::process::ExitCode> {
     let Some(scene) = &analysis.scene else {
-        return Err(std::process::ExitCode::from(1));
+        return Err(std::process::ExitCode::from(exit::SCENE));
     };
     let target = sdfc::driver::pick_shape(scene, shape).map_err(|e| {
         eprintln!("error: {e}");
-        std::process::ExitCode::from(compile::USAGE_EXIT)
+        std::process::ExitCode::from(exit::USAGE)
     })?;
     let render_item = if shape.is_some() {
         None

@@ -1,14 +1,11 @@
 //! `sdfc render`: a scene → PNG (and float EXR AOVs), headless, through wgpu.
 
 use super::{compile, RenderArgs};
-use sdfc::fsutil::write_atomic;
+use sdfc::fsutil::write_output;
 use sdfc::gpu::{self, Frame, Gpu};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
-
-/// Exit status when no GPU can be used.
-pub const GPU_EXIT: u8 = 4;
 
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -56,18 +53,14 @@ fn write_exr(path: &Path, frame: &Frame, name: &str) -> Result<(), String> {
             _ => (n[3], n[3], n[3]),
         }
     };
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let tmp = tempfile::Builder::new()
-        .suffix(".exr")
-        .tempfile_in(dir)
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    let channels = SpecificChannels::rgb(|Vec2(x, y)| texel(x, y));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_channels((w, h), channels)
+        .write()
+        .to_buffered(&mut bytes)
         .map_err(|e| e.to_string())?;
-    sdfc::fsutil::readable(tmp.as_file()).map_err(|e| e.to_string())?;
-    exr::prelude::write_rgb_file(tmp.path(), w, h, texel).map_err(|e| e.to_string())?;
-    tmp.persist(path).map_err(|e| e.error.to_string())?;
-    Ok(())
+    write_output(path, bytes.get_ref()).map_err(|e| e.to_string())
 }
 
 fn encode_png(frame: &Frame) -> Result<Vec<u8>, String> {
@@ -110,7 +103,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(GPU_EXIT);
+            return ExitCode::from(super::exit::gpu(&e));
         }
     };
     let frame = match gpu::render(
@@ -123,24 +116,24 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(f) => f,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(GPU_EXIT);
+            return ExitCode::from(super::exit::gpu(&e));
         }
     };
     let png = match encode_png(&frame) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: cannot encode the image: {e}");
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     };
-    if let Err(e) = write_atomic(&args.output, &png) {
+    if let Err(e) = write_output(&args.output, &png) {
         eprintln!("error: cannot write {}: {e}", args.output.display());
-        return ExitCode::from(2);
+        return ExitCode::from(super::exit::USAGE);
     }
     for (name, path) in &args.aov {
         if let Err(e) = write_exr(path, &frame, name) {
             eprintln!("error: cannot write {}: {e}", path.display());
-            return ExitCode::from(2);
+            return ExitCode::from(super::exit::USAGE);
         }
     }
     if args.timings {

@@ -33,7 +33,7 @@ fn checked(name: &str, source: &str) -> Result<driver::Analysis, ExitCode> {
             sdfc::diagnostic::render(name, source, &analysis.diagnostics, false)
         );
         eprintln!("error: a generated sweep scene has diagnostics (a bug in sdfc::bench::plate)");
-        return Err(ExitCode::from(1));
+        return Err(ExitCode::from(super::exit::SCENE));
     }
     Ok(analysis)
 }
@@ -55,7 +55,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(super::render::GPU_EXIT);
+            return ExitCode::from(super::exit::gpu(&e));
         }
     };
     let (width, height) = args.size.unwrap_or((320, 240));
@@ -71,7 +71,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
             (view.width, view.height) = (width, height);
             let gpu_error = |e: gpu::GpuError| {
                 eprintln!("error: {e}");
-                ExitCode::from(super::render::GPU_EXIT)
+                ExitCode::from(super::exit::gpu(&e))
             };
             let renderer = gpu::Renderer::new(&gpu, &module, here).map_err(gpu_error)?;
             let (frame, _) = renderer

@@ -27,8 +27,11 @@ pub enum GpuError {
     NoAdapter(String),
     /// The adapter would not give a device.
     Device(String),
-    /// wgpu reported a validation or out-of-memory error.
+    /// wgpu reported a validation error.
     Validation(String),
+    /// Out of memory, or a size over the adapter's or sdfc's limits; the message names
+    /// the limit.
+    Resource(String),
     /// A texture file could not be read.
     Texture(String),
 }
@@ -42,12 +45,16 @@ impl fmt::Display for GpuError {
             ),
             GpuError::Device(e) => write!(f, "the GPU adapter could not open a device: {e}"),
             GpuError::Validation(e) => write!(f, "the GPU rejected a command: {e}"),
+            GpuError::Resource(e) => write!(f, "{e}"),
             GpuError::Texture(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl std::error::Error for GpuError {}
+
+/// The most GPU memory one frame's targets and readback may take, in bytes.
+pub const MAX_FRAME_BYTES: u64 = 4 << 30;
 
 /// An open device.
 pub struct Gpu {
@@ -108,10 +115,41 @@ impl Gpu {
         let out = f();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
-        match v.or(o) {
+        if let Some(e) = o {
+            return Err(GpuError::Resource(format!(
+                "the GPU ran out of memory: {e}"
+            )));
+        }
+        match v {
             Some(e) => Err(GpuError::Validation(e.to_string())),
             None => Ok(out),
         }
+    }
+
+    /// Checks that a `width`×`height` image with `bytes_per_texel` bytes of targets and
+    /// readback fits this device's limits and [`MAX_FRAME_BYTES`].
+    pub fn check_size(
+        &self,
+        width: u32,
+        height: u32,
+        bytes_per_texel: u64,
+    ) -> Result<(), GpuError> {
+        let side = self.device.limits().max_texture_dimension_2d;
+        if width > side || height > side {
+            return Err(GpuError::Resource(format!(
+                "the image is {width}×{height}; this GPU's limit is {side} texels a side"
+            )));
+        }
+        let bytes = width as u64 * height as u64 * bytes_per_texel;
+        let limit = MAX_FRAME_BYTES.min(self.device.limits().max_buffer_size.saturating_mul(4));
+        if bytes > limit {
+            return Err(GpuError::Resource(format!(
+                "the image is {width}×{height}, which needs {} MiB of GPU memory; the limit is {} MiB",
+                bytes >> 20,
+                limit >> 20
+            )));
+        }
+        Ok(())
     }
 
     /// Waits for all submitted work.

@@ -340,6 +340,14 @@ impl Renderer {
     ) -> Result<(Frame, Vec<Duration>), GpuError> {
         let d = &gpu.device;
         let (w, h) = (view.width.max(1), view.height.max(1));
+        // Targets and their readback on the GPU, and the frame on the CPU.
+        let per_texel: u64 = self
+            .formats
+            .iter()
+            .map(|f| 2 * f.block_copy_size(None).unwrap_or(16) as u64)
+            .sum::<u64>()
+            + 52;
+        gpu.check_size(w, h, per_texel)?;
         let uniforms = globals(view, mode);
         let (targets, bind_group, queries, _globals) = gpu.scoped(|| {
             use wgpu::util::DeviceExt;

@@ -5,10 +5,29 @@ use std::path::Path;
 
 /// Loads an image with an sRGB mip chain.
 pub fn load_texture(gpu: &Gpu, path: &Path, srgb: bool) -> Result<wgpu::Texture, GpuError> {
-    let img = image::open(path)
-        .map_err(|e| GpuError::Texture(format!("cannot read texture {}: {e}", path.display())))?
-        .to_rgba8();
-    let (w, h) = img.dimensions();
+    let unreadable = |e: &dyn std::fmt::Display| {
+        GpuError::Texture(format!("cannot read texture {}: {e}", path.display()))
+    };
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| unreadable(&e))?
+        .with_guessed_format()
+        .map_err(|e| unreadable(&e))?;
+    // The header was checked at check time; these limits hold even if the file changed.
+    reader.limits(crate::access::decoder_limits());
+    let (w, h) = reader.into_dimensions().map_err(|e| unreadable(&e))?;
+    let side = gpu.device.limits().max_texture_dimension_2d;
+    if w > side || h > side {
+        return Err(GpuError::Resource(format!(
+            "texture {} is {w}×{h}; this GPU's limit is {side} texels a side",
+            path.display()
+        )));
+    }
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| unreadable(&e))?
+        .with_guessed_format()
+        .map_err(|e| unreadable(&e))?;
+    reader.limits(crate::access::decoder_limits());
+    let img = reader.decode().map_err(|e| unreadable(&e))?.to_rgba8();
     let levels = 32 - w.max(h).max(1).leading_zeros();
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("image"),

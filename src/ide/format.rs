@@ -336,7 +336,12 @@ pub fn format(src: &str) -> Result<String, Vec<Diagnostic>> {
             }
         }
     }
-    Ok(p.finish(crlf))
+    let out = p.finish(crlf);
+    // A byte-order mark is kept: the lexer skips it, so the printer never sees it.
+    if src.starts_with(crate::syntax::source::BOM) {
+        return Ok(format!("{}{out}", crate::syntax::source::BOM));
+    }
+    Ok(out)
 }
 
 /// The smallest single edit that turns `old` into `new`: the byte range of

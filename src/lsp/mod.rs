@@ -11,8 +11,9 @@ mod actions;
 mod dispatch;
 mod features;
 mod server;
+pub mod transport;
 
-pub use server::serve;
+pub use server::{serve, Ended};
 
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ide::{self, Document, SymbolKind};
@@ -287,12 +288,12 @@ fn symbol(o: &Open, s: &ide::Symbol) -> lsp::DocumentSymbol {
 }
 
 /// Serves on standard input and output.
-pub fn run_stdio() -> Result<(), Error> {
-    let (conn, io) = Connection::stdio();
-    serve(conn)?;
+pub fn run_stdio() -> Result<Ended, Error> {
+    let (conn, io) = transport::stdio();
+    let ended = serve(conn)?;
     // The server has let go of the connection, so the writer can finish.
     io.join()?;
-    Ok(())
+    Ok(ended)
 }
 
 /// Parses a URI (for tests and clients of this module).

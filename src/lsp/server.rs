@@ -62,8 +62,17 @@ fn queue(conn: &Connection) -> mpsc::Receiver<Message> {
     rx
 }
 
-/// Serves one client on a connection until it exits (`Ok` after a `shutdown`, an
-/// error otherwise) or closes the connection.
+/// How the server ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ended {
+    /// `exit` (or the end of the input) after `shutdown`: exit status 0.
+    Clean,
+    /// `exit` (or the end of the input) without `shutdown`: exit status 1, as the
+    /// specification asks.
+    WithoutShutdown,
+}
+
+/// Serves one client on a connection until it exits or closes the connection.
 ///
 /// Messages are taken in batches: everything that arrived while the server was busy.
 /// Each document changed in a batch is analysed once, at its latest text, and its
@@ -71,7 +80,7 @@ fn queue(conn: &Connection) -> mpsc::Receiver<Message> {
 /// answered against that text, except those the client cancelled (`$/cancelRequest`),
 /// which get `RequestCancelled` without being computed. A cancellation that arrives
 /// during the analysis still counts for the batch's requests.
-pub fn serve(conn: Connection) -> Result<(), Error> {
+pub fn serve(conn: Connection) -> Result<Ended, Error> {
     let inbox = queue(&conn);
     let mut server = Server {
         conn,
@@ -87,7 +96,7 @@ pub fn serve(conn: Connection) -> Result<(), Error> {
             match inbox.recv() {
                 Ok(m) => batch.push(m),
                 // The client closed the connection.
-                Err(_) => return Ok(()),
+                Err(_) => return Ok(server.ended()),
             }
         }
         batch.extend(inbox.try_iter());
@@ -123,15 +132,19 @@ pub fn serve(conn: Connection) -> Result<(), Error> {
         }
         server.cancelled.clear();
         if exit {
-            return match server.phase {
-                Phase::ShutDown => Ok(()),
-                _ => Err("exit before shutdown".into()),
-            };
+            return Ok(server.ended());
         }
     }
 }
 
 impl Server {
+    fn ended(&self) -> Ended {
+        match self.phase {
+            Phase::ShutDown => Ended::Clean,
+            _ => Ended::WithoutShutdown,
+        }
+    }
+
     /// Answers the lifecycle requests in order, and defers the others.
     fn classify(&mut self, req: Request) -> Pending {
         let lifecycle =
@@ -184,12 +197,36 @@ impl Server {
                     "cancelled by the client",
                 )),
             ),
-            Pending::Deferred(req) => answer(&self.docs, req),
+            Pending::Deferred(req) => {
+                // A panic inside a request is answered as an internal error, and the
+                // server keeps serving (as rust-analyzer does).
+                let id = req.id.clone();
+                let method = req.method.clone();
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| answer(&self.docs, req)))
+                    .unwrap_or_else(|panic| {
+                        let why = panic_message(&panic);
+                        eprintln!("sdfc lsp: internal error in {method}: {why}");
+                        respond::<()>(
+                            id,
+                            Err(Failure::new(
+                                ErrorCode::InternalError,
+                                format!("internal error in {method}: {why}"),
+                            )),
+                        )
+                    })
+            }
         }
     }
 
     /// Applies a notification; before `initialize`, notifications are dropped.
     fn notify(&mut self, n: Notification) -> Result<(), Error> {
+        if n.method == super::transport::SKIPPED {
+            let why = n.params["message"]
+                .as_str()
+                .unwrap_or("a message was skipped");
+            eprintln!("sdfc lsp: {why}");
+            return show_error(&self.conn, why);
+        }
         if self.phase == Phase::Uninitialized {
             return Ok(());
         }
@@ -231,10 +268,49 @@ impl Server {
     /// Analyses each document changed in the batch, once, and publishes its diagnostics.
     fn analyse(&mut self) -> Result<(), Error> {
         for (uri, text, version) in std::mem::take(&mut self.changed) {
-            let o = open(&uri, text, version);
+            let analysed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                open(&uri, text, version)
+            }));
+            let o = match analysed {
+                Ok(o) => o,
+                Err(panic) => {
+                    let why = panic_message(&panic);
+                    eprintln!(
+                        "sdfc lsp: internal error while checking {}: {why}",
+                        uri.as_str()
+                    );
+                    show_error(
+                        &self.conn,
+                        &format!("sdfc: internal error while checking: {why}"),
+                    )?;
+                    continue;
+                }
+            };
             publish(&self.conn, &uri, Some(&o))?;
             self.docs.insert(uri.as_str().to_string(), o);
         }
         Ok(())
     }
+}
+
+fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| String::from("a panic"))
+}
+
+/// Shows the user an error (`window/showMessage`).
+fn show_error(conn: &Connection, message: &str) -> Result<(), Error> {
+    use lsp_types::notification::ShowMessage;
+    let params = lsp::ShowMessageParams {
+        typ: lsp::MessageType::ERROR,
+        message: message.to_string(),
+    };
+    conn.sender.send(Message::Notification(Notification::new(
+        ShowMessage::METHOD.to_string(),
+        params,
+    )))?;
+    Ok(())
 }

@@ -5,18 +5,18 @@ use super::builtins::{
 };
 use super::types::{fmt_num, Ty, Value};
 use super::*;
+use crate::access::Access;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::syntax::ast::{self, AtlasStmt, Ident, ItemKind, Setting};
 use std::collections::{HashMap, HashSet};
-use std::path::Path;
 
-/// Checks a parsed file. `base_dir` is the scene file's folder, used to resolve texture
-/// paths; without it, texture files are not looked up.
-pub fn check(file: &ast::File, base_dir: Option<&Path>, diags: &mut Vec<Diagnostic>) -> Program {
+/// Checks a parsed file. `access` says where texture paths are resolved and which
+/// folders they may reach; without a base folder, texture files are not looked up.
+pub fn check(file: &ast::File, access: &Access, diags: &mut Vec<Diagnostic>) -> Program {
     let mut c = Checker {
         diags,
-        base_dir,
+        access,
         prog: Program::default(),
         scope: HashMap::new(),
         items: HashMap::new(),
@@ -42,7 +42,7 @@ pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) ->
 
 pub(crate) struct Checker<'d> {
     pub(crate) diags: &'d mut Vec<Diagnostic>,
-    pub(crate) base_dir: Option<&'d Path>,
+    pub(crate) access: &'d Access,
     pub(crate) prog: Program,
     /// Top-level names visible so far.
     pub(crate) scope: HashMap<String, DefId>,

@@ -5,10 +5,12 @@ use super::check::{suggest, Checker};
 use super::fold;
 use super::types::{AtlasAttr, FieldExpr, Node, SurfaceInput, Ty, Value};
 use super::{Reference, TextureRef};
+use crate::access::Refusal;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::span::Span;
 use crate::syntax::ast::{Arg, BinaryOp, Expr, ExprKind, Ident, Unit};
+use std::path::Path;
 use std::rc::Rc;
 
 impl Checker<'_> {
@@ -639,17 +641,17 @@ impl Checker<'_> {
 
     fn texture_file(&mut self, path: &str, span: Span) {
         let lower = path.to_ascii_lowercase();
-        let resolved = self.base_dir.map(|d| d.join(path));
-        self.prog.textures.push(TextureRef {
+        let mut texture = TextureRef {
             path: path.to_string(),
-            resolved: resolved.clone(),
+            resolved: None,
             span,
-        });
+        };
         if !(lower.ends_with(".png") || lower.ends_with(".jpg") || lower.ends_with(".jpeg")) {
+            self.prog.textures.push(texture);
             self.error(
                 Diagnostic::error(
                     codes::E_IMAGE_FORMAT,
-                    format!("cannot read {path:?}: textures must be PNG or JPEG"),
+                    format!("cannot read {}: textures must be PNG or JPEG", quote(path)),
                     span,
                     "unsupported image format",
                 )
@@ -657,21 +659,57 @@ impl Checker<'_> {
             );
             return;
         }
-        if let Some(full) = resolved {
-            if !full.is_file() {
+        match self.access.resolve(path) {
+            None => {}
+            Some(Ok(full)) => match crate::access::image_header(&full) {
+                Ok(_) => texture.resolved = Some(full),
+                Err(why) => self.error(Diagnostic::error(
+                    codes::E_IMAGE_FORMAT,
+                    format!("cannot read texture {}: {why}", quote(path)),
+                    span,
+                    "not a usable image",
+                )),
+            },
+            Some(Err(Refusal::NotFound)) => {
+                let base = self.access.base.as_deref().unwrap_or(Path::new("."));
                 self.error(
                     Diagnostic::error(
                         codes::E_MISSING_FILE,
-                        format!("texture file {path:?} not found"),
+                        format!("texture file {} not found", quote(path)),
                         span,
                         "no such file",
                     )
-                    .with_note(format!("looked for {}", full.display()))
+                    .with_note(format!("looked for {}", base.join(path).display()))
                     .with_note("texture paths are relative to the scene file's folder"),
-                );
+                )
             }
+            Some(Err(Refusal::Outside)) => self.error(
+                Diagnostic::error(
+                    codes::E_FILE_REFUSED,
+                    format!("cannot read texture {}: {}", quote(path), Refusal::Outside),
+                    span,
+                    "outside the allowed folders",
+                )
+                .with_note(
+                    "a scene reads files only in its own folder and its subfolders, after \
+                     following symbolic links",
+                )
+                .with_help("to allow another folder, pass `--allow-path DIR`"),
+            ),
+            Some(Err(why)) => self.error(Diagnostic::error(
+                codes::E_FILE_REFUSED,
+                format!("cannot read texture {}: {why}", quote(path)),
+                span,
+                "not a readable image file",
+            )),
         }
+        self.prog.textures.push(texture);
     }
+}
+
+/// A user's string in a message: quoted, and cut short when long.
+fn quote(text: &str) -> String {
+    crate::diagnostic::quote(text)
 }
 
 /// Component indices of a swizzle on a vector of `n` components.

@@ -209,6 +209,10 @@ pub fn lex<'a>(src: &'a str, diags: &mut Vec<Diagnostic>) -> Lexed<'a> {
     let mut tokens = Vec::new();
     let mut comments = Vec::new();
     let mut lexer = Token::lexer(src);
+    // A UTF-8 byte-order mark (Windows editors write one) is not part of the text.
+    if src.starts_with(super::source::BOM) {
+        lexer.bump(super::source::BOM.len_utf8());
+    }
     // Runs of invalid characters are reported once.
     let mut error_run: Option<Span> = None;
     let flush = |run: &mut Option<Span>, diags: &mut Vec<Diagnostic>| {
@@ -220,7 +224,7 @@ pub fn lex<'a>(src: &'a str, diags: &mut Vec<Diagnostic>) -> Lexed<'a> {
                     text.chars().next().unwrap_or(' ')
                 )
             } else {
-                format!("unexpected characters {text:?}")
+                format!("unexpected characters {}", crate::diagnostic::quote(text))
             };
             diags.push(Diagnostic::error(
                 codes::E_UNEXPECTED_CHAR,

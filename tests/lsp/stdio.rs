@@ -216,5 +216,49 @@ fn the_lifecycle_is_answered_at_every_step() {
     // `exit` without `shutdown` ends the server too, with a failure status.
     let mut p = Pipe::spawn();
     p.initialize();
-    assert!(!p.exit().success());
+    assert_eq!(p.exit().code(), Some(1));
+}
+
+/// A message whose Content-Length is over the limit is skipped and reported to the user
+/// (`window/showMessage`); the server does not allocate it and keeps serving.
+#[test]
+fn an_oversized_message_is_reported_and_skipped() {
+    let mut p = Pipe::spawn();
+    p.initialize();
+    let claimed = sdfc::lsp::transport::MAX_MESSAGE_BYTES + 1;
+    let padding = " ".repeat(claimed);
+    p.stdin
+        .write_all(format!("Content-Length: {claimed}\r\n\r\n{padding}").as_bytes())
+        .unwrap();
+    let shown = loop {
+        let m = p.read();
+        if m["method"] == "window/showMessage" {
+            break m;
+        }
+    };
+    assert_eq!(shown["params"]["type"], 1, "{shown}");
+    assert!(
+        shown["params"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("over the limit"),
+        "{shown}"
+    );
+    p.send(did_open(super::URI, "render sphre(1);"));
+    let d = p.diagnostics();
+    assert_eq!(d["diagnostics"][0]["code"], "E0103", "{d}");
+    assert!(p.stop().success());
+}
+
+/// `shutdown` and `exit` in one write: the reply to shutdown, then exit status 0.
+#[test]
+fn shutdown_and_exit_in_one_batch_exit_cleanly() {
+    let mut p = Pipe::spawn();
+    p.initialize();
+    p.write(&[
+        json!({ "jsonrpc": "2.0", "id": 7, "method": "shutdown", "params": null }),
+        json!({ "jsonrpc": "2.0", "method": "exit", "params": null }),
+    ]);
+    assert_eq!(p.response(7)["result"], Value::Null);
+    assert_eq!(p.child.wait().unwrap().code(), Some(0));
 }

@@ -368,7 +368,7 @@ impl Generator<'_> {
             let start = self.out.len();
             let case = self.material_case(i + 1, m, &mut uses, &mut problems);
             self.out.push_str(&case);
-            let span = self.program.defs[m.def].item_span;
+            let span = self.program.def(m.def).item_span;
             self.region(start, Some(span), Definition::Material(m.name.clone()));
         }
         let _ = writeln!(self.out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
@@ -388,7 +388,7 @@ impl Generator<'_> {
         problems: &mut Vec<Diagnostic>,
     ) -> String {
         uses.atlases.clear();
-        let span = self.program.defs[m.def].span;
+        let span = self.program.def(m.def).span;
         let mut attr = |v: &Value, what: MaterialField| {
             uses.srgb = what.is_color();
             field(v, uses).unwrap_or_else(|e| {
@@ -417,10 +417,11 @@ impl Generator<'_> {
         let samples: String = uses
             .atlases
             .iter()
-            .map(|k| {
+            .map(|&k| {
                 format!(
-                    "            let atlas_sample_{k} = atlas_{}(p);\n",
-                    self.program.atlases[*k].name
+                    "            let atlas_sample_{} = atlas_{}(p);\n",
+                    k.index(),
+                    self.program.atlas(k).name
                 )
             })
             .collect();

@@ -153,7 +153,7 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
 }
 
 fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
-    match &shape.nodes[id].op {
+    match &shape[id].op {
         Op::Prim(pr) => (prim(p, pr), 0),
         Op::Csg { op, k, a, b } => {
             let (da, ma) = eval_node(shape, *a, p);

@@ -58,11 +58,11 @@ impl Lowerer<'_> {
             bounds,
             lipschitz,
         });
-        Some(self.out.nodes.len() - 1)
+        Some(NodeId::new(self.out.nodes.len() - 1))
     }
 
     fn info(&self, id: NodeId) -> (Aabb, f64) {
-        let n = &self.out.nodes[id];
+        let n = &self.out[id];
         (n.bounds, n.lipschitz)
     }
 
@@ -125,7 +125,7 @@ impl Lowerer<'_> {
                     r,
                 })
                 .map(|id| {
-                    self.out.nodes[id].bounds = Aabb::centered(half);
+                    self.out[id].bounds = Aabb::centered(half);
                     id
                 })
             }
@@ -345,7 +345,7 @@ impl Lowerer<'_> {
                 let (b, l) = self.info(child);
                 self.push(
                     Op::Paint {
-                        material: m as u32 + 1,
+                        material: m.index() as u32 + 1,
                         child,
                     },
                     b,

@@ -61,7 +61,7 @@ impl Checker<'_> {
     }
 
     fn define(&mut self, name: &Ident, kind: DefKind, item_span: Span, value: Value) -> DefId {
-        let id = self.prog.defs.len();
+        let id = DefId::new(self.prog.defs.len());
         self.prog.defs.push(Def {
             name: name.name.clone(),
             kind,
@@ -144,7 +144,8 @@ impl Checker<'_> {
 
     fn unused(&mut self) {
         let mut warnings = Vec::new();
-        for (id, def) in self.prog.defs.iter().enumerate() {
+        for (i, def) in self.prog.defs.iter().enumerate() {
+            let id = DefId::new(i);
             if self.used.contains(&id)
                 || self.duplicates.contains(&id)
                 || self.used_early.contains(&def.name)
@@ -397,7 +398,7 @@ impl Checker<'_> {
                 .with_note("seeds are placed on the surface of the shape after `on`"),
             );
         }
-        let atlas_id = self.prog.atlases.len();
+        let atlas_id = AtlasId::new(self.prog.atlases.len());
         let def = self.define(name, DefKind::Atlas, span, Value::Atlas(atlas_id));
         let settings: Vec<&Setting> = body
             .iter()
@@ -580,7 +581,7 @@ impl Checker<'_> {
                             let owner = self
                                 .prog
                                 .atlases
-                                .get(other_atlas)
+                                .get(other_atlas.index())
                                 .map(|a| a.name.clone())
                                 .unwrap_or_default();
                             d = d
@@ -643,7 +644,7 @@ impl Checker<'_> {
     }
 
     fn material(&mut self, name: &Ident, body: &[Setting], span: Span) -> DefId {
-        let id = self.prog.materials.len();
+        let id = MaterialId::new(self.prog.materials.len());
         let def = self.define(name, DefKind::Material, span, Value::Material(id));
         let refs: Vec<&Setting> = body.iter().collect();
         let values = self.settings("material", MATERIAL_SETTINGS, &refs);

@@ -110,7 +110,7 @@ impl Checker<'_> {
         if let Some(&id) = self.scope.get(n) {
             self.prog.references.push(Reference { span, def: id });
             self.used.insert(id);
-            return self.prog.defs[id].value.clone();
+            return self.prog.def(id).value.clone();
         }
         match n {
             "pi" => return Value::Float(std::f64::consts::PI),

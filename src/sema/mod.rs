@@ -21,8 +21,10 @@ pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, T
 use crate::span::Span;
 use std::path::PathBuf;
 
-/// Index of a definition in [`Program::defs`].
-pub type DefId = usize;
+crate::id::define_id!(
+    /// Index of a definition in [`Program::defs`].
+    DefId
+);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DefKind {
@@ -156,6 +158,18 @@ pub struct Program {
 }
 
 impl Program {
+    pub fn def(&self, id: DefId) -> &Def {
+        &self.defs[id.index()]
+    }
+
+    pub fn atlas(&self, id: AtlasId) -> &AtlasDef {
+        &self.atlases[id.index()]
+    }
+
+    pub fn material(&self, id: MaterialId) -> &MaterialDef {
+        &self.materials[id.index()]
+    }
+
     /// The top-level definition of a name (a `let`, atlas or material).
     pub fn lookup(&self, name: &str) -> Option<&Def> {
         self.defs
@@ -176,7 +190,10 @@ impl Program {
             .iter()
             .find(|r| r.span.contains(offset))
             .map(|r| r.def)
-            .or_else(|| self.defs.iter().position(|d| d.span.contains(offset)))
+            .or_else(|| {
+                let i = self.defs.iter().position(|d| d.span.contains(offset))?;
+                Some(DefId::new(i))
+            })
     }
 
     /// Every reference to a definition.

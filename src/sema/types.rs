@@ -74,10 +74,14 @@ impl fmt::Display for Ty {
     }
 }
 
-/// Index of an atlas in [`super::Program::atlases`].
-pub type AtlasId = usize;
-/// Index of a material in [`super::Program::materials`].
-pub type MaterialId = usize;
+crate::id::define_id!(
+    /// Index of an atlas in [`super::Program::atlases`].
+    AtlasId
+);
+crate::id::define_id!(
+    /// Index of a material in [`super::Program::materials`].
+    MaterialId
+);
 
 /// A call of a builtin with its arguments bound, in parameter order, defaults filled in.
 /// Shapes, textures, cameras and lights are trees of these; the IR lowers them.

@@ -1,9 +1,8 @@
 //! The checker's item level: definitions, atlases, materials and the render item.
 
-use super::builtins::{
-    self, Check, Dflt, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS,
-};
-use super::types::{fmt_num, Ty, Value};
+use super::builtins::{Check, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS};
+use super::settings::Settings;
+use super::types::{fmt_num, Value};
 use super::*;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
@@ -224,19 +223,13 @@ impl Checker<'_> {
                 continue;
             }
             seen.insert(spec.name, s.name.span);
-            let v = self.setting_value(block, spec, value, s.value.span);
+            let v = self.setting_value(spec, value, s.value.span);
             out.insert(spec.name, (v, s.value.span));
         }
         out
     }
 
-    fn setting_value(
-        &mut self,
-        block: &str,
-        spec: &SettingSpec,
-        value: Value,
-        span: Span,
-    ) -> Value {
+    fn setting_value(&mut self, spec: &SettingSpec, value: Value, span: Span) -> Value {
         if value.is_error() {
             return value;
         }
@@ -253,18 +246,8 @@ impl Checker<'_> {
             );
             return Value::Error;
         }
-        let expected = builtins::setting_type(block, spec);
-        let base = ty.base().clone();
-        let ok = match (block, spec.name) {
-            ("material", "color") => matches!(base, Ty::Float | Ty::Vec(3) | Ty::Vec(4)),
-            _ => base == expected,
-        };
-        if !ok {
-            let want = if (block, spec.name) == ("material", "color") {
-                String::from("float, vec3 or vec4")
-            } else {
-                expected.to_string()
-            };
+        if !spec.ty.accepts(ty.base()) {
+            let want = spec.ty.describe();
             self.error(Diagnostic::error(
                 codes::E_TYPE_MISMATCH,
                 format!("`{}` expects {want}, found {ty}", spec.name),
@@ -347,18 +330,6 @@ impl Checker<'_> {
         }
     }
 
-    fn float_setting(
-        &self,
-        values: &HashMap<&'static str, (Value, Span)>,
-        name: &str,
-        default: f64,
-    ) -> f64 {
-        values
-            .get(name)
-            .and_then(|(v, _)| v.as_float())
-            .unwrap_or(default)
-    }
-
     fn const_vec3(&mut self, e: &ast::Expr, what: &str) -> Option<[f64; 3]> {
         let v = self.expr(e);
         match &v {
@@ -410,41 +381,23 @@ impl Checker<'_> {
                 }
             })
             .collect();
-        let values = self.settings("atlas", ATLAS_SETTINGS, &settings);
-        let mut params = AtlasParams::default();
-        if let Some((v, vspan)) = values.get("steps") {
-            if let Some(n) = v.as_float() {
-                if n.fract() != 0.0 || !(1.0..=64.0).contains(&n) {
-                    self.error(
-                        Diagnostic::error(
-                            codes::E_OUT_OF_RANGE,
-                            "`steps` must be a whole number from 1 to 64",
-                            *vspan,
-                            format!("this is {}", fmt_num(n)),
-                        )
-                        .with_note("N is unrolled into the shader; the paper uses 5 to 40"),
-                    );
-                } else {
-                    params.steps = n as u32;
-                }
+        let mut values = self.settings("atlas", ATLAS_SETTINGS, &settings);
+        if let Some((Value::Float(n), vspan)) = values.get("steps") {
+            let (n, vspan) = (*n, *vspan);
+            if n.fract() != 0.0 || !(1.0..=64.0).contains(&n) {
+                self.error(
+                    Diagnostic::error(
+                        codes::E_OUT_OF_RANGE,
+                        "`steps` must be a whole number from 1 to 64",
+                        vspan,
+                        format!("this is {}", fmt_num(n)),
+                    )
+                    .with_note("N is unrolled into the shader; the paper uses 5 to 40"),
+                );
+                values.remove("steps");
             }
         }
-        let dflt = |name: &str| match ATLAS_SETTINGS
-            .iter()
-            .find(|s| s.name == name)
-            .and_then(|s| s.default)
-        {
-            Some(Dflt::F(x)) => x,
-            _ => 0.0,
-        };
-        params.max_distance = self.float_setting(&values, "max_distance", dflt("max_distance"));
-        params.heuristic_tolerance =
-            self.float_setting(&values, "heuristic_tolerance", dflt("heuristic_tolerance"));
-        params.sharp_tolerance =
-            self.float_setting(&values, "sharp_tolerance", dflt("sharp_tolerance"));
-        params.min_reach = self.float_setting(&values, "min_reach", dflt("min_reach"));
-        params.reproject = matches!(values.get("reproject"), Some((Value::Bool(true), _)));
-        params.sigma = values.get("sigma").and_then(|(v, _)| v.as_float());
+        let params = AtlasParams::new(&Settings::new(ATLAS_SETTINGS, &values));
 
         let mut seeds: Vec<SeedDef> = Vec::new();
         let mut local: HashMap<String, usize> = HashMap::new();
@@ -648,28 +601,12 @@ impl Checker<'_> {
         let def = self.define(name, DefKind::Material, span, Value::Material(id));
         let refs: Vec<&Setting> = body.iter().collect();
         let values = self.settings("material", MATERIAL_SETTINGS, &refs);
-        let get = |n: &str| -> Value {
-            if let Some((v, _)) = values.get(n) {
-                return v.clone();
-            }
-            match MATERIAL_SETTINGS
-                .iter()
-                .find(|s| s.name == n)
-                .and_then(|s| s.default)
-            {
-                Some(Dflt::F(x)) => Value::Float(x),
-                Some(Dflt::V(v)) => Value::Vec(v.to_vec()),
-                _ => Value::Error,
-            }
-        };
+
         let m = MaterialDef {
             name: name.name.clone(),
             def,
             span,
-            color: get("color"),
-            roughness: get("roughness"),
-            metallic: get("metallic"),
-            emission: get("emission"),
+            attrs: MaterialAttrs::new(&Settings::new(MATERIAL_SETTINGS, &values)),
         };
         self.prog.materials.push(m);
         def
@@ -689,38 +626,24 @@ impl Checker<'_> {
             );
         }
         let refs: Vec<&Setting> = body.iter().collect();
-        let values = self.settings("render", RENDER_SETTINGS, &refs);
-        let mut size = [960, 540];
-        if let Some((Value::Vec(v), vspan)) = values.get("size") {
-            if v.iter().any(|x| x.fract() != 0.0 || *x > 16384.0) {
+        let mut values = self.settings("render", RENDER_SETTINGS, &refs);
+        if let Some((v @ Value::Vec(c), vspan)) = values.get("size") {
+            if c.iter().any(|x| x.fract() != 0.0 || *x > 16384.0) {
                 self.error(Diagnostic::error(
                     codes::E_OUT_OF_RANGE,
                     "`size` must be whole numbers of pixels, at most 16384",
                     *vspan,
-                    format!("this is {}", Value::Vec(v.clone()).display()),
+                    format!("this is {}", v.display()),
                 ));
-            } else {
-                size = [v[0] as u32, v[1] as u32];
+                values.remove("size");
             }
         }
-        let background = values
-            .get("background")
-            .and_then(|(v, _)| v.as_vec3())
-            .unwrap_or([0.05, 0.06, 0.08]);
-        let ambient = values
-            .get("ambient")
-            .and_then(|(v, _)| v.as_float())
-            .unwrap_or(0.15);
         if self.prog.render.is_none() {
             self.prog.render = Some(RenderDef {
                 span,
                 target: value,
                 target_span: target.span,
-                camera: values.get("camera").map(|(v, _)| v.clone()),
-                light: values.get("light").map(|(v, _)| v.clone()),
-                size,
-                background,
-                ambient,
+                settings: RenderSettings::new(&Settings::new(RENDER_SETTINGS, &values)),
             });
         }
     }

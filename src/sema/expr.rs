@@ -4,7 +4,7 @@ use super::builtins::{self, Builtin, Kind, PTy, Ret, BUILTINS, CONSTANTS};
 use super::check::{suggest, Checker};
 use super::fold;
 use super::types::{AtlasAttr, FieldExpr, Node, SurfaceInput, Ty, Value};
-use super::{Reference, TextureRef};
+use super::{Camera, Light, Reference, TextureRef};
 use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::span::Span;
@@ -490,15 +490,7 @@ impl Checker<'_> {
         for (p, slot) in b.params.iter().zip(slots) {
             match (slot, p.default) {
                 (Some(v), _) => bound.push(v),
-                (None, Some(d)) => bound.push((
-                    match d {
-                        builtins::Dflt::F(x) => Value::Float(x),
-                        builtins::Dflt::V(v) => Value::Vec(v.to_vec()),
-                        builtins::Dflt::B(x) => Value::Bool(x),
-                        builtins::Dflt::S(s) => Value::Str(s.to_string()),
-                    },
-                    span,
-                )),
+                (None, Some(d)) => bound.push((d.value(), span)),
                 (None, None) => {
                     self.error(
                         Diagnostic::error(
@@ -621,8 +613,12 @@ impl Checker<'_> {
         match b.ret {
             Ret::Shape => Value::Shape(node()),
             Ret::Texture => Value::Texture(node()),
-            Ret::Camera => Value::Camera(node()),
-            Ret::Light => Value::Light(node()),
+            Ret::Camera => {
+                Camera::from_call(b.id, &args).map_or(Value::Error, |c| Value::Camera(Rc::new(c)))
+            }
+            Ret::Light => {
+                Light::from_call(b.id, &args).map_or(Value::Error, |l| Value::Light(Rc::new(l)))
+            }
             _ if b.kind == Kind::Texture || args.iter().any(|a| a.ty().is_field()) => Value::field(
                 FieldExpr::Call {
                     builtin: b.id,

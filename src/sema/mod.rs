@@ -11,11 +11,13 @@ pub mod builtins;
 mod check;
 mod expr;
 pub mod fold;
+pub mod settings;
 pub mod types;
 
 pub use check::check;
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
+pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 
 use crate::span::Span;
@@ -55,32 +57,6 @@ pub struct Reference {
     pub def: DefId,
 }
 
-/// The parameters of Alg. 1 and Alg. 2 for one atlas, with defaults filled in.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AtlasParams {
-    pub steps: u32,
-    pub max_distance: f64,
-    pub heuristic_tolerance: f64,
-    pub sharp_tolerance: f64,
-    pub min_reach: f64,
-    pub reproject: bool,
-    pub sigma: Option<f64>,
-}
-
-impl Default for AtlasParams {
-    fn default() -> Self {
-        AtlasParams {
-            steps: 20,
-            max_distance: 3.0,
-            heuristic_tolerance: 1e-3,
-            sharp_tolerance: 0.015,
-            min_reach: 0.01,
-            reproject: false,
-            sigma: None,
-        }
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeedDef {
     pub name: String,
@@ -118,11 +94,7 @@ pub struct MaterialDef {
     pub name: String,
     pub def: DefId,
     pub span: Span,
-    /// float, vec3 or vec4 (rgb is used), constant or field.
-    pub color: Value,
-    pub roughness: Value,
-    pub metallic: Value,
-    pub emission: Value,
+    pub attrs: MaterialAttrs,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -130,11 +102,7 @@ pub struct RenderDef {
     pub span: Span,
     pub target: Value,
     pub target_span: Span,
-    pub camera: Option<Value>,
-    pub light: Option<Value>,
-    pub size: [u32; 2],
-    pub background: [f64; 3],
-    pub ambient: f64,
+    pub settings: RenderSettings,
 }
 
 /// A texture file referenced by `image(path)`.

@@ -399,6 +399,40 @@ impl Checker<'_> {
         }
         let params = AtlasParams::new(&Settings::new(ATLAS_SETTINGS, &values));
 
+        let (seeds, local) = self.seeds(name, atlas_id, body);
+        if seeds.is_empty() && !body.iter().any(|s| matches!(s, AtlasStmt::Error(_))) {
+            self.error(
+                Diagnostic::error(
+                    codes::E_NO_SEEDS,
+                    format!("atlas `{}` has no seed", name.name),
+                    name.span,
+                    "this atlas needs at least one seed",
+                )
+                .with_help("add one: `seed main = [0, 0, 1];`"),
+            );
+        }
+        let broken = body.iter().any(|s| matches!(s, AtlasStmt::Error(_)));
+        let merges = self.merges(name, body, &seeds, &local, broken);
+        self.prog.atlases.push(AtlasDef {
+            name: name.name.clone(),
+            def,
+            span,
+            shape: shape_value,
+            shape_span: shape.span,
+            params,
+            seeds,
+            merges,
+        });
+        def
+    }
+
+    /// Checks the seed statements of an atlas; returns the seeds and their indices by name.
+    fn seeds(
+        &mut self,
+        atlas: &Ident,
+        atlas_id: AtlasId,
+        body: &[AtlasStmt],
+    ) -> (Vec<SeedDef>, HashMap<String, usize>) {
         let mut seeds: Vec<SeedDef> = Vec::new();
         let mut local: HashMap<String, usize> = HashMap::new();
         for stmt in body {
@@ -430,7 +464,7 @@ impl Checker<'_> {
                             codes::E_DUPLICATE_SEED,
                             format!(
                                 "seed `{}` is declared twice in atlas `{}`",
-                                seed_name.name, name.name
+                                seed_name.name, atlas.name
                             ),
                             seed_name.span,
                             "declared again here",
@@ -453,30 +487,7 @@ impl Checker<'_> {
                 });
             }
         }
-        if seeds.is_empty() && !body.iter().any(|s| matches!(s, AtlasStmt::Error(_))) {
-            self.error(
-                Diagnostic::error(
-                    codes::E_NO_SEEDS,
-                    format!("atlas `{}` has no seed", name.name),
-                    name.span,
-                    "this atlas needs at least one seed",
-                )
-                .with_help("add one: `seed main = [0, 0, 1];`"),
-            );
-        }
-        let broken = body.iter().any(|s| matches!(s, AtlasStmt::Error(_)));
-        let merges = self.merges(name, body, &seeds, &local, broken);
-        self.prog.atlases.push(AtlasDef {
-            name: name.name.clone(),
-            def,
-            span,
-            shape: shape_value,
-            shape_span: shape.span,
-            params,
-            seeds,
-            merges,
-        });
-        def
+        (seeds, local)
     }
 
     /// Checks the merge statements. When `broken`, a statement of the block did not parse

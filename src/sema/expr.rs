@@ -509,12 +509,13 @@ impl Checker<'_> {
         (bound, ok)
     }
 
-    /// Type-checks bound arguments and builds the call's value.
-    fn apply(&mut self, b: &'static Builtin, bound: Vec<(Value, Span)>, span: Span) -> Value {
+    /// Type-checks bound arguments and applies the parameters' checks; returns the
+    /// size of the `T` arguments (1 for floats), or `None` after reporting a problem.
+    fn check_args(&mut self, b: &'static Builtin, bound: &[(Value, Span)]) -> Option<u8> {
         let lifts = b.kind.lifts_fields();
         let mut ok = true;
         let mut t_size: Option<(u8, Span)> = None;
-        for (p, (v, vspan)) in b.params.iter().zip(&bound) {
+        for (p, (v, vspan)) in b.params.iter().zip(bound) {
             if v.is_error() {
                 ok = false;
                 continue;
@@ -582,16 +583,20 @@ impl Checker<'_> {
                 ok = false;
             }
         }
-        if !ok {
+        ok.then(|| t_size.map(|(n, _)| n).unwrap_or(1))
+    }
+
+    /// Type-checks bound arguments and builds the call's value.
+    fn apply(&mut self, b: &'static Builtin, bound: Vec<(Value, Span)>, span: Span) -> Value {
+        let Some(n) = self.check_args(b, &bound) else {
             return Value::Error;
-        }
+        };
         let args: Vec<Value> = bound.iter().map(|(v, _)| v.clone()).collect();
         if b.name == "image" {
             if let (Value::Str(path), pspan) = (&args[0], bound[0].1) {
                 self.texture_file(path, pspan);
             }
         }
-        let n = t_size.map(|(n, _)| n).unwrap_or(1);
         let t_ty = if n == 1 { Ty::Float } else { Ty::Vec(n) };
         let ret_ty = match b.ret {
             Ret::Float => Ty::Float,

@@ -225,9 +225,9 @@ pub fn generate(
         out: String::new(),
         source_map: Vec::new(),
     };
-    g.scene_constants(&target);
+    g.scene_constants(target);
     g.shapes(scene);
-    g.render_target(scene, &target, options);
+    g.render_target(scene, target, options);
     let plain = options.plain;
     if !plain {
         g.atlases(atlases, options)
@@ -242,7 +242,7 @@ pub fn generate(
     )
     .map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
-    Ok(g.finish(&target, scene, table, textures))
+    Ok(g.finish(target, scene, table, textures))
 }
 
 /// The module being written: the scene's code after the libraries, with its source map.

@@ -230,7 +230,8 @@ pub fn project(shape: &Shape, p: DVec3, tolerance: f64) -> Option<DVec3> {
         }
         let g = gradient(shape, x);
         let g2 = g.length_squared();
-        if !(g2 > 1e-12) || !d.is_finite() {
+        // Written so that a NaN gradient also stops the projection.
+        if g2.is_nan() || g2 <= 1e-12 || !d.is_finite() {
             return None;
         }
         x -= g * (d / g2);

@@ -124,9 +124,8 @@ impl Lowerer<'_> {
                     half: half - DVec3::splat(r),
                     r,
                 })
-                .map(|id| {
+                .inspect(|&id| {
                     self.out[id].bounds = Aabb::centered(half);
-                    id
                 })
             }
             B::BoxFrame => self.prim(Prim::BoxFrame {

@@ -25,6 +25,7 @@ pub mod diagnostic;
 pub mod driver;
 pub mod fsutil;
 pub mod gpu;
+mod id;
 pub mod ide;
 pub mod ir;
 pub mod lsp;

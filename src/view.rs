@@ -4,7 +4,7 @@
 
 use crate::ir::{eval, Shape};
 use crate::sema::builtins::BuiltinId;
-use crate::sema::{RenderDef, Value};
+use crate::sema::{self, RenderDef, RenderSettings};
 use glam::DVec3;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,11 +46,30 @@ impl Camera {
         Camera::look_at(target + dir * distance, target, fov)
     }
 
-    /// Frames a shape's bounds from a three-quarter view.
+    /// The camera a scene asks for.
+    pub fn new(camera: &sema::Camera) -> Camera {
+        let v = DVec3::from_array;
+        match *camera {
+            sema::Camera::Orbit {
+                target,
+                distance,
+                yaw,
+                pitch,
+                fov,
+            } => Camera::orbit(v(target), distance, yaw, pitch, fov),
+            sema::Camera::LookAt { eye, target, fov } => Camera::look_at(v(eye), v(target), fov),
+        }
+    }
+
+    /// Frames a shape's bounds from a three-quarter view, with `orbit`'s default field of view.
     pub fn frame(shape: &Shape) -> Camera {
         let b = shape.framing_bounds();
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
-        let fov = 45f64.to_radians();
+        let fov = BuiltinId::Orbit
+            .builtin()
+            .param("fov")
+            .and_then(|(_, p)| p.default?.value().as_float())
+            .expect("`orbit` has a default `fov`");
         Camera::orbit(
             b.center(),
             radius / (fov * 0.5).sin() * 1.1,
@@ -78,12 +97,19 @@ pub struct Sun {
     pub intensity: f64,
 }
 
-impl Default for Sun {
-    fn default() -> Self {
-        Sun {
-            direction: DVec3::new(0.5, 1.0, 0.3).normalize(),
-            color: DVec3::ONE,
-            intensity: 3.0,
+impl Sun {
+    /// The light a scene asks for.
+    pub fn new(light: &sema::Light) -> Sun {
+        match *light {
+            sema::Light::Sun {
+                direction,
+                color,
+                intensity,
+            } => Sun {
+                direction: DVec3::from_array(direction).normalize(),
+                color: DVec3::from_array(color),
+                intensity,
+            },
         }
     }
 }
@@ -108,39 +134,21 @@ pub struct View {
     pub atlas_aov: bool,
 }
 
-fn vec3(v: &Value) -> Option<DVec3> {
-    v.as_vec3().map(DVec3::from_array)
-}
-
 impl View {
     /// Resolves the view from the render item (when there is one) for a shape.
     pub fn new(render: Option<&RenderDef>, shape: &Shape) -> View {
-        let camera = render
-            .and_then(|r| r.camera.as_ref())
-            .and_then(|c| match c {
-                Value::Camera(n) if n.builtin == BuiltinId::Orbit => {
-                    let f = |i: usize| n.args[i].as_float();
-                    Some(Camera::orbit(vec3(&n.args[0])?, f(1)?, f(2)?, f(3)?, f(4)?))
-                }
-                Value::Camera(n) if n.builtin == BuiltinId::LookAt => Some(Camera::look_at(
-                    vec3(&n.args[0])?,
-                    vec3(&n.args[1])?,
-                    n.args[2].as_float()?,
-                )),
-                _ => None,
-            });
-        let camera = camera.unwrap_or_else(|| Camera::frame(shape));
-        let sun = render
-            .and_then(|r| r.light.as_ref())
-            .and_then(|l| match l {
-                Value::Light(n) => Some(Sun {
-                    direction: vec3(&n.args[0])?.normalize(),
-                    color: vec3(&n.args[1])?,
-                    intensity: n.args[2].as_float()?,
-                }),
-                _ => None,
-            })
-            .unwrap_or_default();
+        let defaults;
+        let settings = match render {
+            Some(r) => &r.settings,
+            None => {
+                defaults = RenderSettings::default();
+                &defaults
+            }
+        };
+        let camera = match &settings.camera {
+            Some(c) => Camera::new(c),
+            None => Camera::frame(shape),
+        };
         let b = shape.framing_bounds();
         let scale = (b.max - b.min).max_element().max(1e-3);
         let far = ((camera.eye - b.center()).length() + (b.max - b.min).length()) * 2.0;
@@ -149,16 +157,13 @@ impl View {
         } else {
             far.max(100.0 * scale)
         };
-        let (width, height) = render.map(|r| (r.size[0], r.size[1])).unwrap_or((960, 540));
         View {
             camera,
-            sun,
-            width,
-            height,
-            background: render
-                .map(|r| DVec3::from_array(r.background))
-                .unwrap_or(DVec3::new(0.05, 0.06, 0.08)),
-            ambient: render.map(|r| r.ambient).unwrap_or(0.15),
+            sun: Sun::new(&settings.light),
+            width: settings.size[0],
+            height: settings.size[1],
+            background: DVec3::from_array(settings.background),
+            ambient: settings.ambient,
             far,
             epsilon: 1e-4,
             max_steps: 256,
@@ -205,4 +210,39 @@ pub fn trace_cpu(
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::driver::check;
+
+    fn view(text: &str) -> View {
+        let a = check(text, None);
+        assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
+        let shape = a.scene.as_ref().and_then(|s| s.render.clone()).unwrap();
+        View::new(a.program.render.as_ref(), &shape)
+    }
+
+    #[test]
+    fn the_scene_camera_and_light_reach_the_view() {
+        let v = view(
+            "render sphere() { camera = look_at([0, 0, 5], fov: 1); light = sun([0, 2, 0], intensity: 2); ambient = 0.5; }",
+        );
+        assert_eq!(v.camera.eye, DVec3::new(0.0, 0.0, 5.0));
+        assert_eq!(v.camera.fov, 1.0);
+        assert_eq!(v.sun.direction, DVec3::Y);
+        assert_eq!((v.sun.color, v.sun.intensity), (DVec3::ONE, 2.0));
+        assert_eq!(v.ambient, 0.5);
+    }
+
+    #[test]
+    fn without_settings_the_view_takes_the_table_defaults() {
+        let v = view("render sphere() { }");
+        let d = RenderSettings::default();
+        assert_eq!(v.sun, Sun::new(&d.light));
+        assert_eq!([v.width, v.height], d.size);
+        assert_eq!(v.background, DVec3::from_array(d.background));
+        assert_eq!(v.camera.fov, std::f64::consts::FRAC_PI_4);
+    }
 }

@@ -77,39 +77,39 @@ struct SeedLine {
     offset: [f64; 2],
 }
 
+/// An error already reported on stderr, with the exit status it calls for.
+type Failed = ExitCode;
+
+/// Prints a usage or I/O error and gives its exit status.
+fn fail(message: impl std::fmt::Display, code: u8) -> Failed {
+    eprintln!("error: {message}");
+    ExitCode::from(code)
+}
+
 pub fn run(args: EvalArgs) -> ExitCode {
-    let (source, analysis) = match load(&args.scene) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
+    match eval(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+/// The steps of `sdfc eval`: load, pick the shape and the atlas, read the points,
+/// evaluate on the CPU (and with `--gpu`, on the GPU), print one line per point.
+fn eval(args: &EvalArgs) -> Result<(), Failed> {
+    let (source, analysis) = load(&args.scene)?;
     let Some(scene) = &analysis.scene else {
-        return ExitCode::from(super::exit::SCENE);
+        return Err(ExitCode::from(exit::SCENE));
     };
-    let shape = match driver::pick_shape(scene, args.shape.as_deref()) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(exit::USAGE);
-        }
-    };
-    let points = match read_text(&args.points, MAX_POINTS_BYTES)
+    let shape =
+        driver::pick_shape(scene, args.shape.as_deref()).map_err(|e| fail(e, exit::USAGE))?;
+    let points = read_text(&args.points, MAX_POINTS_BYTES)
         .map_err(|e| format!("cannot read {}: {e}", args.points.display()))
         .and_then(|t| parse_points(&t))
-    {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::USAGE);
-        }
-    };
+        .map_err(|e| fail(e, exit::USAGE))?;
     // The atlas as the check prepared it (projected seeds, solved merge graph).
-    let atlas = match driver::pick_atlas(&analysis.program, args.atlas.as_deref()) {
-        Ok(def) => def.and_then(|def| analysis.atlas(&def.name)),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(exit::USAGE);
-        }
-    };
+    let atlas = driver::pick_atlas(&analysis.program, args.atlas.as_deref())
+        .map_err(|e| fail(e, exit::USAGE))?
+        .and_then(|def| analysis.atlas(&def.name));
     // Atlas queries happen at each point's projection onto the atlas's own surface.
     let atlas_points: Vec<Option<DVec3>> = match atlas {
         Some(a) => points
@@ -118,102 +118,141 @@ pub fn run(args: EvalArgs) -> ExitCode {
             .collect(),
         None => Vec::new(),
     };
-    let mut atlas_results: Vec<Option<AtlasLine>> = match atlas {
-        Some(a) => atlas_points
-            .iter()
-            .map(|x| {
-                x.map(|x| {
-                    let s = a.sample_with(
-                        x,
-                        sdfc::uv::Search {
-                            brute_force: args.brute_force,
-                        },
-                    );
-                    let mut line = atlas_line(
-                        a,
-                        s.status,
-                        s.uv.to_array(),
-                        s.seed.map(|i| i as i32).unwrap_or(-1),
-                        s.distance,
-                        s.weight,
-                    );
-                    if args.all_seeds {
-                        line.seeds = Some(seed_lines(a, x));
-                    }
-                    line
-                })
-            })
-            .collect(),
+    let mut results = eval::query_all(shape, &points);
+    let mut atlas_results = match atlas {
+        Some(a) => cpu_atlas_lines(a, &atlas_points, args),
         None => Vec::new(),
     };
-    let mut results = eval::query_all(&shape, &points);
     if args.gpu {
-        let options = sdfc::codegen::Options {
-            shape: args.shape.clone(),
-            atlas: args.atlas.clone(),
-            ..Default::default()
-        };
-        let name = args.scene.display().to_string();
-        let module = match driver::compile(&analysis, &options) {
-            Ok(c) => c.module,
-            Err(e) => return super::compile::report(&name, &source, e),
-        };
-        let gpu = match sdfc::gpu::Gpu::new(args.backend) {
-            Ok(g) => g,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(super::exit::gpu(&e));
-            }
-        };
-        match sdfc::gpu::eval_points(&gpu, &module.wgsl, &points) {
-            Ok(values) => {
-                for (q, v) in results.iter_mut().zip(values) {
-                    q.distance = v[0] as f64;
-                    q.gradient = DVec3::new(v[1] as f64, v[2] as f64, v[3] as f64);
-                }
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(super::exit::gpu(&e));
-            }
-        }
+        let module = compile(args, &analysis, &source)?;
+        let gpu = sdfc::gpu::Gpu::new(args.backend).map_err(|e| {
+            let code = exit::gpu(&e);
+            fail(e, code)
+        })?;
+        gpu_distances(&gpu, &module.wgsl, &points, &mut results)?;
         if let Some(a) = atlas {
-            let on_surface: Vec<DVec3> = atlas_points
-                .iter()
-                .map(|x| x.unwrap_or(DVec3::ZERO))
-                .collect();
-            match sdfc::gpu::eval_atlas(&gpu, &module.wgsl, &on_surface) {
-                Ok(values) => {
-                    for ((slot, v), x) in atlas_results.iter_mut().zip(values).zip(&atlas_points) {
-                        if let Some(x) = x {
-                            let mut line = atlas_line(
-                                a,
-                                sdfc::uv::Status::from_code(v.status),
-                                [v.uv[0] as f64, v.uv[1] as f64],
-                                v.seed,
-                                v.distance as f64,
-                                v.weight as f64,
-                            );
-                            if args.all_seeds {
-                                line.seeds = Some(seed_lines(a, *x));
-                            }
-                            *slot = Some(line);
-                        }
-                    }
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(super::exit::gpu(&e));
-                }
-            }
+            gpu_atlas_lines(
+                &gpu,
+                &module.wgsl,
+                a,
+                &atlas_points,
+                args,
+                &mut atlas_results,
+            )?;
         }
     }
+    print_lines(results, atlas.is_some().then_some(atlas_results))
+}
+
+/// The atlas lines of the CPU reference, `None` where a point has no projection.
+fn cpu_atlas_lines(
+    a: &sdfc::uv::Atlas,
+    atlas_points: &[Option<DVec3>],
+    args: &EvalArgs,
+) -> Vec<Option<AtlasLine>> {
+    let search = sdfc::uv::Search {
+        brute_force: args.brute_force,
+    };
+    atlas_points
+        .iter()
+        .map(|x| {
+            let x = (*x)?;
+            let s = a.sample_with(x, search);
+            let seed = s.seed.map(|i| i as i32).unwrap_or(-1);
+            let mut line = atlas_line(a, s.status, s.uv.to_array(), seed, s.distance, s.weight);
+            if args.all_seeds {
+                line.seeds = Some(seed_lines(a, x));
+            }
+            Some(line)
+        })
+        .collect()
+}
+
+/// The scene's module for `--gpu`, with the shape and atlas asked for.
+fn compile(
+    args: &EvalArgs,
+    analysis: &driver::Analysis,
+    source: &str,
+) -> Result<sdfc::codegen::Module, Failed> {
+    let options = sdfc::codegen::Options {
+        shape: args.shape.clone(),
+        atlas: args.atlas.clone(),
+        ..Default::default()
+    };
+    let name = args.scene.display().to_string();
+    driver::compile(analysis, &options)
+        .map(|c| c.module)
+        .map_err(|e| super::compile::report(&name, source, e))
+}
+
+/// Replaces the CPU distances and gradients with the GPU's.
+fn gpu_distances(
+    gpu: &sdfc::gpu::Gpu,
+    wgsl: &str,
+    points: &[DVec3],
+    results: &mut [eval::Query],
+) -> Result<(), Failed> {
+    let values = sdfc::gpu::eval_points(gpu, wgsl, points).map_err(|e| {
+        let code = exit::gpu(&e);
+        fail(e, code)
+    })?;
+    for (q, v) in results.iter_mut().zip(values) {
+        q.distance = v[0] as f64;
+        q.gradient = DVec3::new(v[1] as f64, v[2] as f64, v[3] as f64);
+    }
+    Ok(())
+}
+
+/// Replaces the CPU atlas lines with the GPU's, at the same projections.
+fn gpu_atlas_lines(
+    gpu: &sdfc::gpu::Gpu,
+    wgsl: &str,
+    a: &sdfc::uv::Atlas,
+    atlas_points: &[Option<DVec3>],
+    args: &EvalArgs,
+    atlas_results: &mut [Option<AtlasLine>],
+) -> Result<(), Failed> {
+    let on_surface: Vec<DVec3> = atlas_points
+        .iter()
+        .map(|x| x.unwrap_or(DVec3::ZERO))
+        .collect();
+    let values = sdfc::gpu::eval_atlas(gpu, wgsl, &on_surface).map_err(|e| {
+        let code = exit::gpu(&e);
+        fail(e, code)
+    })?;
+    for ((slot, v), x) in atlas_results.iter_mut().zip(values).zip(atlas_points) {
+        let Some(x) = x else {
+            continue;
+        };
+        let mut line = atlas_line(
+            a,
+            sdfc::uv::Status::from_code(v.status),
+            [v.uv[0] as f64, v.uv[1] as f64],
+            v.seed,
+            v.distance as f64,
+            v.weight as f64,
+        );
+        if args.all_seeds {
+            line.seeds = Some(seed_lines(a, *x));
+        }
+        *slot = Some(line);
+    }
+    Ok(())
+}
+
+/// Prints one JSON line per point; with an atlas, a point without a projection gets
+/// the status `no_surface`.
+fn print_lines(
+    results: Vec<eval::Query>,
+    atlas_results: Option<Vec<Option<AtlasLine>>>,
+) -> Result<(), Failed> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    let mut atlas_results = atlas_results.into_iter();
+    let has_atlas = atlas_results.is_some();
+    let mut atlas_results = atlas_results.unwrap_or_default().into_iter();
     for q in results {
-        let atlas_line = if atlas.is_some() {
-            Some(atlas_results.next().flatten().unwrap_or_else(|| AtlasLine {
+        let atlas = has_atlas.then(|| {
+            atlas_results.next().flatten().unwrap_or_else(|| AtlasLine {
                 name: String::new(),
                 status: "no_surface",
                 uv: [0.0; 2],
@@ -221,23 +260,19 @@ pub fn run(args: EvalArgs) -> ExitCode {
                 geodesic_distance: None,
                 weight: 0.0,
                 seeds: None,
-            }))
-        } else {
-            None
-        };
+            })
+        });
         let line = Line {
             point: q.point.to_array(),
             distance: q.distance,
             gradient: q.gradient.to_array(),
             surface: q.surface.map(|s| s.to_array()),
-            atlas: atlas_line,
+            atlas,
         };
         let text = serde_json::to_string(&line).unwrap_or_default();
-        if writeln!(out, "{text}").is_err() {
-            return ExitCode::from(super::exit::USAGE);
-        }
+        writeln!(out, "{text}").map_err(|_| ExitCode::from(exit::USAGE))?;
     }
-    ExitCode::SUCCESS
+    Ok(())
 }
 
 fn atlas_line(

@@ -23,10 +23,11 @@ fn send_note(conn: &Connection, method: &str, params: serde_json::Value) -> Resu
 fn wait_diagnostics(conn: &Connection, version: i32) -> Result<usize, Error> {
     loop {
         match conn.receiver.recv_timeout(Duration::from_secs(600))? {
-            Message::Notification(n) if n.method == "textDocument/publishDiagnostics" => {
-                if n.params["version"] == version {
-                    return Ok(n.params["diagnostics"].as_array().map_or(0, |a| a.len()));
-                }
+            Message::Notification(n)
+                if n.method == "textDocument/publishDiagnostics"
+                    && n.params["version"] == version =>
+            {
+                return Ok(n.params["diagnostics"].as_array().map_or(0, |a| a.len()));
             }
             _ => {}
         }

@@ -50,54 +50,88 @@ fn solve_time(source: &str, runs: usize) -> Duration {
     Duration::from_secs_f64(times.get(times.len() / 2).copied().unwrap_or(0.0))
 }
 
-pub fn run(args: &BenchArgs) -> ExitCode {
-    let gpu = match Gpu::new(args.backend) {
-        Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
-    };
-    let (width, height) = args.size.unwrap_or((320, 240));
-    let frames = args.frames.max(1);
-    let here = Path::new(".");
-    let measure =
-        |name: &str, source: &str, options: &Options| -> Result<(Duration, Duration), ExitCode> {
-            let analysis = checked(name, source)?;
-            let module = driver::compile(&analysis, options)
-                .map_err(|e| compile::report(name, source, e))?
-                .module;
-            let mut view = super::view_for(&analysis, None)?;
-            (view.width, view.height) = (width, height);
-            let gpu_error = |e: gpu::GpuError| {
-                eprintln!("error: {e}");
-                ExitCode::from(super::exit::gpu(&e))
-            };
-            let renderer = gpu::Renderer::new(&gpu, &module, here).map_err(gpu_error)?;
-            let (frame, _) = renderer
-                .frames(&gpu, &view, ViewMode::Color, 1, frames)
-                .map_err(gpu_error)?;
-            Ok((frame.timings.pipeline, frame.timings.frame))
-        };
-    let plain_options = Options {
-        plain: true,
-        ..Default::default()
-    };
-    let plain_source = plate(1, 10, false);
+/// What every measurement of the sweep shares: the adapter, the image size and the
+/// number of frames.
+struct Bench<'a> {
+    gpu: &'a Gpu,
+    width: u32,
+    height: u32,
+    frames: u32,
+}
 
+impl Bench<'_> {
+    /// The pipeline creation time and the median frame time of one scene.
+    fn measure(
+        &self,
+        name: &str,
+        source: &str,
+        options: &Options,
+    ) -> Result<(Duration, Duration), ExitCode> {
+        let analysis = checked(name, source)?;
+        let module = driver::compile(&analysis, options)
+            .map_err(|e| compile::report(name, source, e))?
+            .module;
+        let mut view = super::view_for(&analysis, None)?;
+        (view.width, view.height) = (self.width, self.height);
+        let gpu_error = |e: gpu::GpuError| {
+            eprintln!("error: {e}");
+            ExitCode::from(super::exit::gpu(&e))
+        };
+        let renderer = gpu::Renderer::new(self.gpu, &module, Path::new(".")).map_err(gpu_error)?;
+        let (frame, _) = renderer
+            .frames(self.gpu, &view, ViewMode::Color, 1, self.frames)
+            .map_err(gpu_error)?;
+        Ok((frame.timings.pipeline, frame.timings.frame))
+    }
+
+    /// The untextured baseline's frame time.
+    fn measure_plain(&self) -> Result<Duration, ExitCode> {
+        let options = Options {
+            plain: true,
+            ..Default::default()
+        };
+        Ok(self.measure("plain", &plate(1, 10, false), &options)?.1)
+    }
+}
+
+pub fn run(args: &BenchArgs) -> ExitCode {
+    match sweep(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
+    let gpu = Gpu::new(args.backend).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(super::exit::gpu(&e))
+    })?;
+    let (width, height) = args.size.unwrap_or((320, 240));
+    let bench = Bench {
+        gpu: &gpu,
+        width,
+        height,
+        frames: args.frames.max(1),
+    };
     println!("seed-count sweep (Fig. 15): the 8 x 8 plate of examples/plate.sdf");
     println!("adapter:   {}", gpu.describe());
     println!(
-        "size:      {width}x{height}, median of {frames} frames after one warm-up frame, walk {:?}",
-        args.walk
+        "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}",
+        bench.frames, args.walk
     );
-    // The untextured baseline is measured before each seed count and at the end; the
-    // ratios use the median of those measurements, and the spread is reported.
+    let (rows, plain) = measure_rows(&bench, args)?;
+    let base = print_plain(plain);
+    print_ratios(&rows, base);
+    print_speedups(&rows);
+    print_solve_times();
+    Ok(())
+}
+
+/// Measures every configuration, printing a line for each. The untextured baseline is
+/// measured before each seed count and at the end; the ratios use the median of those
+/// measurements, and the spread is reported.
+fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Vec<Duration>), ExitCode> {
     let mut plain = Vec::new();
-    let measure_plain = |plain: &mut Vec<Duration>| -> Result<(), ExitCode> {
-        plain.push(measure("plain", &plain_source, &plain_options)?.1);
-        Ok(())
-    };
     println!();
     println!(
         "{:>5} {:>3} {:>6} {:>4} {:>12} {:>10}",
@@ -105,9 +139,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
     );
     let mut rows = Vec::new();
     for seeds in SEED_COUNTS {
-        if let Err(code) = measure_plain(&mut plain) {
-            return code;
-        }
+        plain.push(bench.measure_plain()?);
         for steps in [10, 20] {
             // One seed has nothing to merge with: its merged row would repeat the other.
             for merged in [false, true].into_iter().filter(|&m| !m || seeds > 1) {
@@ -123,10 +155,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
                         ..Default::default()
                     };
                     let name = format!("plate({seeds}, {steps}, {merged})");
-                    let (pipeline, frame) = match measure(&name, &source, &options) {
-                        Ok(r) => r,
-                        Err(code) => return code,
-                    };
+                    let (pipeline, frame) = bench.measure(&name, &source, &options)?;
                     println!(
                         "{seeds:>5} {steps:>3} {:>6} {:>4} {:>12.1} {:>10.2}",
                         if merged { "yes" } else { "no" },
@@ -145,20 +174,32 @@ pub fn run(args: &BenchArgs) -> ExitCode {
             }
         }
     }
-    if let Err(code) = measure_plain(&mut plain) {
-        return code;
-    }
-    let mut sorted = plain.clone();
-    sorted.sort();
-    let base = sorted[sorted.len() / 2];
+    plain.push(bench.measure_plain()?);
+    Ok((rows, plain))
+}
+
+/// The row of one configuration.
+fn find(rows: &[Row], seeds: u32, steps: u32, merged: bool, grid: bool) -> Option<&Row> {
+    rows.iter()
+        .find(|r| (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid))
+}
+
+/// Prints the untextured baseline's spread; returns its median.
+fn print_plain(mut plain: Vec<Duration>) -> Duration {
+    plain.sort();
+    let base = plain[plain.len() / 2];
     println!();
     println!(
         "untextured (plain sphere trace): median {:.2} ms of {} measurements through the run (min {:.2}, max {:.2})",
         ms(base),
         plain.len(),
-        ms(sorted[0]),
-        ms(sorted[sorted.len() - 1])
+        ms(plain[0]),
+        ms(plain[plain.len() - 1])
     );
+    base
+}
+
+fn print_ratios(rows: &[Row], base: Duration) {
     println!();
     println!("frame time ÷ untextured:");
     println!(
@@ -168,8 +209,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
     for seeds in SEED_COUNTS {
         for steps in [10, 20] {
             let cell = |merged: bool, grid: bool| {
-                rows.iter()
-                    .find(|r| (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid))
+                find(rows, seeds, steps, merged, grid)
                     .map(|r| format!("{:.2}", ms(r.frame) / ms(base)))
                     .unwrap_or_else(|| String::from("—"))
             };
@@ -182,18 +222,16 @@ pub fn run(args: &BenchArgs) -> ExitCode {
             );
         }
     }
+}
 
+fn print_speedups(rows: &[Row]) {
     println!();
     println!("seed grid speed-up (frame time off ÷ on):");
     for seeds in SEED_COUNTS {
         let mut cells = Vec::new();
         for steps in [10, 20] {
             for merged in [false, true] {
-                let pick = |grid: bool| {
-                    rows.iter().find(|r| {
-                        (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid)
-                    })
-                };
+                let pick = |grid: bool| find(rows, seeds, steps, merged, grid);
                 if let (Some(off), Some(on)) = (pick(false), pick(true)) {
                     cells.push(format!(
                         "N={steps} {}: {:.2}",
@@ -205,7 +243,9 @@ pub fn run(args: &BenchArgs) -> ExitCode {
         }
         println!("{seeds:>5} seeds   {}", cells.join("   "));
     }
+}
 
+fn print_solve_times() {
     println!();
     println!("merge-graph solve (frames, Eq. 45/48, and offsets, Eq. 47), median of 21 checks:");
     for seeds in SEED_COUNTS.into_iter().filter(|&s| s > 1) {
@@ -217,5 +257,4 @@ pub fn run(args: &BenchArgs) -> ExitCode {
             t.as_secs_f64() * 1e3
         );
     }
-    ExitCode::SUCCESS
 }

@@ -4,7 +4,7 @@
 
 use crate::ir::{Csg, NodeId, Op, Prim, Shape};
 use crate::sema::builtins::BuiltinId;
-use crate::sema::{AtlasAttr, FieldExpr, SurfaceInput, Ty, Value};
+use crate::sema::{AtlasAttr, AtlasId, FieldExpr, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use glam::{DMat3, DVec3};
 use std::fmt::Write;
@@ -76,7 +76,7 @@ impl Writer {
     /// `vec2<f32>` holding (distance, material).
     pub fn shape(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
         let d = self.fresh("d");
-        match &shape.nodes[id].op {
+        match &shape[id].op {
             Op::Prim(pr) => {
                 let call = match pr {
                     Prim::Sphere { r } => format!("sd_sphere({p}, {})", lit(*r)),
@@ -155,7 +155,7 @@ impl Writer {
                 radius,
                 child,
             } => {
-                let warp = if matches!(shape.nodes[id].op, Op::Twist { .. }) {
+                let warp = if matches!(shape[id].op, Op::Twist { .. }) {
                     "op_twist"
                 } else {
                     "op_bend"
@@ -254,7 +254,7 @@ pub struct TextureUse {
 pub struct Uses {
     pub textures: Vec<TextureUse>,
     /// Atlas indices read by the expressions generated since the last reset.
-    pub atlases: std::collections::BTreeSet<usize>,
+    pub atlases: std::collections::BTreeSet<AtlasId>,
     /// While set, atlas uv and position are generated displaced by these WGSL
     /// expressions: the footprint of a pixel, for texture derivatives.
     pub offset: Option<(String, String)>,
@@ -303,8 +303,10 @@ pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
                     AtlasAttr::Seed => "seed",
                 };
                 match (&tex.offset, attr) {
-                    (Some((du, _)), AtlasAttr::Uv) => format!("(atlas_sample_{atlas}.uv + {du})"),
-                    _ => format!("atlas_sample_{atlas}.{name}"),
+                    (Some((du, _)), AtlasAttr::Uv) => {
+                        format!("(atlas_sample_{}.uv + {du})", atlas.index())
+                    }
+                    _ => format!("atlas_sample_{}.{name}", atlas.index()),
                 }
             }
             FieldExpr::Unary { op, operand } => {

@@ -23,10 +23,10 @@ pub use targets::{compact, translate, validate, NagaError, Target, Validated};
 use crate::codes;
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ir::{self, Scene};
-use crate::sema::{MaterialDef, Program, Ty, Value};
+use crate::sema::{MaterialAttrs, MaterialDef, Program, Ty, Value};
 use crate::span::Span;
 use crate::uv::Atlas;
-use emit::{field, Uses, Writer};
+use emit::{field, Unsupported, Uses, Writer};
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -225,9 +225,9 @@ pub fn generate(
         out: String::new(),
         source_map: Vec::new(),
     };
-    g.scene_constants(&target);
+    g.scene_constants(target);
     g.shapes(scene);
-    g.render_target(scene, &target, options);
+    g.render_target(scene, target, options);
     let plain = options.plain;
     if !plain {
         g.atlases(atlases, options)
@@ -242,7 +242,7 @@ pub fn generate(
     )
     .map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
-    Ok(g.finish(&target, scene, table, textures))
+    Ok(g.finish(target, scene, table, textures))
 }
 
 /// The module being written: the scene's code after the libraries, with its source map.
@@ -366,32 +366,8 @@ impl Generator<'_> {
         let mut problems = Vec::new();
         for (i, m) in materials.iter().enumerate() {
             let start = self.out.len();
-            let case = self.material_case(i + 1, m, &mut uses, &mut problems);
-            self.out.push_str(&case);
-            let span = self.program.defs[m.def].item_span;
-            self.region(start, Some(span), Definition::Material(m.name.clone()));
-        }
-        let _ = writeln!(self.out, "        default: {{\n            return Material(vec3<f32>(0.8), 0.5, 0.0, vec3<f32>(0.0));\n        }}\n    }}\n}}\n");
-        if problems.is_empty() {
-            Ok(uses.textures)
-        } else {
-            Err(problems)
-        }
-    }
-
-    /// One `case` of `scene_material`.
-    fn material_case(
-        &self,
-        id: usize,
-        m: &MaterialDef,
-        uses: &mut Uses,
-        problems: &mut Vec<Diagnostic>,
-    ) -> String {
-        uses.atlases.clear();
-        let span = self.program.defs[m.def].span;
-        let mut attr = |v: &Value, what: MaterialField| {
-            uses.srgb = what.is_color();
-            field(v, uses).unwrap_or_else(|e| {
+            let span = self.program.def(m.def).span;
+            let body = self.material_body(&m.attrs, &mut uses, |what, e| {
                 problems.push(Diagnostic::error(
                     codes::E_CODEGEN,
                     format!(
@@ -402,7 +378,38 @@ impl Generator<'_> {
                     ),
                     span,
                     "in this material",
-                ));
+                ))
+            });
+            let _ = writeln!(self.out, "        case {}: {{\n{body}        }}", i + 1);
+            let item_span = self.program.def(m.def).item_span;
+            self.region(start, Some(item_span), Definition::Material(m.name.clone()));
+        }
+        // The default material's attributes are constants, which always generate.
+        let body = self.material_body(&MaterialAttrs::default(), &mut uses, |_, _| {});
+        let _ = writeln!(
+            self.out,
+            "        default: {{\n{body}        }}\n    }}\n}}\n"
+        );
+        if problems.is_empty() {
+            Ok(uses.textures)
+        } else {
+            Err(problems)
+        }
+    }
+
+    /// The body of one `case` of `scene_material`: the atlas samples it needs and the
+    /// `return`. An attribute that cannot be generated is reported to `problem`.
+    fn material_body(
+        &self,
+        m: &MaterialAttrs,
+        uses: &mut Uses,
+        mut problem: impl FnMut(MaterialField, Unsupported),
+    ) -> String {
+        uses.atlases.clear();
+        let mut attr = |v: &Value, what: MaterialField| {
+            uses.srgb = what.is_color();
+            field(v, uses).unwrap_or_else(|e| {
+                problem(what, e);
                 String::from("0.0")
             })
         };
@@ -417,14 +424,15 @@ impl Generator<'_> {
         let samples: String = uses
             .atlases
             .iter()
-            .map(|k| {
+            .map(|&k| {
                 format!(
-                    "            let atlas_sample_{k} = atlas_{}(p);\n",
-                    self.program.atlases[*k].name
+                    "            let atlas_sample_{} = atlas_{}(p);\n",
+                    k.index(),
+                    self.program.atlas(k).name
                 )
             })
             .collect();
-        format!("        case {id}: {{\n{samples}            return Material({color}, {r}, {mt}, {e});\n        }}\n")
+        format!("{samples}            return Material({color}, {r}, {mt}, {e});\n")
     }
 
     /// The header, the libraries and the scene's code, with the source map shifted to

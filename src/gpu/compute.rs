@@ -39,6 +39,125 @@ pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasVa
         .collect())
 }
 
+/// The query pipeline and its buffers: `points` in, `size` bytes of results out.
+struct Queries {
+    pipeline: wgpu::ComputePipeline,
+    group0: wgpu::BindGroup,
+    group1: wgpu::BindGroup,
+    /// Bound in `group1`; kept alive until the dispatch.
+    _input: wgpu::Buffer,
+    output: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
+fn create_queries(
+    d: &wgpu::Device,
+    wgsl: &str,
+    entry_name: &str,
+    data: &[[f32; 4]],
+    size: u64,
+) -> Queries {
+    use wgpu::util::DeviceExt;
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("scene"),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    };
+    let storage = |read_only| wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let uniform = wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Uniform,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let empty = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("empty"),
+        entries: &[],
+    });
+    let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("queries"),
+        entries: &[
+            entry(0, uniform),
+            entry(1, storage(true)),
+            entry(2, storage(false)),
+        ],
+    });
+    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("queries"),
+        bind_group_layouts: &[Some(&empty), Some(&layout1)],
+        immediate_size: 0,
+    });
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry_name),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some(entry_name),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("grid"),
+        contents: &[0u8; 48],
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let input = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("points"),
+        contents: bytemuck::cast_slice(data),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let output = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let group0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("empty"),
+        layout: &empty,
+        entries: &[],
+    });
+    let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("queries"),
+        layout: &layout1,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: grid.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: input.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: output.as_entire_binding(),
+            },
+        ],
+    });
+    Queries {
+        pipeline,
+        group0,
+        group1,
+        _input: input,
+        output,
+        readback,
+    }
+}
+
 /// Runs a compute entry point over points; it writes `per_point` vec4s per point.
 fn run(
     gpu: &Gpu,
@@ -56,101 +175,7 @@ fn run(
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
     let size = (data.len() * 16 * per_point) as u64;
-    let (pipeline, group0, group1, input, output, readback) = gpu.scoped(|| {
-        use wgpu::util::DeviceExt;
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("scene"),
-            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-        });
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let empty = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("empty"),
-            entries: &[],
-        });
-        let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("queries"),
-            entries: &[
-                entry(0, uniform),
-                entry(1, storage(true)),
-                entry(2, storage(false)),
-            ],
-        });
-        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("queries"),
-            bind_group_layouts: &[Some(&empty), Some(&layout1)],
-            immediate_size: 0,
-        });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry_name),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some(entry_name),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("grid"),
-            contents: &[0u8; 48],
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let input = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("points"),
-            contents: bytemuck::cast_slice(&data),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let output = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("results"),
-            size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let readback = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let group0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("empty"),
-            layout: &empty,
-            entries: &[],
-        });
-        let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("queries"),
-            layout: &layout1,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: grid.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: input.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: output.as_entire_binding(),
-                },
-            ],
-        });
-        (pipeline, group0, group1, input, output, readback)
-    })?;
-    let _keep = &input;
+    let q = gpu.scoped(|| create_queries(d, wgsl, entry_name, &data, size))?;
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("queries"),
@@ -160,14 +185,14 @@ fn run(
                 label: Some("queries"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &group0, &[]);
-            pass.set_bind_group(1, &group1, &[]);
+            pass.set_pipeline(&q.pipeline);
+            pass.set_bind_group(0, &q.group0, &[]);
+            pass.set_bind_group(1, &q.group1, &[]);
             pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
         }
-        enc.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
+        enc.copy_buffer_to_buffer(&q.output, 0, &q.readback, 0, size);
         gpu.queue.submit([enc.finish()]);
     })?;
-    let bytes = gpu.read_buffer(&readback)?;
+    let bytes = gpu.read_buffer(&q.readback)?;
     Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec())
 }

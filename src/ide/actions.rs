@@ -30,7 +30,7 @@ fn reach(doc: &Document, d: &Diagnostic) -> Option<Span> {
             .iter()
             .flat_map(|a| &a.seeds)
             .find(|s| s.position_span == span)
-            .map_or(span, |s| program.defs[s.def].item_span.to(span)),
+            .map_or(span, |s| program.def(s.def).item_span.to(span)),
     )
 }
 

@@ -233,12 +233,8 @@ pub(crate) fn call_at(toks: &[(Token, Span)]) -> Option<Call> {
 
 fn settings(specs: &[SettingSpec]) -> impl Iterator<Item = Completion> + '_ {
     specs.iter().map(|s| {
-        let detail = match s.default {
-            Some(d) => format!("{}: {} = {}", s.name, s.ty.describe(), d.display()),
-            None => format!("{}: {}", s.name, s.ty.describe()),
-        };
         Completion::new(s.name, CompletionKind::Setting)
-            .detail(detail)
+            .detail(s.describe())
             .doc(s.doc)
             .insert(format!("{} = ", s.name))
     })
@@ -317,13 +313,9 @@ pub fn completions(doc: &Document, offset: usize) -> Vec<Completion> {
         if call.at_start {
             for (p, given) in call.builtin.params.iter().zip(call.given()) {
                 if !given {
-                    let detail = match p.default {
-                        Some(d) => format!("{}: {} = {}", p.name, p.ty.describe(), d.display()),
-                        None => format!("{}: {}", p.name, p.ty.describe()),
-                    };
                     out.push(
                         Completion::new(format!("{}:", p.name), CompletionKind::Parameter)
-                            .detail(detail)
+                            .detail(p.describe())
                             .insert(format!("{}: ", p.name)),
                     );
                 }
@@ -375,10 +367,7 @@ pub fn signature_help(doc: &Document, offset: usize) -> Option<SignatureHelp> {
             label.push_str(", ");
         }
         let start = label.len();
-        label.push_str(&match p.default {
-            Some(d) => format!("{}: {} = {}", p.name, p.ty.describe(), d.display()),
-            None => format!("{}: {}", p.name, p.ty.describe()),
-        });
+        label.push_str(&p.describe());
         parameters.push((start, label.len()));
     }
     let sig = b.signature();

@@ -28,8 +28,13 @@ pub struct Document {
 
 impl Document {
     pub fn new(text: impl Into<String>, base_dir: Option<&Path>) -> Document {
+        Document::with_access(text, &crate::access::Access::new(base_dir))
+    }
+
+    /// A document whose files may be read from the folders of `access`.
+    pub fn with_access(text: impl Into<String>, access: &crate::access::Access) -> Document {
         let text = text.into();
-        let analysis = crate::driver::check_all(&text, base_dir);
+        let analysis = crate::driver::check_all_with(&text, access);
         Document { text, analysis }
     }
 }
@@ -98,7 +103,7 @@ fn named_at(doc: &Document, offset: usize) -> Option<Named<'_>> {
 pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
     let program = &doc.analysis.program;
     if let Some(id) = program.def_at(offset) {
-        let def = &program.defs[id];
+        let def = program.def(id);
         let span = program
             .references
             .iter()
@@ -122,7 +127,7 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
             }
             DefKind::Material => format!("```sdf\nmaterial {}\n```", def.name),
             DefKind::Seed { atlas } => {
-                let a = &program.atlases[atlas];
+                let a = program.atlas(atlas);
                 let s = a.seeds.iter().find(|s| s.def == id)?;
                 let tangent = s
                     .tangent
@@ -135,7 +140,11 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
                     a.name
                 );
                 // What the compile-time geometry made of it (when the file is valid).
-                let prepared = doc.analysis.atlases.get(atlas).and_then(|p| p.as_ref());
+                let prepared = doc
+                    .analysis
+                    .atlases
+                    .get(atlas.index())
+                    .and_then(|p| p.as_ref());
                 if let Some(pa) = prepared {
                     let k = a.seeds.iter().position(|x| x.def == id)?;
                     let ps = &pa.seeds[k];
@@ -197,7 +206,7 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
 /// The definition of the name at an offset.
 pub fn definition(doc: &Document, offset: usize) -> Option<Span> {
     let program = &doc.analysis.program;
-    program.def_at(offset).map(|id| program.defs[id].span)
+    program.def_at(offset).map(|id| program.def(id).span)
 }
 
 /// Every use of the name at an offset, with its definition first when asked.
@@ -208,7 +217,7 @@ pub fn references(doc: &Document, offset: usize, include_definition: bool) -> Ve
     };
     let mut out = Vec::new();
     if include_definition {
-        out.push(program.defs[id].span);
+        out.push(program.def(id).span);
     }
     out.extend(program.references_to(id).map(|r| r.span));
     out

@@ -65,8 +65,8 @@ pub fn prepare_rename(doc: &Document, offset: usize) -> Result<(Span, String), R
         .iter()
         .find(|r| r.def == id && r.span.contains(offset))
         .map(|r| r.span)
-        .unwrap_or(program.defs[id].span);
-    Ok((span, program.defs[id].name.clone()))
+        .unwrap_or(program.def(id).span);
+    Ok((span, program.def(id).name.clone()))
 }
 
 /// Checks that `name` is a valid identifier that no keyword or builtin uses.
@@ -94,7 +94,7 @@ pub fn rename(doc: &Document, offset: usize, new_name: &str) -> Result<Vec<Span>
     let program = &doc.analysis.program;
     let id = target(doc, offset)?;
     check_new_name(new_name)?;
-    let def = &program.defs[id];
+    let def = program.def(id);
     if def.name == new_name {
         return Ok(Vec::new());
     }

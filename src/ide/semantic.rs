@@ -135,7 +135,7 @@ pub fn semantic_tokens(doc: &Document) -> Vec<SemanticToken> {
         resolved.insert(d.span.start, (def_kind(d.kind), true));
     }
     for r in &program.references {
-        resolved.insert(r.span.start, (def_kind(program.defs[r.def].kind), false));
+        resolved.insert(r.span.start, (def_kind(program.def(r.def).kind), false));
     }
     let lexed = lex(&doc.text, &mut Vec::new());
     let mut out: Vec<SemanticToken> = lexed

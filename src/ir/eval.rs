@@ -153,7 +153,7 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
 }
 
 fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
-    match &shape.nodes[id].op {
+    match &shape[id].op {
         Op::Prim(pr) => (prim(p, pr), 0),
         Op::Csg { op, k, a, b } => {
             let (da, ma) = eval_node(shape, *a, p);
@@ -230,7 +230,8 @@ pub fn project(shape: &Shape, p: DVec3, tolerance: f64) -> Option<DVec3> {
         }
         let g = gradient(shape, x);
         let g2 = g.length_squared();
-        if !(g2 > 1e-12) || !d.is_finite() {
+        // Written so that a NaN gradient also stops the projection.
+        if g2.is_nan() || g2 <= 1e-12 || !d.is_finite() {
             return None;
         }
         x -= g * (d / g2);

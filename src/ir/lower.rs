@@ -58,11 +58,11 @@ impl Lowerer<'_> {
             bounds,
             lipschitz,
         });
-        Some(self.out.nodes.len() - 1)
+        Some(NodeId::new(self.out.nodes.len() - 1))
     }
 
     fn info(&self, id: NodeId) -> (Aabb, f64) {
-        let n = &self.out.nodes[id];
+        let n = &self.out[id];
         (n.bounds, n.lipschitz)
     }
 
@@ -124,9 +124,8 @@ impl Lowerer<'_> {
                     half: half - DVec3::splat(r),
                     r,
                 })
-                .map(|id| {
-                    self.out.nodes[id].bounds = Aabb::centered(half);
-                    id
+                .inspect(|&id| {
+                    self.out[id].bounds = Aabb::centered(half);
                 })
             }
             B::BoxFrame => self.prim(Prim::BoxFrame {
@@ -345,7 +344,7 @@ impl Lowerer<'_> {
                 let (b, l) = self.info(child);
                 self.push(
                     Op::Paint {
-                        material: m as u32 + 1,
+                        material: m.index() as u32 + 1,
                         child,
                     },
                     b,

@@ -15,8 +15,10 @@ pub use lower::{lower, lower_shape};
 
 use glam::{DMat3, DVec3};
 
-/// Index of a node in [`Scene::nodes`].
-pub type NodeId = usize;
+crate::id::define_id!(
+    /// Index of a node in [`Shape::nodes`].
+    NodeId
+);
 
 /// A primitive's distance function, in its local frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -262,13 +264,27 @@ pub struct Shape {
     pub nodes: Vec<Node>,
 }
 
+impl std::ops::Index<NodeId> for Shape {
+    type Output = Node;
+
+    fn index(&self, id: NodeId) -> &Node {
+        &self.nodes[id.index()]
+    }
+}
+
+impl std::ops::IndexMut<NodeId> for Shape {
+    fn index_mut(&mut self, id: NodeId) -> &mut Node {
+        &mut self.nodes[id.index()]
+    }
+}
+
 impl Shape {
     pub fn root(&self) -> NodeId {
-        self.nodes.len() - 1
+        NodeId::new(self.nodes.len() - 1)
     }
 
     pub fn root_node(&self) -> &Node {
-        &self.nodes[self.root()]
+        &self[self.root()]
     }
 
     pub fn lipschitz(&self) -> f64 {

@@ -172,8 +172,28 @@ fn initialize_result() -> lsp::InitializeResult {
     }
 }
 
-fn open(uri: &lsp::Uri, text: String, version: i32) -> Open {
-    let doc = Document::new(text, base_dir(uri).as_deref());
+/// The folders of the workspace, from `initialize`: a document may read files in its
+/// own folder and in these.
+fn workspace_roots(params: &serde_json::Value) -> Vec<PathBuf> {
+    let Ok(p) = serde_json::from_value::<lsp::InitializeParams>(params.clone()) else {
+        return Vec::new();
+    };
+    #[allow(deprecated)]
+    let mut uris: Vec<String> = p.root_uri.iter().map(|u| u.as_str().to_string()).collect();
+    for f in p.workspace_folders.into_iter().flatten() {
+        uris.push(f.uri.as_str().to_string());
+    }
+    uris.iter()
+        .filter_map(|u| url::Url::parse(u).ok()?.to_file_path().ok())
+        .collect()
+}
+
+fn open(uri: &lsp::Uri, text: String, version: i32, roots: &[PathBuf]) -> Open {
+    let mut access = crate::access::Access::new(base_dir(uri).as_deref());
+    for r in roots {
+        access.allow(r);
+    }
+    let doc = Document::with_access(text, &access);
     let index = LineIndex::new(&doc.text);
     Open {
         version,

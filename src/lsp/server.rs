@@ -42,6 +42,8 @@ pub(super) struct Server {
     changed: Vec<(lsp::Uri, String, i32)>,
     /// Requests the client cancelled.
     cancelled: HashSet<RequestId>,
+    /// The workspace folders (from `initialize`), where documents may read files.
+    roots: Vec<std::path::PathBuf>,
 }
 
 /// Moves every message of the connection into an unbounded queue, from a thread
@@ -88,6 +90,7 @@ pub fn serve(conn: Connection) -> Result<Ended, Error> {
         docs: Docs::new(),
         changed: Vec::new(),
         cancelled: HashSet::new(),
+        roots: Vec::new(),
     };
     let mut carried: Vec<Message> = Vec::new();
     loop {
@@ -152,6 +155,7 @@ impl Server {
         match (self.phase, req.method.as_str()) {
             (Phase::Uninitialized, Initialize::METHOD) => {
                 self.phase = Phase::Running;
+                self.roots = super::workspace_roots(&req.params);
                 lifecycle(
                     req.id,
                     Ok(serde_json::to_value(super::initialize_result())
@@ -269,7 +273,7 @@ impl Server {
     fn analyse(&mut self) -> Result<(), Error> {
         for (uri, text, version) in std::mem::take(&mut self.changed) {
             let analysed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                open(&uri, text, version)
+                open(&uri, text, version, &self.roots)
             }));
             let o = match analysed {
                 Ok(o) => o,

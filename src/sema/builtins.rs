@@ -2,7 +2,7 @@
 //! defaults and documentation. The checker, hover, completion and signature
 //! help all read this one table.
 
-use super::types::Ty;
+use super::types::{Ty, Value};
 
 /// The type a parameter accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -19,6 +19,10 @@ pub enum PTy {
     T,
     /// A float (uniform) or a vec3 (per axis).
     FloatOrVec3,
+    /// A colour: a float (grey), a vec3, or a vec4 whose rgb is used.
+    Color,
+    Camera,
+    Light,
 }
 
 impl PTy {
@@ -35,6 +39,9 @@ impl PTy {
             PTy::Texture => *t == Ty::Texture,
             PTy::Material => *t == Ty::Material,
             PTy::FloatOrVec3 => matches!(t, Ty::Float | Ty::Vec(3)),
+            PTy::Color => matches!(t, Ty::Float | Ty::Vec(3) | Ty::Vec(4)),
+            PTy::Camera => *t == Ty::Camera,
+            PTy::Light => *t == Ty::Light,
             PTy::T => t.is_numeric(),
         }
     }
@@ -51,11 +58,14 @@ impl PTy {
             PTy::Material => "material",
             PTy::T => "float or vector",
             PTy::FloatOrVec3 => "float or vec3",
+            PTy::Color => "float, vec3 or vec4",
+            PTy::Camera => "camera",
+            PTy::Light => "light",
         }
     }
 }
 
-/// A default value.
+/// A default value, as the tables write it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Dflt {
     F(f64),
@@ -65,19 +75,29 @@ pub enum Dflt {
 }
 
 impl Dflt {
-    pub fn display(self) -> String {
+    /// The default as a folded value: the one conversion, used by the checker for
+    /// missing arguments and unset settings.
+    pub fn value(self) -> Value {
         match self {
-            Dflt::F(x) => super::types::fmt_num(x),
-            Dflt::V(v) => format!(
-                "[{}]",
-                v.iter()
-                    .map(|x| super::types::fmt_num(*x))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            Dflt::B(b) => b.to_string(),
-            Dflt::S(s) => format!("{s:?}"),
+            Dflt::F(x) => Value::Float(x),
+            Dflt::V(v) => Value::Vec(v.to_vec()),
+            Dflt::B(b) => Value::Bool(b),
+            Dflt::S(s) => Value::Str(s.to_string()),
         }
+    }
+
+    /// The default as hover, completion and signatures show it.
+    pub fn display(self) -> String {
+        self.value().display()
+    }
+}
+
+/// `name: type = default`, or `name: type` without a default: a parameter or setting
+/// as signatures, completion and signature help show it.
+fn describe_slot(name: &str, ty: PTy, default: Option<Dflt>) -> String {
+    match default {
+        Some(d) => format!("{name}: {} = {}", ty.describe(), d.display()),
+        None => format!("{name}: {}", ty.describe()),
     }
 }
 
@@ -101,6 +121,13 @@ pub struct Param {
     pub ty: PTy,
     pub default: Option<Dflt>,
     pub check: Check,
+}
+
+impl Param {
+    /// `name: type = default`, for signatures and completion.
+    pub fn describe(&self) -> String {
+        describe_slot(self.name, self.ty, self.default)
+    }
 }
 
 const fn p(name: &'static str, ty: PTy) -> Param {
@@ -204,16 +231,17 @@ impl Builtin {
         self.params.iter().enumerate().find(|(_, p)| p.name == name)
     }
 
+    /// Every parameter's default, in order; `None` when some parameter has none.
+    pub fn default_args(&self) -> Option<Vec<Value>> {
+        self.params
+            .iter()
+            .map(|p| p.default.map(Dflt::value))
+            .collect()
+    }
+
     /// `name(param: type = default, …) -> ret`, for hover and signature help.
     pub fn signature(&self) -> String {
-        let params: Vec<String> = self
-            .params
-            .iter()
-            .map(|p| match p.default {
-                Some(d) => format!("{}: {} = {}", p.name, p.ty.describe(), d.display()),
-                None => format!("{}: {}", p.name, p.ty.describe()),
-            })
-            .collect();
+        let params: Vec<String> = self.params.iter().map(Param::describe).collect();
         let ret = match self.ret {
             Ret::Shape => "shape",
             Ret::Texture => "texture",
@@ -315,8 +343,8 @@ builtins! {
     Checker: "checker", [p("uv", Vec2), posd("n", Float, F(8.0))], Float, Texture, "A checkerboard of `n` squares per unit of uv: 0 or 1.";
     Grid: "grid", [p("uv", Vec2), posd("n", Float, F(8.0)), posd("width", Float, F(0.05))], Float, Texture, "Grid lines, `n` per unit of uv, of relative `width`: 1 on a line, 0 elsewhere.";
     // Render settings.
-    Orbit: "orbit", [d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("distance", Float, F(5.0)), d("yaw", Float, F(0.0)), d("pitch", Float, F(0.0)), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera looking at `target` from `distance`, turned by `yaw` about y and raised by `pitch`; `fov` is the vertical field of view.";
-    LookAt: "look_at", [p("eye", Vec3), d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("fov", Float, F(0.785_398_163_397_448_3))], Camera, Render, "A camera at `eye` looking at `target`; `fov` is the vertical field of view.";
+    Orbit: "orbit", [d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("distance", Float, F(5.0)), d("yaw", Float, F(0.0)), d("pitch", Float, F(0.0)), posd("fov", Float, F(std::f64::consts::FRAC_PI_4))], Camera, Render, "A camera looking at `target` from `distance`, turned by `yaw` about y and raised by `pitch`; `fov` is the vertical field of view.";
+    LookAt: "look_at", [p("eye", Vec3), d("target", Vec3, V(&[0.0, 0.0, 0.0])), posd("fov", Float, F(std::f64::consts::FRAC_PI_4))], Camera, Render, "A camera at `eye` looking at `target`; `fov` is the vertical field of view.";
     Sun: "sun", [dir("direction", &[0.5, 1.0, 0.3]), Param { name: "color", ty: Vec3, default: Some(V(&[1.0, 1.0, 1.0])), check: Check::NonNegative }, Param { name: "intensity", ty: Float, default: Some(F(3.0)), check: Check::NonNegative }], Light, Render, "A directional light; `direction` points from the surface towards the sun.";
     // Math; all of these also work on surface fields.
     Sin: "sin", [TX], T, Math, "Sine, per component.";
@@ -426,7 +454,7 @@ pub static ATLAS_SETTINGS: &[SettingSpec] = &[
 pub static MATERIAL_SETTINGS: &[SettingSpec] = &[
     set(
         "color",
-        FloatOrVec3,
+        Color,
         Some(V(&[0.8, 0.8, 0.8])),
         Check::NonNegative,
         true,
@@ -462,7 +490,7 @@ pub static MATERIAL_SETTINGS: &[SettingSpec] = &[
 pub static RENDER_SETTINGS: &[SettingSpec] = &[
     set(
         "camera",
-        PTy::Float,
+        PTy::Camera,
         None,
         Check::None,
         false,
@@ -478,7 +506,7 @@ pub static RENDER_SETTINGS: &[SettingSpec] = &[
     ),
     set(
         "light",
-        PTy::Float,
+        PTy::Light,
         None,
         Check::None,
         false,
@@ -502,16 +530,16 @@ pub static RENDER_SETTINGS: &[SettingSpec] = &[
     ),
 ];
 
-/// The type a setting expects, for messages (camera and light are not parameter types).
-pub fn setting_type(block: &str, s: &SettingSpec) -> Ty {
-    match (block, s.name) {
-        ("render", "camera") => Ty::Camera,
-        ("render", "light") => Ty::Light,
-        (_, "reproject") => Ty::Bool,
-        _ => match s.ty {
-            PTy::Vec2 => Ty::Vec(2),
-            PTy::Vec3 | PTy::FloatOrVec3 => Ty::Vec(3),
-            _ => Ty::Float,
-        },
+impl SettingSpec {
+    /// `name: type = default`, for completion.
+    pub fn describe(&self) -> String {
+        describe_slot(self.name, self.ty, self.default)
     }
+}
+
+/// The default of a block's setting as a value; `None` for a setting without one (or
+/// no such setting).
+pub fn setting_default(specs: &[SettingSpec], name: &str) -> Option<Value> {
+    let spec = specs.iter().find(|s| s.name == name)?;
+    spec.default.map(Dflt::value)
 }

@@ -1,9 +1,8 @@
 //! The checker's item level: definitions, atlases, materials and the render item.
 
-use super::builtins::{
-    self, Check, Dflt, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS,
-};
-use super::types::{fmt_num, Ty, Value};
+use super::builtins::{Check, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS};
+use super::settings::Settings;
+use super::types::{fmt_num, Value};
 use super::*;
 use crate::access::Access;
 use crate::codes;
@@ -61,7 +60,7 @@ impl Checker<'_> {
     }
 
     fn define(&mut self, name: &Ident, kind: DefKind, item_span: Span, value: Value) -> DefId {
-        let id = self.prog.defs.len();
+        let id = DefId::new(self.prog.defs.len());
         self.prog.defs.push(Def {
             name: name.name.clone(),
             kind,
@@ -144,7 +143,8 @@ impl Checker<'_> {
 
     fn unused(&mut self) {
         let mut warnings = Vec::new();
-        for (id, def) in self.prog.defs.iter().enumerate() {
+        for (i, def) in self.prog.defs.iter().enumerate() {
+            let id = DefId::new(i);
             if self.used.contains(&id)
                 || self.duplicates.contains(&id)
                 || self.used_early.contains(&def.name)
@@ -223,19 +223,13 @@ impl Checker<'_> {
                 continue;
             }
             seen.insert(spec.name, s.name.span);
-            let v = self.setting_value(block, spec, value, s.value.span);
+            let v = self.setting_value(spec, value, s.value.span);
             out.insert(spec.name, (v, s.value.span));
         }
         out
     }
 
-    fn setting_value(
-        &mut self,
-        block: &str,
-        spec: &SettingSpec,
-        value: Value,
-        span: Span,
-    ) -> Value {
+    fn setting_value(&mut self, spec: &SettingSpec, value: Value, span: Span) -> Value {
         if value.is_error() {
             return value;
         }
@@ -252,18 +246,8 @@ impl Checker<'_> {
             );
             return Value::Error;
         }
-        let expected = builtins::setting_type(block, spec);
-        let base = ty.base().clone();
-        let ok = match (block, spec.name) {
-            ("material", "color") => matches!(base, Ty::Float | Ty::Vec(3) | Ty::Vec(4)),
-            _ => base == expected,
-        };
-        if !ok {
-            let want = if (block, spec.name) == ("material", "color") {
-                String::from("float, vec3 or vec4")
-            } else {
-                expected.to_string()
-            };
+        if !spec.ty.accepts(ty.base()) {
+            let want = spec.ty.describe();
             self.error(Diagnostic::error(
                 codes::E_TYPE_MISMATCH,
                 format!("`{}` expects {want}, found {ty}", spec.name),
@@ -346,18 +330,6 @@ impl Checker<'_> {
         }
     }
 
-    fn float_setting(
-        &self,
-        values: &HashMap<&'static str, (Value, Span)>,
-        name: &str,
-        default: f64,
-    ) -> f64 {
-        values
-            .get(name)
-            .and_then(|(v, _)| v.as_float())
-            .unwrap_or(default)
-    }
-
     fn const_vec3(&mut self, e: &ast::Expr, what: &str) -> Option<[f64; 3]> {
         let v = self.expr(e);
         match &v {
@@ -397,7 +369,7 @@ impl Checker<'_> {
                 .with_note("seeds are placed on the surface of the shape after `on`"),
             );
         }
-        let atlas_id = self.prog.atlases.len();
+        let atlas_id = AtlasId::new(self.prog.atlases.len());
         let def = self.define(name, DefKind::Atlas, span, Value::Atlas(atlas_id));
         let settings: Vec<&Setting> = body
             .iter()
@@ -409,42 +381,58 @@ impl Checker<'_> {
                 }
             })
             .collect();
-        let values = self.settings("atlas", ATLAS_SETTINGS, &settings);
-        let mut params = AtlasParams::default();
-        if let Some((v, vspan)) = values.get("steps") {
-            if let Some(n) = v.as_float() {
-                if n.fract() != 0.0 || !(1.0..=64.0).contains(&n) {
-                    self.error(
-                        Diagnostic::error(
-                            codes::E_OUT_OF_RANGE,
-                            "`steps` must be a whole number from 1 to 64",
-                            *vspan,
-                            format!("this is {}", fmt_num(n)),
-                        )
-                        .with_note("N is unrolled into the shader; the paper uses 5 to 40"),
-                    );
-                } else {
-                    params.steps = n as u32;
-                }
+        let mut values = self.settings("atlas", ATLAS_SETTINGS, &settings);
+        if let Some((Value::Float(n), vspan)) = values.get("steps") {
+            let (n, vspan) = (*n, *vspan);
+            if n.fract() != 0.0 || !(1.0..=64.0).contains(&n) {
+                self.error(
+                    Diagnostic::error(
+                        codes::E_OUT_OF_RANGE,
+                        "`steps` must be a whole number from 1 to 64",
+                        vspan,
+                        format!("this is {}", fmt_num(n)),
+                    )
+                    .with_note("N is unrolled into the shader; the paper uses 5 to 40"),
+                );
+                values.remove("steps");
             }
         }
-        let dflt = |name: &str| match ATLAS_SETTINGS
-            .iter()
-            .find(|s| s.name == name)
-            .and_then(|s| s.default)
-        {
-            Some(Dflt::F(x)) => x,
-            _ => 0.0,
-        };
-        params.max_distance = self.float_setting(&values, "max_distance", dflt("max_distance"));
-        params.heuristic_tolerance =
-            self.float_setting(&values, "heuristic_tolerance", dflt("heuristic_tolerance"));
-        params.sharp_tolerance =
-            self.float_setting(&values, "sharp_tolerance", dflt("sharp_tolerance"));
-        params.min_reach = self.float_setting(&values, "min_reach", dflt("min_reach"));
-        params.reproject = matches!(values.get("reproject"), Some((Value::Bool(true), _)));
-        params.sigma = values.get("sigma").and_then(|(v, _)| v.as_float());
+        let params = AtlasParams::new(&Settings::new(ATLAS_SETTINGS, &values));
 
+        let (seeds, local) = self.seeds(name, atlas_id, body);
+        if seeds.is_empty() && !body.iter().any(|s| matches!(s, AtlasStmt::Error(_))) {
+            self.error(
+                Diagnostic::error(
+                    codes::E_NO_SEEDS,
+                    format!("atlas `{}` has no seed", name.name),
+                    name.span,
+                    "this atlas needs at least one seed",
+                )
+                .with_help("add one: `seed main = [0, 0, 1];`"),
+            );
+        }
+        let broken = body.iter().any(|s| matches!(s, AtlasStmt::Error(_)));
+        let merges = self.merges(name, body, &seeds, &local, broken);
+        self.prog.atlases.push(AtlasDef {
+            name: name.name.clone(),
+            def,
+            span,
+            shape: shape_value,
+            shape_span: shape.span,
+            params,
+            seeds,
+            merges,
+        });
+        def
+    }
+
+    /// Checks the seed statements of an atlas; returns the seeds and their indices by name.
+    fn seeds(
+        &mut self,
+        atlas: &Ident,
+        atlas_id: AtlasId,
+        body: &[AtlasStmt],
+    ) -> (Vec<SeedDef>, HashMap<String, usize>) {
         let mut seeds: Vec<SeedDef> = Vec::new();
         let mut local: HashMap<String, usize> = HashMap::new();
         for stmt in body {
@@ -476,7 +464,7 @@ impl Checker<'_> {
                             codes::E_DUPLICATE_SEED,
                             format!(
                                 "seed `{}` is declared twice in atlas `{}`",
-                                seed_name.name, name.name
+                                seed_name.name, atlas.name
                             ),
                             seed_name.span,
                             "declared again here",
@@ -499,30 +487,7 @@ impl Checker<'_> {
                 });
             }
         }
-        if seeds.is_empty() && !body.iter().any(|s| matches!(s, AtlasStmt::Error(_))) {
-            self.error(
-                Diagnostic::error(
-                    codes::E_NO_SEEDS,
-                    format!("atlas `{}` has no seed", name.name),
-                    name.span,
-                    "this atlas needs at least one seed",
-                )
-                .with_help("add one: `seed main = [0, 0, 1];`"),
-            );
-        }
-        let broken = body.iter().any(|s| matches!(s, AtlasStmt::Error(_)));
-        let merges = self.merges(name, body, &seeds, &local, broken);
-        self.prog.atlases.push(AtlasDef {
-            name: name.name.clone(),
-            def,
-            span,
-            shape: shape_value,
-            shape_span: shape.span,
-            params,
-            seeds,
-            merges,
-        });
-        def
+        (seeds, local)
     }
 
     /// Checks the merge statements. When `broken`, a statement of the block did not parse
@@ -580,7 +545,7 @@ impl Checker<'_> {
                             let owner = self
                                 .prog
                                 .atlases
-                                .get(other_atlas)
+                                .get(other_atlas.index())
                                 .map(|a| a.name.clone())
                                 .unwrap_or_default();
                             d = d
@@ -643,32 +608,16 @@ impl Checker<'_> {
     }
 
     fn material(&mut self, name: &Ident, body: &[Setting], span: Span) -> DefId {
-        let id = self.prog.materials.len();
+        let id = MaterialId::new(self.prog.materials.len());
         let def = self.define(name, DefKind::Material, span, Value::Material(id));
         let refs: Vec<&Setting> = body.iter().collect();
         let values = self.settings("material", MATERIAL_SETTINGS, &refs);
-        let get = |n: &str| -> Value {
-            if let Some((v, _)) = values.get(n) {
-                return v.clone();
-            }
-            match MATERIAL_SETTINGS
-                .iter()
-                .find(|s| s.name == n)
-                .and_then(|s| s.default)
-            {
-                Some(Dflt::F(x)) => Value::Float(x),
-                Some(Dflt::V(v)) => Value::Vec(v.to_vec()),
-                _ => Value::Error,
-            }
-        };
+
         let m = MaterialDef {
             name: name.name.clone(),
             def,
             span,
-            color: get("color"),
-            roughness: get("roughness"),
-            metallic: get("metallic"),
-            emission: get("emission"),
+            attrs: MaterialAttrs::new(&Settings::new(MATERIAL_SETTINGS, &values)),
         };
         self.prog.materials.push(m);
         def
@@ -688,38 +637,24 @@ impl Checker<'_> {
             );
         }
         let refs: Vec<&Setting> = body.iter().collect();
-        let values = self.settings("render", RENDER_SETTINGS, &refs);
-        let mut size = [960, 540];
-        if let Some((Value::Vec(v), vspan)) = values.get("size") {
-            if v.iter().any(|x| x.fract() != 0.0 || *x > 16384.0) {
+        let mut values = self.settings("render", RENDER_SETTINGS, &refs);
+        if let Some((v @ Value::Vec(c), vspan)) = values.get("size") {
+            if c.iter().any(|x| x.fract() != 0.0 || *x > 16384.0) {
                 self.error(Diagnostic::error(
                     codes::E_OUT_OF_RANGE,
                     "`size` must be whole numbers of pixels, at most 16384",
                     *vspan,
-                    format!("this is {}", Value::Vec(v.clone()).display()),
+                    format!("this is {}", v.display()),
                 ));
-            } else {
-                size = [v[0] as u32, v[1] as u32];
+                values.remove("size");
             }
         }
-        let background = values
-            .get("background")
-            .and_then(|(v, _)| v.as_vec3())
-            .unwrap_or([0.05, 0.06, 0.08]);
-        let ambient = values
-            .get("ambient")
-            .and_then(|(v, _)| v.as_float())
-            .unwrap_or(0.15);
         if self.prog.render.is_none() {
             self.prog.render = Some(RenderDef {
                 span,
                 target: value,
                 target_span: target.span,
-                camera: values.get("camera").map(|(v, _)| v.clone()),
-                light: values.get("light").map(|(v, _)| v.clone()),
-                size,
-                background,
-                ambient,
+                settings: RenderSettings::new(&Settings::new(RENDER_SETTINGS, &values)),
             });
         }
     }

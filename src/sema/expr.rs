@@ -4,7 +4,7 @@ use super::builtins::{self, Builtin, Kind, PTy, Ret, BUILTINS, CONSTANTS};
 use super::check::{suggest, Checker};
 use super::fold;
 use super::types::{AtlasAttr, FieldExpr, Node, SurfaceInput, Ty, Value};
-use super::{Reference, TextureRef};
+use super::{Camera, Light, Reference, TextureRef};
 use crate::access::Refusal;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
@@ -112,7 +112,7 @@ impl Checker<'_> {
         if let Some(&id) = self.scope.get(n) {
             self.prog.references.push(Reference { span, def: id });
             self.used.insert(id);
-            return self.prog.defs[id].value.clone();
+            return self.prog.def(id).value.clone();
         }
         match n {
             "pi" => return Value::Float(std::f64::consts::PI),
@@ -492,15 +492,7 @@ impl Checker<'_> {
         for (p, slot) in b.params.iter().zip(slots) {
             match (slot, p.default) {
                 (Some(v), _) => bound.push(v),
-                (None, Some(d)) => bound.push((
-                    match d {
-                        builtins::Dflt::F(x) => Value::Float(x),
-                        builtins::Dflt::V(v) => Value::Vec(v.to_vec()),
-                        builtins::Dflt::B(x) => Value::Bool(x),
-                        builtins::Dflt::S(s) => Value::Str(s.to_string()),
-                    },
-                    span,
-                )),
+                (None, Some(d)) => bound.push((d.value(), span)),
                 (None, None) => {
                     self.error(
                         Diagnostic::error(
@@ -519,12 +511,13 @@ impl Checker<'_> {
         (bound, ok)
     }
 
-    /// Type-checks bound arguments and builds the call's value.
-    fn apply(&mut self, b: &'static Builtin, bound: Vec<(Value, Span)>, span: Span) -> Value {
+    /// Type-checks bound arguments and applies the parameters' checks; returns the
+    /// size of the `T` arguments (1 for floats), or `None` after reporting a problem.
+    fn check_args(&mut self, b: &'static Builtin, bound: &[(Value, Span)]) -> Option<u8> {
         let lifts = b.kind.lifts_fields();
         let mut ok = true;
         let mut t_size: Option<(u8, Span)> = None;
-        for (p, (v, vspan)) in b.params.iter().zip(&bound) {
+        for (p, (v, vspan)) in b.params.iter().zip(bound) {
             if v.is_error() {
                 ok = false;
                 continue;
@@ -592,16 +585,20 @@ impl Checker<'_> {
                 ok = false;
             }
         }
-        if !ok {
+        ok.then(|| t_size.map(|(n, _)| n).unwrap_or(1))
+    }
+
+    /// Type-checks bound arguments and builds the call's value.
+    fn apply(&mut self, b: &'static Builtin, bound: Vec<(Value, Span)>, span: Span) -> Value {
+        let Some(n) = self.check_args(b, &bound) else {
             return Value::Error;
-        }
+        };
         let args: Vec<Value> = bound.iter().map(|(v, _)| v.clone()).collect();
         if b.name == "image" {
             if let (Value::Str(path), pspan) = (&args[0], bound[0].1) {
                 self.texture_file(path, pspan);
             }
         }
-        let n = t_size.map(|(n, _)| n).unwrap_or(1);
         let t_ty = if n == 1 { Ty::Float } else { Ty::Vec(n) };
         let ret_ty = match b.ret {
             Ret::Float => Ty::Float,
@@ -623,8 +620,12 @@ impl Checker<'_> {
         match b.ret {
             Ret::Shape => Value::Shape(node()),
             Ret::Texture => Value::Texture(node()),
-            Ret::Camera => Value::Camera(node()),
-            Ret::Light => Value::Light(node()),
+            Ret::Camera => {
+                Camera::from_call(b.id, &args).map_or(Value::Error, |c| Value::Camera(Rc::new(c)))
+            }
+            Ret::Light => {
+                Light::from_call(b.id, &args).map_or(Value::Error, |l| Value::Light(Rc::new(l)))
+            }
             _ if b.kind == Kind::Texture || args.iter().any(|a| a.ty().is_field()) => Value::field(
                 FieldExpr::Call {
                     builtin: b.id,

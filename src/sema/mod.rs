@@ -11,18 +11,22 @@ pub mod builtins;
 mod check;
 mod expr;
 pub mod fold;
+pub mod settings;
 pub mod types;
 
 pub use check::check;
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
+pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 
 use crate::span::Span;
 use std::path::PathBuf;
 
-/// Index of a definition in [`Program::defs`].
-pub type DefId = usize;
+crate::id::define_id!(
+    /// Index of a definition in [`Program::defs`].
+    DefId
+);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DefKind {
@@ -51,32 +55,6 @@ pub struct Def {
 pub struct Reference {
     pub span: Span,
     pub def: DefId,
-}
-
-/// The parameters of Alg. 1 and Alg. 2 for one atlas, with defaults filled in.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AtlasParams {
-    pub steps: u32,
-    pub max_distance: f64,
-    pub heuristic_tolerance: f64,
-    pub sharp_tolerance: f64,
-    pub min_reach: f64,
-    pub reproject: bool,
-    pub sigma: Option<f64>,
-}
-
-impl Default for AtlasParams {
-    fn default() -> Self {
-        AtlasParams {
-            steps: 20,
-            max_distance: 3.0,
-            heuristic_tolerance: 1e-3,
-            sharp_tolerance: 0.015,
-            min_reach: 0.01,
-            reproject: false,
-            sigma: None,
-        }
-    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -116,11 +94,7 @@ pub struct MaterialDef {
     pub name: String,
     pub def: DefId,
     pub span: Span,
-    /// float, vec3 or vec4 (rgb is used), constant or field.
-    pub color: Value,
-    pub roughness: Value,
-    pub metallic: Value,
-    pub emission: Value,
+    pub attrs: MaterialAttrs,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -128,11 +102,7 @@ pub struct RenderDef {
     pub span: Span,
     pub target: Value,
     pub target_span: Span,
-    pub camera: Option<Value>,
-    pub light: Option<Value>,
-    pub size: [u32; 2],
-    pub background: [f64; 3],
-    pub ambient: f64,
+    pub settings: RenderSettings,
 }
 
 /// A texture file referenced by `image(path)`.
@@ -156,6 +126,18 @@ pub struct Program {
 }
 
 impl Program {
+    pub fn def(&self, id: DefId) -> &Def {
+        &self.defs[id.index()]
+    }
+
+    pub fn atlas(&self, id: AtlasId) -> &AtlasDef {
+        &self.atlases[id.index()]
+    }
+
+    pub fn material(&self, id: MaterialId) -> &MaterialDef {
+        &self.materials[id.index()]
+    }
+
     /// The top-level definition of a name (a `let`, atlas or material).
     pub fn lookup(&self, name: &str) -> Option<&Def> {
         self.defs
@@ -176,7 +158,10 @@ impl Program {
             .iter()
             .find(|r| r.span.contains(offset))
             .map(|r| r.def)
-            .or_else(|| self.defs.iter().position(|d| d.span.contains(offset)))
+            .or_else(|| {
+                let i = self.defs.iter().position(|d| d.span.contains(offset))?;
+                Some(DefId::new(i))
+            })
     }
 
     /// Every reference to a definition.

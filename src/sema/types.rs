@@ -74,13 +74,18 @@ impl fmt::Display for Ty {
     }
 }
 
-/// Index of an atlas in [`super::Program::atlases`].
-pub type AtlasId = usize;
-/// Index of a material in [`super::Program::materials`].
-pub type MaterialId = usize;
+crate::id::define_id!(
+    /// Index of an atlas in [`super::Program::atlases`].
+    AtlasId
+);
+crate::id::define_id!(
+    /// Index of a material in [`super::Program::materials`].
+    MaterialId
+);
 
 /// A call of a builtin with its arguments bound, in parameter order, defaults filled in.
-/// Shapes, textures, cameras and lights are trees of these; the IR lowers them.
+/// Shapes and textures are trees of these; the IR lowers them. (Cameras and lights
+/// are read into [`super::Camera`] and [`super::Light`] when they are built.)
 #[derive(Debug, Clone, PartialEq)]
 pub struct Node {
     pub builtin: super::builtins::BuiltinId,
@@ -183,8 +188,8 @@ pub enum Value {
     Str(String),
     Shape(Rc<Node>),
     Texture(Rc<Node>),
-    Camera(Rc<Node>),
-    Light(Rc<Node>),
+    Camera(Rc<super::Camera>),
+    Light(Rc<super::Light>),
     Atlas(AtlasId),
     Material(MaterialId),
     /// A surface field with the type of its per-point values.
@@ -251,9 +256,9 @@ impl Value {
             ),
             Value::Bool(b) => b.to_string(),
             Value::Str(s) => format!("{s:?}"),
-            Value::Shape(n) | Value::Texture(n) | Value::Camera(n) | Value::Light(n) => {
-                format!("{}(…)", n.builtin.name())
-            }
+            Value::Shape(n) | Value::Texture(n) => format!("{}(…)", n.builtin.name()),
+            Value::Camera(c) => format!("{}(…)", c.builtin().name()),
+            Value::Light(l) => format!("{}(…)", l.builtin().name()),
             other => other.ty().to_string(),
         }
     }

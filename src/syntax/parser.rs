@@ -294,8 +294,7 @@ where
     I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
 {
     let body = none_of([Token::Semi, Token::RBrace]).repeated();
-    body.clone()
-        .then(just(Token::Semi))
+    body.then(just(Token::Semi))
         .ignored()
         .or(body.at_least(1).ignored())
 }

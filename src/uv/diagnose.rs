@@ -53,6 +53,15 @@ pub fn fmt_point(p: DVec3) -> String {
 /// The diagnostics of one prepared atlas.
 pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
     let mut out = Vec::new();
+    moved_seeds(def, atlas, &mut out);
+    coincident_seeds(def, atlas, &mut out);
+    unreachable_merges(def, atlas, &mut out);
+    obstructions(def, atlas, &mut out);
+    out
+}
+
+/// Seeds that projection moved far (onto another part) or visibly (onto the surface).
+fn moved_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
     let s = scale(&atlas.shape);
     for (i, seed) in atlas.seeds.iter().enumerate() {
         let sd = &def.seeds[i];
@@ -99,6 +108,10 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
             );
         }
     }
+}
+
+/// Seeds that project to the same point as an earlier one.
+fn coincident_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
     for &(i, j) in &atlas.coincident {
         let mut d = Diagnostic::warning(
             codes::W_COINCIDENT_SEEDS,
@@ -124,6 +137,10 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
         }
         out.push(d);
     }
+}
+
+/// Merges whose seeds no geodesic walk connects.
+fn unreachable_merges(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
     for u in &atlas.graph.unreachable {
         let m = &def.merges[u.merge];
         let (a, b) = (&def.seeds[u.a].name, &def.seeds[u.b].name);
@@ -162,6 +179,10 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
             }),
         );
     }
+}
+
+/// Merge cycles that cannot close into one chart.
+fn obstructions(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
     for c in atlas.graph.cycles.iter().filter(|c| c.is_obstruction()) {
         let edges: Vec<&crate::uv::merge::Edge> =
             c.edges.iter().map(|&k| &atlas.graph.edges[k]).collect();
@@ -201,7 +222,6 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
             .with_help("leave one merge of the cycle out: its frontier becomes a seam");
         out.push(d);
     }
-    out
 }
 
 fn fmt_vec(p: DVec3) -> String {

@@ -262,3 +262,46 @@ fn shutdown_and_exit_in_one_batch_exit_cleanly() {
     assert_eq!(p.response(7)["result"], Value::Null);
     assert_eq!(p.child.wait().unwrap().code(), Some(0));
 }
+
+/// In the language server, the workspace folders are roots too: a document may read a
+/// texture beside its own folder inside the workspace, and nothing outside it.
+#[test]
+fn workspace_folders_bound_what_documents_read() {
+    let root = tempfile::tempdir().unwrap();
+    let ws = root.path().join("ws");
+    std::fs::create_dir_all(ws.join("scenes")).unwrap();
+    std::fs::create_dir_all(ws.join("shared")).unwrap();
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui/textures/bricks.png"),
+        ws.join("shared/t.png"),
+    )
+    .unwrap();
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui/textures/bricks.png"),
+        root.path().join("outside.png"),
+    )
+    .unwrap();
+    let file_uri = |p: &std::path::Path| format!("file://{}", p.display());
+    let doc = file_uri(&ws.join("scenes/s.sdf"));
+    let text = "let a = image(\"../shared/t.png\");\nlet b = image(\"../../outside.png\");\nlet s = sphere(1);\nrender s { camera = orbit(); }\n";
+    let mut p = Pipe::spawn();
+    p.send(
+        json!({ "jsonrpc": "2.0", "id": 1, "method": "initialize", "params": {
+        "capabilities": {},
+        "workspaceFolders": [{ "uri": file_uri(&ws), "name": "ws" }]
+    } }),
+    );
+    p.response(1);
+    p.send(json!({ "jsonrpc": "2.0", "method": "initialized", "params": {} }));
+    p.send(did_open(&doc, text));
+    let d = p.diagnostics();
+    let refused: Vec<u64> = d["diagnostics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["code"] == "E0306")
+        .map(|d| d["range"]["start"]["line"].as_u64().unwrap())
+        .collect();
+    assert_eq!(refused, [1], "only the texture outside the workspace: {d}");
+    assert!(p.stop().success());
+}

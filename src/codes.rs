@@ -17,7 +17,8 @@ codes! {
     E_INVALID_UTF8 = "E0005": "bytes that are not valid UTF-8";
     E_TOO_LARGE = "E0006": "a file larger than the limit sdfc reads";
     E_SYNTAX = "E0010": "a syntax error: the parser expected something else";
-    E_TOO_DEEP = "E0011": "an expression nested deeper than the limit";
+    E_TOO_DEEP = "E0011": "an expression nested deeper than the limit (brackets, operator and method chains, or `let`s inlined)";
+    E_TOO_LARGE_VALUE = "E0012": "a value that, with its `let`s inlined, has more operations than the limit";
     E_UNKNOWN_NAME = "E0100": "a name that is not defined";
     E_DUPLICATE_DEF = "E0101": "a name defined twice";
     E_USED_BEFORE_DEF = "E0102": "a name used before its definition";
@@ -43,7 +44,7 @@ codes! {
     E_RENDER_NOT_SHAPE = "E0205": "a render item whose target is not a shape";
     E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
     E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
-    E_NON_FINITE = "E0302": "a constant that is NaN or infinite";
+    E_NON_FINITE = "E0302": "a constant that is NaN, infinite, or beyond the single-precision (f32) range";
     E_MISSING_FILE = "E0303": "a texture file that does not exist";
     E_IMAGE_FORMAT = "E0304": "a texture file in a format sdfc cannot read";
     E_ZERO_VECTOR = "E0305": "a direction that is the zero vector";
@@ -51,6 +52,7 @@ codes! {
     E_CODEGEN = "E0400": "a scene the code generator cannot compile yet";
     E_SEED_PROJECTION = "E0401": "a seed that cannot be projected onto its atlas's surface";
     E_UNREACHABLE_MERGE = "E0402": "a merge whose seeds cannot reach each other by the geodesic walk";
+    E_DERIVED_OVERFLOW = "E0403": "a shape whose derived bounds or Lipschitz bound overflow single precision (long chains of warps)";
     E_INTERNAL = "E0900": "an internal compiler error: naga rejected generated code";
     W_UNUSED = "W0001": "a `let` binding that is never used";
     W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";

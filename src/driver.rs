@@ -160,9 +160,54 @@ pub fn check_with(source: &str, access: &Access) -> Analysis {
         diagnostic::sort(&mut analysis.diagnostics);
     }
     if !analysis.has_errors() {
-        analysis.scene = Some(ir::lower(&analysis.program));
+        let scene = ir::lower(&analysis.program);
+        let overflows = derived_overflows(&analysis.program, &scene);
+        if overflows.is_empty() {
+            analysis.scene = Some(scene);
+        } else {
+            analysis.diagnostics.extend(overflows);
+            diagnostic::sort(&mut analysis.diagnostics);
+        }
     }
     analysis
+}
+
+/// Errors for shapes whose derived constants do not fit single precision
+/// ([`ir::Shape::overflow`]), on their `let` or the render item.
+fn derived_overflows(program: &Program, scene: &Scene) -> Vec<Diagnostic> {
+    let named = scene.shapes.iter().filter_map(|s| {
+        let why = s.shape.overflow()?;
+        let span = program.lookup(&s.name)?.item_span;
+        Some((format!("shape `{}`", s.name), why, span))
+    });
+    let render = scene.render.as_ref().and_then(|r| {
+        let why = r.overflow()?;
+        Some((
+            String::from("the rendered shape"),
+            why,
+            program.render.as_ref()?.target_span,
+        ))
+    });
+    let named: Vec<_> = named.collect();
+    // The rendered shape is usually one of the named ones: one error is enough.
+    let render = if named.is_empty() { render } else { None };
+    named
+        .into_iter()
+        .chain(render)
+        .map(|(what, why, span)| {
+            Diagnostic::error(
+                crate::codes::E_DERIVED_OVERFLOW,
+                format!("{what} cannot be compiled: {why}"),
+                span,
+                "derived constants beyond single precision",
+            )
+            .with_note(
+                "each twist or bend multiplies the bound of the distance's stretch; long \
+                 chains of warps overflow the shaders' 32-bit floats",
+            )
+            .with_help("use fewer chained warps, or smaller rates")
+        })
+        .collect()
 }
 
 /// [`check`] and, when it finds no errors, code generation and naga validation with the

@@ -115,14 +115,19 @@ fn pathological_inputs() {
 
 #[test]
 fn deep_nesting_is_reported_not_crashed() {
-    let src = format!("let a = {}1{};", "(".repeat(100), ")".repeat(100));
+    let limit = sdfc::syntax::parser::MAX_NESTING;
+    let src = format!(
+        "let a = {}1{};",
+        "(".repeat(limit + 1),
+        ")".repeat(limit + 1)
+    );
     let analysis = analyze(&src, None);
     assert!(analysis
         .diagnostics
         .iter()
         .any(|d| d.code == sdfc::codes::E_TOO_DEEP));
     // Just inside the limit is fine.
-    let src = format!("let _a = {}1{};", "(".repeat(64), ")".repeat(64));
+    let src = format!("let _a = {}1{};", "(".repeat(limit), ")".repeat(limit));
     let analysis = analyze(&src, None);
     assert!(
         analysis.diagnostics.is_empty(),

@@ -52,7 +52,7 @@ pub fn emit(
     grid: &SeedGrid,
 ) -> Result<String, template::Mismatch> {
     let p = &atlas.params;
-    let mut w = Writer::new();
+    let mut w = Writer::new(&format!("atlas_{k}_f"));
     let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
     let n = p.steps.max(1);
     let walk_steps = match form {
@@ -80,6 +80,7 @@ pub fn emit(
         ("seeds", atlas.seeds.len().to_string()),
         ("n", n.to_string()),
         ("field_body", w.out),
+        ("field_helpers", w.helpers),
         ("field_result", field),
         ("h_gradient", lit(p.h_gradient)),
         ("reproject", p.reproject.to_string()),

@@ -52,14 +52,21 @@ pub struct Writer {
     pub out: String,
     indent: usize,
     next: usize,
+    /// The prefix of the helper functions this writer defines (unique in the module).
+    prefix: String,
+    /// Helper functions the code in `out` calls: module-scope WGSL to emit beside it.
+    pub helpers: String,
 }
 
 impl Writer {
-    pub fn new() -> Self {
+    /// A writer for the body of function `name`, whose helpers are named after it.
+    pub fn new(name: &str) -> Self {
         Writer {
             out: String::new(),
             indent: 1,
             next: 0,
+            prefix: name.to_string(),
+            helpers: String::new(),
         }
     }
 
@@ -75,6 +82,10 @@ impl Writer {
     /// Emits the evaluation of `id` at the point variable `p`; returns the name of the
     /// `vec2<f32>` holding (distance, material).
     pub fn shape(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
+        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.shape_inner(shape, id, p))
+    }
+
+    fn shape_inner(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
         let d = self.fresh("d");
         match &shape[id].op {
             Op::Prim(pr) => {
@@ -177,8 +188,18 @@ impl Writer {
                     self.indent -= 1;
                     self.line("} else {");
                     self.indent += 1;
-                    let dc = self.point(shape, *child, &inner);
-                    self.line(&format!("{d} = {dc};"));
+                    // The child goes into a helper function, so chains of warps do not
+                    // nest blocks (naga limits brace nesting).
+                    let helper = self.fresh(&format!("{}_w", self.prefix));
+                    let mut inner_w = Writer::new(&helper);
+                    let dc = inner_w.shape(shape, *child, "p");
+                    self.helpers.push_str(&inner_w.helpers);
+                    let _ = writeln!(
+                        self.helpers,
+                        "fn {helper}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                        inner_w.out
+                    );
+                    self.line(&format!("{d} = {helper}({inner});"));
                     self.indent -= 1;
                     self.line("}");
                 } else {
@@ -260,9 +281,28 @@ pub struct Uses {
     pub offset: Option<(String, String)>,
     /// Whether textures sampled now hold colour (sRGB) rather than data (linear).
     pub srgb: bool,
+    /// `let` statements of the function being generated, which long expressions are
+    /// bound to: generated expressions stay shallow (within naga's recursion limit)
+    /// however deep the field, and a value shared by `let`s in the scene is computed once.
+    pub lets: Vec<String>,
+    /// The bound name of each shared field value already generated (by node and offset).
+    bound: std::collections::HashMap<BoundKey, String>,
 }
 
+/// A field node as generated under one footprint offset.
+type BoundKey = (*const FieldExpr, Option<(String, String)>);
+
+/// Expressions longer than this are bound to a `let` (which bounds their nesting).
+const MAX_INLINE_EXPRESSION: usize = 160;
+
 impl Uses {
+    /// Starts the statements of a new function.
+    pub fn start_function(&mut self) {
+        self.lets.clear();
+        self.bound.clear();
+        self.atlases.clear();
+    }
+
     fn index(&mut self, path: &str, wrap: &str) -> usize {
         let u = TextureUse {
             path: path.to_string(),
@@ -277,8 +317,32 @@ impl Uses {
     }
 }
 
-/// A surface field (or constant) as a WGSL expression over `p` (position) and `n` (normal).
+/// A surface field (or constant) as a WGSL expression over `p` (position) and `n`
+/// (normal), with the statements it needs in [`Uses::lets`].
 pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
+    let Value::Field(expr, _) = v else {
+        return field_expr(v, tex);
+    };
+    let key = (std::rc::Rc::as_ptr(expr), tex.offset.clone());
+    if let Some(name) = tex.bound.get(&key) {
+        return Ok(name.clone());
+    }
+    let e = field_expr(v, tex)?;
+    let shared = std::rc::Rc::strong_count(expr) > 1;
+    if e.len() <= MAX_INLINE_EXPRESSION && !(shared && e.len() > 24) {
+        return Ok(e);
+    }
+    let name = format!("v{}", tex.lets.len());
+    tex.lets.push(format!("let {name} = {e};"));
+    tex.bound.insert(key, name.clone());
+    Ok(name)
+}
+
+fn field_expr(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || field_expr_inner(v, tex))
+}
+
+fn field_expr_inner(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
     Ok(match v {
         Value::Float(x) => lit(*x),
         Value::Bool(b) => b.to_string(),

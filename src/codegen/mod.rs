@@ -330,19 +330,17 @@ impl Generator<'_> {
     /// `cs_atlas` (the chosen one, or the first).
     fn atlas_choice(&mut self, options: &Options, plain: bool) -> Result<(), Vec<Diagnostic>> {
         let atlases = &self.program.atlases;
+        // Generated names are mangled by index, never by the user's names.
         let chosen = match options.atlas.as_deref() {
             _ if plain => None,
-            Some(name) => match atlases.iter().find(|a| a.name == name) {
-                Some(a) => Some(&a.name),
+            Some(name) => match atlases.iter().position(|a| a.name == name) {
+                Some(k) => Some(k),
                 None => return Err(internal(format!("code generation: no atlas `{name}`"))),
             },
-            None => atlases.first().map(|a| &a.name),
+            None => (!atlases.is_empty()).then_some(0),
         };
         let (sample, merged) = match chosen {
-            Some(name) => (
-                format!("atlas_{name}(p)"),
-                format!("atlas_{name}_merged(i, j)"),
-            ),
+            Some(k) => (format!("atlas_{k}(p)"), format!("atlas_{k}_merged(i, j)")),
             None => (
                 String::from("uv_failed(UV_TOO_FAR, -1.0)"),
                 String::from("false"),
@@ -405,7 +403,7 @@ impl Generator<'_> {
         uses: &mut Uses,
         mut problem: impl FnMut(MaterialField, Unsupported),
     ) -> String {
-        uses.atlases.clear();
+        uses.start_function();
         let mut attr = |v: &Value, what: MaterialField| {
             uses.srgb = what.is_color();
             field(v, uses).unwrap_or_else(|e| {
@@ -426,13 +424,17 @@ impl Generator<'_> {
             .iter()
             .map(|&k| {
                 format!(
-                    "            let atlas_sample_{} = atlas_{}(p);\n",
-                    k.index(),
-                    self.program.atlas(k).name
+                    "            let atlas_sample_{0} = atlas_{0}(p);\n",
+                    k.index()
                 )
             })
             .collect();
-        format!("{samples}            return Material({color}, {r}, {mt}, {e});\n")
+        let lets: String = uses
+            .lets
+            .iter()
+            .map(|l| format!("            {l}\n"))
+            .collect();
+        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e});\n")
     }
 
     /// The header, the libraries and the scene's code, with the source map shifted to
@@ -487,11 +489,11 @@ impl Generator<'_> {
 }
 
 fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
-    let mut w = Writer::new();
+    let mut w = Writer::new(name);
     let d = w.shape(shape, shape.root(), "p");
     let _ = writeln!(
         out,
-        "fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {d};\n}}\n",
-        w.out
+        "{}fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {d};\n}}\n",
+        w.helpers, w.out
     );
 }

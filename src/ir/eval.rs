@@ -153,6 +153,10 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
 }
 
 fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p))
+}
+
+fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
     match &shape[id].op {
         Op::Prim(pr) => (prim(p, pr), 0),
         Op::Csg { op, k, a, b } => {

@@ -107,7 +107,12 @@ impl Lowerer<'_> {
         self.push(Op::Prim(p), b, l)
     }
 
+    /// Lowers a shape value (recursive: on a fresh stack segment when this one runs low).
     fn node(&mut self, value: &Value) -> Option<NodeId> {
+        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.node_inner(value))
+    }
+
+    fn node_inner(&mut self, value: &Value) -> Option<NodeId> {
         let Value::Shape(n) = value else { return None };
         let a = &n.args;
         use crate::sema::builtins::BuiltinId as B;
@@ -246,7 +251,16 @@ impl Lowerer<'_> {
                 let (b, l) = self.info(child);
                 // A point at distance R from the axis moves sideways by up to |rate|·R per unit
                 // along it; the field's gradient grows to at most √(1 + (rate·R)²).
-                let bounded = b.radius_from_origin();
+                // Twists and bends rotate points about the origin, so a warped shape lies
+                // in the same ball as its child: through a chain of warps the ball's
+                // radius stays the innermost one (the box bound's corner would grow it by
+                // √3 per warp).
+                let bounded = match self.out[child].op {
+                    Op::Twist { radius, .. } | Op::Bend { radius, .. } if radius.is_finite() => {
+                        radius.min(b.radius_from_origin())
+                    }
+                    _ => b.radius_from_origin(),
+                };
                 let r = if bounded.is_finite() {
                     warp_outer(bounded)
                 } else {

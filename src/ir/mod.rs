@@ -249,6 +249,10 @@ impl Aabb {
     }
 }
 
+/// The largest derived constant a shape may have (bounds, Lipschitz bound, warp
+/// radii): well inside single precision, so sums and products in the shader stay finite.
+pub const MAX_DERIVED: f64 = 1e30;
+
 /// A node with its bound and Lipschitz constant.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Node {
@@ -289,6 +293,40 @@ impl Shape {
 
     pub fn lipschitz(&self) -> f64 {
         self.root_node().lipschitz
+    }
+
+    /// Why the shape's derived constants (bounds, Lipschitz bound, warp radii) do not fit
+    /// the shaders' single precision, or None. Every constant the code generator writes
+    /// must be finite in f32; these are derived, so the checker cannot see them.
+    pub fn overflow(&self) -> Option<String> {
+        let big = |x: f64| x.is_finite() && x.abs() > MAX_DERIVED;
+        for n in &self.nodes {
+            if !n.lipschitz.is_finite() || n.lipschitz > MAX_DERIVED {
+                return Some(format!(
+                    "its warps stretch distances by more than {MAX_DERIVED:e} (the Lipschitz bound is {:e})",
+                    n.lipschitz
+                ));
+            }
+            let b = n.bounds;
+            if b.min
+                .to_array()
+                .into_iter()
+                .chain(b.max.to_array())
+                .any(big)
+            {
+                return Some(format!(
+                    "its bounds reach beyond {MAX_DERIVED:e} from the origin"
+                ));
+            }
+            if let Op::Twist { radius, .. } | Op::Bend { radius, .. } = n.op {
+                if big(radius) {
+                    return Some(format!(
+                        "a warp's radius of {radius:e} is beyond {MAX_DERIVED:e}"
+                    ));
+                }
+            }
+        }
+        None
     }
 
     /// A finite bound for framing a camera: the shape's bound, or a 4-unit cube when unbounded.

@@ -22,6 +22,8 @@ pub fn check(file: &ast::File, access: &Access, diags: &mut Vec<Diagnostic>) -> 
         used: HashSet::new(),
         used_early: HashSet::new(),
         duplicates: HashSet::new(),
+        sizes: super::size::Sizes::default(),
+        suggestion_budget: SUGGESTION_BUDGET,
     };
     c.run(file);
     c.prog
@@ -32,6 +34,9 @@ pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) ->
     let limit = (name.chars().count() / 3).max(1);
     candidates
         .into_iter()
+        // The edit distance is at least the difference in characters (a byte-length
+        // difference over 4 per allowed edit cannot be within the limit).
+        .filter(|c| c.len().abs_diff(name.len()) <= 4 * limit)
         .filter(|c| *c != name)
         .map(|c| (strsim::osa_distance(name, c), c))
         .filter(|(d, _)| *d <= limit)
@@ -52,9 +57,56 @@ pub(crate) struct Checker<'d> {
     pub(crate) used_early: HashSet<String>,
     /// Definitions that repeat an earlier name (already reported; not "unused").
     duplicates: HashSet<DefId>,
+    /// Depths and sizes of values with their `let`s inlined.
+    sizes: super::size::Sizes,
+    /// Name comparisons left for did-you-mean suggestions in this file.
+    pub(crate) suggestion_budget: usize,
 }
 
+/// How many name comparisons did-you-mean suggestions may make in one file.
+const SUGGESTION_BUDGET: usize = 1_000_000;
+
 impl Checker<'_> {
+    /// A `let`'s value, or an error when, with the `let`s it uses inlined, it is deeper
+    /// or larger than the limits of [`super::size`].
+    fn bounded(&mut self, v: Value, span: Span) -> Value {
+        use super::size::{MAX_INLINED_DEPTH, MAX_INLINED_SIZE};
+        let (depth, size) = self.sizes.measure(&v);
+        let problem = if depth > MAX_INLINED_DEPTH {
+            Some((
+                codes::E_TOO_DEEP,
+                format!(
+                    "with the `let`s it uses inlined, this value is {depth} levels deep; the limit is {MAX_INLINED_DEPTH}"
+                ),
+            ))
+        } else if size > MAX_INLINED_SIZE {
+            Some((
+                codes::E_TOO_LARGE_VALUE,
+                format!(
+                    "with the `let`s it uses inlined, this value has more than {MAX_INLINED_SIZE} operations{}",
+                    if size == u64::MAX { String::new() } else { format!(" ({size})") }
+                ),
+            ))
+        } else {
+            None
+        };
+        match problem {
+            None => v,
+            Some((code, message)) => {
+                self.error(
+                    Diagnostic::error(code, message, span, "over the limit")
+                        .with_note(
+                            "a `let` is inlined where it is used: a chain of `let`s each using \
+                             the one before grows deeper, and one used twice by the next \
+                             doubles in size",
+                        )
+                        .with_help("use fewer chained `let`s, or reuse a shape fewer times"),
+                );
+                Value::Error
+            }
+        }
+    }
+
     pub(crate) fn error(&mut self, d: Diagnostic) {
         self.diags.push(d);
     }
@@ -100,6 +152,7 @@ impl Checker<'_> {
             let id = match &item.kind {
                 ItemKind::Let { name, value } => {
                     let v = self.expr(value);
+                    let v = self.bounded(v, value.span);
                     Some((self.define(name, DefKind::Let, item.span, v), name))
                 }
                 ItemKind::Atlas { name, shape, body } => {

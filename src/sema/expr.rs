@@ -98,11 +98,18 @@ impl Checker<'_> {
             self.error(
                 Diagnostic::error(
                     codes::E_NON_FINITE,
-                    format!("this constant is not a finite number ({})", v.display()),
+                    format!(
+                        "this constant is not a finite single-precision number ({})",
+                        v.display()
+                    ),
                     span,
-                    "NaN or infinite",
+                    "NaN, infinite, or beyond ±3.4e38",
                 )
-                .with_note("constants are folded at compile time in double precision"),
+                .with_note(
+                    "constants are folded at compile time in double precision, and the \
+                     shaders hold them in single precision (f32), whose largest value is \
+                     about 3.4e38",
+                ),
             );
             Value::Error
         }
@@ -150,14 +157,22 @@ impl Checker<'_> {
                 b.signature()
             ));
         } else {
-            let candidates: Vec<String> = self
-                .scope
-                .keys()
-                .cloned()
-                .chain(CONSTANTS.iter().map(|c| c.name.to_string()))
-                .collect();
-            if let Some(best) = suggest(n, candidates.iter().map(|s| s.as_str())) {
-                d = d.with_suggestion(best);
+            // Did-you-mean compares against every name in scope: a budget per file keeps
+            // a file of many unknown names linear.
+            let cost = self.scope.len() + CONSTANTS.len();
+            if cost <= self.suggestion_budget {
+                self.suggestion_budget -= cost;
+                let best = suggest(
+                    n,
+                    self.scope
+                        .keys()
+                        .map(|s| s.as_str())
+                        .chain(CONSTANTS.iter().map(|c| c.name)),
+                )
+                .map(str::to_string);
+                if let Some(best) = best {
+                    d = d.with_suggestion(&best);
+                }
             }
         }
         self.error(d);

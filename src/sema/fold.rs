@@ -240,7 +240,11 @@ pub fn math(builtin: BuiltinId, args: &[Value], n: usize) -> Value {
 }
 
 /// Whether every component of a constant is finite (non-constants count as finite).
+/// Whether every component is a finite number that single precision can hold (the
+/// generated shaders are f32: a constant beyond ±3.4e38 would become infinite there).
 pub fn is_finite(v: &Value) -> bool {
-    v.components()
-        .is_none_or(|c| c.iter().all(|x| x.is_finite()))
+    v.components().is_none_or(|c| {
+        c.iter()
+            .all(|x| x.is_finite() && x.abs() <= f32::MAX as f64)
+    })
 }

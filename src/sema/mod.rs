@@ -12,6 +12,7 @@ mod check;
 mod expr;
 pub mod fold;
 pub mod settings;
+pub mod size;
 pub mod types;
 
 pub use check::check;

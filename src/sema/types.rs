@@ -268,6 +268,9 @@ impl Value {
 pub fn fmt_num(x: f64) -> String {
     if x.is_finite() && x == x.trunc() && x.abs() < 1e15 {
         format!("{}", x as i64)
+    } else if x.is_finite() && (x.abs() >= 1e15 || x.abs() < 1e-6) {
+        // Huge and tiny numbers in scientific notation, not 40 digits or "0".
+        format!("{x:e}")
     } else {
         let s = format!("{x:.6}");
         let s = s.trim_end_matches('0').trim_end_matches('.');

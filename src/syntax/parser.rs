@@ -15,8 +15,12 @@ use chumsky::input::{Input as _, ValueInput};
 use chumsky::pratt::*;
 use chumsky::prelude::*;
 
-/// How deeply brackets and prefix operators may nest in one expression.
-pub const MAX_NESTING: usize = 64;
+/// How deep one expression may be: each bracket, prefix operator, binary operator and
+/// method call (`.`) of a chain counts one level, since each nests the tree one level
+/// deeper. Every later pass (checking, folding, lowering, evaluation, code generation,
+/// formatting) recurses at most this deep on a file's own expressions; `let` bindings
+/// are bounded after inlining by `sema::MAX_INLINED_DEPTH`.
+pub const MAX_NESTING: usize = 256;
 
 /// The result of parsing a file.
 #[derive(Debug, Clone)]
@@ -104,30 +108,66 @@ fn fallback_name(chunk: &[(Token, SimpleSpan)]) -> Option<Ident> {
 
 /// Reports nesting deeper than [`MAX_NESTING`]; returns false if the item must not be parsed.
 fn check_nesting(chunk: &[(Token, SimpleSpan)], diags: &mut Vec<Diagnostic>) -> bool {
-    let mut depth = 0usize;
+    // Chain links (binary operators, `.`) counted per bracket level, and the brackets.
+    let mut links: Vec<usize> = vec![0];
+    let mut total_links = 0usize;
     let mut prefix_run = 0usize;
     let mut prev: Option<Token> = None;
     for (tok, span) in chunk {
-        let is_prefix = matches!(tok, Token::Minus | Token::Bang)
-            && !matches!(
-                prev,
-                Some(
-                    Token::Ident(_)
-                        | Token::Number(_)
-                        | Token::RParen
-                        | Token::RBracket
-                        | Token::True
-                        | Token::False
-                        | Token::Str(_)
-                )
+        let after_operand = matches!(
+            prev,
+            Some(
+                Token::Ident(_)
+                    | Token::Number(_)
+                    | Token::RParen
+                    | Token::RBracket
+                    | Token::True
+                    | Token::False
+                    | Token::Str(_)
+            )
+        );
+        let is_prefix = matches!(tok, Token::Minus | Token::Bang) && !after_operand;
+        let is_link = !is_prefix
+            && matches!(
+                tok,
+                Token::Dot
+                    | Token::Plus
+                    | Token::Minus
+                    | Token::Star
+                    | Token::Slash
+                    | Token::Percent
+                    | Token::Pipe
+                    | Token::Amp
+                    | Token::EqEq
+                    | Token::NotEq
+                    | Token::Lt
+                    | Token::Le
+                    | Token::Gt
+                    | Token::Ge
             );
         match tok {
-            Token::LParen | Token::LBracket => depth += 1,
-            Token::RParen | Token::RBracket => depth = depth.saturating_sub(1),
+            Token::LParen | Token::LBracket | Token::LBrace => links.push(0),
+            Token::RParen | Token::RBracket | Token::RBrace if links.len() > 1 => {
+                total_links -= links.pop().unwrap_or(0);
+            }
+            // A statement ends every chain of its level.
+            Token::Semi | Token::Comma => {
+                if let Some(l) = links.last_mut() {
+                    total_links -= *l;
+                    *l = 0;
+                }
+            }
+            _ if is_link => {
+                if let Some(l) = links.last_mut() {
+                    *l += 1;
+                    total_links += 1;
+                }
+            }
             _ => {}
         }
         prefix_run = if is_prefix { prefix_run + 1 } else { 0 };
-        if depth + prefix_run > MAX_NESTING {
+        let depth = links.len() - 1 + total_links + prefix_run;
+        if depth > MAX_NESTING {
             diags.push(
                 Diagnostic::error(
                     codes::E_TOO_DEEP,
@@ -136,7 +176,9 @@ fn check_nesting(chunk: &[(Token, SimpleSpan)], diags: &mut Vec<Diagnostic>) -> 
                     format!("nesting level {} starts here", MAX_NESTING + 1),
                 )
                 .with_note(format!(
-                    "brackets and prefix operators may nest at most {MAX_NESTING} levels"
+                    "brackets, operators and method calls may nest at most {MAX_NESTING} \
+                     levels: each link of a chain such as `a | b | c` or \
+                     `s.translate(…).rotate_x(…)` counts one"
                 ))
                 .with_help("split the expression with `let` bindings"),
             );

@@ -36,6 +36,7 @@ codes! {
     E_BAD_MERGE = "E0114": "a merge that names fewer than two seeds, or a seed with itself";
     E_NO_SEEDS = "E0115": "an atlas with no seed";
     E_DUPLICATE_RENDER = "E0116": "more than one render item";
+    E_TOO_MANY = "E0117": "an atlas with more seeds or merges than the limit";
     E_TYPE_MISMATCH = "E0200": "a value of the wrong type";
     E_BAD_OPERANDS = "E0201": "an operator applied to types it does not accept";
     E_VECTOR_SIZE = "E0202": "a vector of the wrong size, or vectors of different sizes";
@@ -60,6 +61,7 @@ codes! {
     W_COINCIDENT_SEEDS = "W0004": "two seeds of one atlas that project to the same point";
     W_OBSTRUCTION = "W0005": "a cycle of merges that cannot close into one uv chart (a topological obstruction)";
     W_SEED_JUMP = "W0006": "a seed that projection moved onto another part of the surface";
+    W_TANGENT_PARALLEL = "W0007": "a seed tangent parallel to the surface normal (the default frame is used)";
     N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
     N_TRUNCATED = "N0002": "more diagnostics than a file may report; the rest are counted, not shown";
 }

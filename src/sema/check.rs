@@ -63,6 +63,11 @@ pub(crate) struct Checker<'d> {
     pub(crate) suggestion_budget: usize,
 }
 
+/// The most seeds one atlas may have.
+pub const MAX_SEEDS: usize = 256;
+/// The most merges one atlas may have.
+pub const MAX_MERGES: usize = 1024;
+
 /// How many name comparisons did-you-mean suggestions may make in one file.
 const SUGGESTION_BUDGET: usize = 1_000_000;
 
@@ -465,7 +470,11 @@ impl Checker<'_> {
             );
         }
         let broken = body.iter().any(|s| matches!(s, AtlasStmt::Error(_)));
-        let merges = self.merges(name, body, &seeds, &local, broken);
+        let mut merges = self.merges(name, body, &seeds, &local, broken);
+        let seeds = self.limit(seeds, MAX_SEEDS, "seeds", |s| s.span, name);
+        // Merges of seeds past the limit go with them.
+        merges.retain(|m| m.a < seeds.len() && m.b < seeds.len());
+        let merges = self.limit(merges, MAX_MERGES, "merges", |m| m.span, name);
         self.prog.atlases.push(AtlasDef {
             name: name.name.clone(),
             def,
@@ -477,6 +486,39 @@ impl Checker<'_> {
             merges,
         });
         def
+    }
+
+    /// Keeps the first `max` of an atlas's seeds or merges; the first one past the limit
+    /// is an error that names the limit.
+    fn limit<T>(
+        &mut self,
+        mut items: Vec<T>,
+        max: usize,
+        what: &str,
+        span: impl Fn(&T) -> Span,
+        atlas: &Ident,
+    ) -> Vec<T> {
+        if items.len() > max {
+            self.error(
+                Diagnostic::error(
+                    codes::E_TOO_MANY,
+                    format!(
+                        "atlas `{}` has {} {what}; the limit is {max}",
+                        atlas.name,
+                        items.len()
+                    ),
+                    span(&items[max]),
+                    format!("{what} past the limit start here"),
+                )
+                .with_note(
+                    "the merge geometry solved at check time grows with the seeds and merges \
+                     (walks between merged seeds, a dense solve of frames and offsets)",
+                )
+                .with_help("split the surface into several atlases"),
+            );
+            items.truncate(max);
+        }
+        items
     }
 
     /// Checks the seed statements of an atlas; returns the seeds and their indices by name.

@@ -78,9 +78,16 @@ pub fn scale(shape: &Shape) -> f64 {
 }
 
 /// The frame at a seed: e1 is the tangent projected onto the tangent plane; without
-/// one, the world x axis projected (or z where x is nearly normal); e2 = n × e1.
+/// one, or with one (nearly) parallel to n, the world x axis projected (or z where x is
+/// nearly normal); e2 = n × e1. The flag says the default was used.
 pub fn frame(n: DVec3, tangent: Option<DVec3>) -> (DVec3, DVec3, bool) {
-    let project = |t: DVec3| (t - n * n.dot(t)).try_normalize();
+    // A tangent within about 0.06° of the normal has no usable direction in the plane.
+    let project = |t: DVec3| {
+        let along = t - n * n.dot(t);
+        (along.length() > 1e-3 * t.length())
+            .then_some(along)?
+            .try_normalize()
+    };
     let (e1, default) = match tangent.and_then(project) {
         Some(e1) => (e1, false),
         None => {

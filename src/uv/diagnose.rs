@@ -54,6 +54,7 @@ pub fn fmt_point(p: DVec3) -> String {
 pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     moved_seeds(def, atlas, &mut out);
+    parallel_tangents(def, atlas, &mut out);
     coincident_seeds(def, atlas, &mut out);
     unreachable_merges(def, atlas, &mut out);
     obstructions(def, atlas, &mut out);
@@ -107,6 +108,36 @@ fn moved_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
                 ),
             );
         }
+    }
+}
+
+/// Seeds whose written `tangent` is (nearly) parallel to the surface normal, so it has no
+/// direction in the tangent plane: the default frame is used instead, and said so.
+fn parallel_tangents(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
+    for (sd, seed) in def.seeds.iter().zip(&atlas.seeds) {
+        let (Some(_), Some(span), true) = (sd.tangent, sd.tangent_span, seed.default_tangent)
+        else {
+            continue;
+        };
+        let n = seed.seed.n;
+        let axis = if n.x.abs() < 0.9 { "x" } else { "z" };
+        out.push(
+            Diagnostic::warning(
+                codes::W_TANGENT_PARALLEL,
+                format!(
+                    "the tangent of seed `{}` is parallel to the surface normal there",
+                    sd.name
+                ),
+                span,
+                format!("parallel to the normal {}", fmt_point(n)),
+            )
+            .with_note(format!(
+                "a tangent must point along the surface; the default frame was used: e1 is the \
+                 world {axis} axis projected onto the tangent plane, {}",
+                fmt_point(seed.seed.e1)
+            ))
+            .with_help("give a direction across the normal, or remove `tangent …`"),
+        );
     }
 }
 

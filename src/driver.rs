@@ -38,6 +38,12 @@ pub struct Analysis {
     pub compiled: Option<Arc<Compiled>>,
 }
 
+/// The language server analyses documents on a worker thread.
+const _: () = {
+    const fn send<T: Send>() {}
+    send::<Analysis>();
+};
+
 impl Analysis {
     /// Adds the diagnostics of decoding the file's bytes ([`syntax::decode`]). An invalid
     /// sequence is reported once, by its byte offset, and not again as an unexpected

@@ -323,12 +323,12 @@ pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
     let Value::Field(expr, _) = v else {
         return field_expr(v, tex);
     };
-    let key = (std::rc::Rc::as_ptr(expr), tex.offset.clone());
+    let key = (std::sync::Arc::as_ptr(expr), tex.offset.clone());
     if let Some(name) = tex.bound.get(&key) {
         return Ok(name.clone());
     }
     let e = field_expr(v, tex)?;
-    let shared = std::rc::Rc::strong_count(expr) > 1;
+    let shared = std::sync::Arc::strong_count(expr) > 1;
     if e.len() <= MAX_INLINE_EXPRESSION && !(shared && e.len() > 24) {
         return Ok(e);
     }

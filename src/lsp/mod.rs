@@ -12,6 +12,7 @@ mod dispatch;
 mod features;
 mod server;
 pub mod transport;
+mod worker;
 
 pub use server::{serve, Ended};
 
@@ -31,7 +32,7 @@ type Error = Box<dyn std::error::Error + Send + Sync>;
 /// The open documents, by URI.
 type Docs = HashMap<String, Open>;
 
-struct Open {
+pub(super) struct Open {
     version: i32,
     doc: Document,
     index: LineIndex,

@@ -1,5 +1,5 @@
 //! The server loop: the lifecycle (initialize, shutdown, exit), batches of messages,
-//! one analysis per changed document and batch, and cancellation.
+//! analyses on a worker thread ([`super::worker`]), and cancellation.
 //!
 //! A reader thread moves every message from the connection into an unbounded queue
 //! as soon as it arrives. `lsp-server`'s stdio connection hands messages over a
@@ -7,7 +7,9 @@
 //! message, and every keystroke of a burst would get its own analysis.
 
 use super::dispatch::{respond, Failure, NotificationDispatcher};
-use super::{answer, open, publish, Docs, Error};
+use super::worker::{self, Done, Job};
+use super::{answer, publish, Docs, Error};
+use crossbeam_channel::{select, Receiver, Sender};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
 use lsp_types as lsp;
 use lsp_types::notification::{
@@ -15,8 +17,13 @@ use lsp_types::notification::{
     Notification as _,
 };
 use lsp_types::request::{Initialize, Request as _, Shutdown};
-use std::collections::HashSet;
-use std::sync::mpsc;
+use std::collections::{HashMap, HashSet};
+use std::time::{Duration, Instant};
+
+/// How long a request waits for the analysis of a text changed before it, before it is
+/// answered against the last finished one (so the server keeps answering while a large
+/// document is checked).
+const WAIT_FOR_ANALYSIS: Duration = Duration::from_secs(2);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -40,6 +47,11 @@ pub(super) struct Server {
     docs: Docs,
     /// Texts opened or changed in this batch, the latest per document.
     changed: Vec<(lsp::Uri, String, i32)>,
+    /// The analysis worker's jobs and results.
+    jobs: Sender<Job>,
+    done: Receiver<Done>,
+    /// The latest version sent to the worker of each document still being analysed.
+    analysing: HashMap<String, i32>,
     /// Requests the client cancelled.
     cancelled: HashSet<RequestId>,
     /// The workspace folders (from `initialize`), where documents may read files.
@@ -48,8 +60,8 @@ pub(super) struct Server {
 
 /// Moves every message of the connection into an unbounded queue, from a thread
 /// that ends when the connection closes or the server stops listening.
-fn queue(conn: &Connection) -> mpsc::Receiver<Message> {
-    let (tx, rx) = mpsc::channel();
+fn queue(conn: &Connection) -> Receiver<Message> {
+    let (tx, rx) = crossbeam_channel::unbounded();
     let receiver = conn.receiver.clone();
     std::thread::Builder::new()
         .name(String::from("sdfc-lsp-queue"))
@@ -77,29 +89,41 @@ pub enum Ended {
 /// Serves one client on a connection until it exits or closes the connection.
 ///
 /// Messages are taken in batches: everything that arrived while the server was busy.
-/// Each document changed in a batch is analysed once, at its latest text, and its
-/// diagnostics are published with that version; the batch's requests are then
-/// answered against that text, except those the client cancelled (`$/cancelRequest`),
-/// which get `RequestCancelled` without being computed. A cancellation that arrives
-/// during the analysis still counts for the batch's requests.
+/// Each document changed in a batch goes to the analysis worker once, at its latest
+/// text; its diagnostics are published with that version when the analysis is done.
+/// The batch's requests wait for the analyses of their batch (at most
+/// [`WAIT_FOR_ANALYSIS`]) and are answered against the latest finished analysis, except
+/// those the client cancelled (`$/cancelRequest`), which get `RequestCancelled` without
+/// being computed. A cancellation that arrives during the wait still counts.
 pub fn serve(conn: Connection) -> Result<Ended, Error> {
     let inbox = queue(&conn);
+    let (jobs, done) = worker::start();
     let mut server = Server {
         conn,
         phase: Phase::Uninitialized,
         docs: Docs::new(),
         changed: Vec::new(),
+        jobs,
+        done,
+        analysing: HashMap::new(),
         cancelled: HashSet::new(),
         roots: Vec::new(),
     };
     let mut carried: Vec<Message> = Vec::new();
     loop {
         let mut batch = std::mem::take(&mut carried);
-        if batch.is_empty() {
-            match inbox.recv() {
-                Ok(m) => batch.push(m),
-                // The client closed the connection.
-                Err(_) => return Ok(server.ended()),
+        while batch.is_empty() {
+            select! {
+                recv(inbox) -> m => match m {
+                    Ok(m) => batch.push(m),
+                    // The client closed the connection.
+                    Err(_) => return Ok(server.ended()),
+                },
+                recv(server.done) -> d => {
+                    if let Ok(d) = d {
+                        server.finished(d)?;
+                    }
+                }
             }
         }
         batch.extend(inbox.try_iter());
@@ -116,18 +140,11 @@ pub fn serve(conn: Connection) -> Result<Ended, Error> {
                 Message::Response(_) => {}
             }
         }
-        server.analyse()?;
-        if !exit {
-            // What arrived during the analysis waits for the next batch, but its
-            // cancellations already apply to this one's requests.
-            carried = inbox.try_iter().collect();
-            for m in &carried {
-                if let Message::Notification(n) = m {
-                    if n.method == Cancel::METHOD {
-                        server.notify(n.clone())?;
-                    }
-                }
-            }
+        server.analyse();
+        if !exit && pending.iter().any(|p| server.waits_for_analysis(p)) {
+            // What arrives during the wait goes to the next batch, but its cancellations
+            // already apply to this one's requests.
+            carried = server.wait(&inbox)?;
         }
         for p in pending {
             let resp = server.answer(p);
@@ -251,6 +268,7 @@ impl Server {
                 let uri = p.text_document.uri;
                 s.changed.retain(|(u, _, _)| *u != uri);
                 s.docs.remove(uri.as_str());
+                s.analysing.remove(uri.as_str());
                 publish(&s.conn, &uri, None)
             })?
             .on::<Cancel, Error>(|s, p| {
@@ -269,35 +287,104 @@ impl Server {
         self.changed.push((uri, text, version));
     }
 
-    /// Analyses each document changed in the batch, once, and publishes its diagnostics.
-    fn analyse(&mut self) -> Result<(), Error> {
+    /// Whether a request is about a document whose analysis is still running.
+    fn waits_for_analysis(&self, p: &Pending) -> bool {
+        let Pending::Deferred(req) = p else {
+            return false;
+        };
+        req.params["textDocument"]["uri"]
+            .as_str()
+            .is_some_and(|uri| self.analysing.contains_key(uri))
+    }
+
+    /// Sends each document changed in the batch to the worker, once, at its latest text.
+    fn analyse(&mut self) {
         for (uri, text, version) in std::mem::take(&mut self.changed) {
-            let analysed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                open(&uri, text, version, &self.roots)
-            }));
-            let o = match analysed {
-                Ok(o) => o,
-                Err(panic) => {
-                    let why = panic_message(&panic);
-                    eprintln!(
-                        "sdfc lsp: internal error while checking {}: {why}",
-                        uri.as_str()
-                    );
-                    show_error(
-                        &self.conn,
-                        &format!("sdfc: internal error while checking: {why}"),
-                    )?;
-                    continue;
-                }
+            self.analysing.insert(uri.as_str().to_string(), version);
+            let job = Job {
+                uri,
+                text,
+                version,
+                roots: self.roots.clone(),
             };
-            publish(&self.conn, &uri, Some(&o))?;
-            self.docs.insert(uri.as_str().to_string(), o);
+            // The worker only stops when the server does.
+            let _ = self.jobs.send(job);
+        }
+    }
+
+    /// Waits until no analysis is outstanding or [`WAIT_FOR_ANALYSIS`] has passed,
+    /// publishing what finishes; returns the messages that arrived meanwhile, after
+    /// applying their cancellations.
+    fn wait(&mut self, inbox: &Receiver<Message>) -> Result<Vec<Message>, Error> {
+        let deadline = Instant::now() + WAIT_FOR_ANALYSIS;
+        let mut arrived = Vec::new();
+        let waiting: Vec<String> = self.analysing.keys().cloned().collect();
+        while waiting.iter().any(|u| self.analysing.contains_key(u)) {
+            let Some(left) = deadline.checked_duration_since(Instant::now()) else {
+                break;
+            };
+            select! {
+                recv(self.done) -> d => match d {
+                    Ok(d) => self.finished(d)?,
+                    Err(_) => break,
+                },
+                recv(inbox) -> m => match m {
+                    Ok(m) => arrived.push(m),
+                    Err(_) => break,
+                },
+                default(left) => break,
+            }
+        }
+        arrived.extend(inbox.try_iter());
+        for m in &arrived {
+            if let Message::Notification(n) = m {
+                if n.method == Cancel::METHOD {
+                    self.notify(n.clone())?;
+                }
+            }
+        }
+        Ok(arrived)
+    }
+
+    /// A finished analysis: published and kept, unless the document was closed since or
+    /// a newer version is already kept.
+    fn finished(&mut self, d: Done) -> Result<(), Error> {
+        let key = d.uri.as_str().to_string();
+        let Some(&latest) = self.analysing.get(&key) else {
+            // Closed since.
+            return Ok(());
+        };
+        if latest == d.version {
+            self.analysing.remove(&key);
+        }
+        match d.result {
+            Ok(o) => {
+                if self
+                    .docs
+                    .get(&key)
+                    .is_some_and(|old| old.version > o.version)
+                {
+                    return Ok(());
+                }
+                publish(&self.conn, &d.uri, Some(&o))?;
+                self.docs.insert(key, o);
+            }
+            Err(why) => {
+                eprintln!(
+                    "sdfc lsp: internal error while checking {}: {why}",
+                    d.uri.as_str()
+                );
+                show_error(
+                    &self.conn,
+                    &format!("sdfc: internal error while checking: {why}"),
+                )?;
+            }
         }
         Ok(())
     }
 }
 
-fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
+pub(super) fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
     panic
         .downcast_ref::<&str>()
         .map(|s| s.to_string())

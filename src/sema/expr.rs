@@ -11,7 +11,7 @@ use crate::diagnostic::Diagnostic;
 use crate::span::Span;
 use crate::syntax::ast::{Arg, BinaryOp, Expr, ExprKind, Ident, Unit};
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 
 impl Checker<'_> {
     /// Checks an expression and folds it to a value.
@@ -261,7 +261,7 @@ impl Checker<'_> {
                     BinaryOp::And => builtins::BuiltinId::Intersection,
                     _ => builtins::BuiltinId::Difference,
                 };
-                Value::Shape(Rc::new(Node {
+                Value::Shape(Arc::new(Node {
                     builtin,
                     args: vec![l, r],
                     span,
@@ -626,7 +626,7 @@ impl Checker<'_> {
             Ret::Light => Ty::Light,
         };
         let node = || {
-            Rc::new(Node {
+            Arc::new(Node {
                 builtin: b.id,
                 args: args.clone(),
                 span,
@@ -636,10 +636,10 @@ impl Checker<'_> {
             Ret::Shape => Value::Shape(node()),
             Ret::Texture => Value::Texture(node()),
             Ret::Camera => {
-                Camera::from_call(b.id, &args).map_or(Value::Error, |c| Value::Camera(Rc::new(c)))
+                Camera::from_call(b.id, &args).map_or(Value::Error, |c| Value::Camera(Arc::new(c)))
             }
             Ret::Light => {
-                Light::from_call(b.id, &args).map_or(Value::Error, |l| Value::Light(Rc::new(l)))
+                Light::from_call(b.id, &args).map_or(Value::Error, |l| Value::Light(Arc::new(l)))
             }
             _ if b.kind == Kind::Texture || args.iter().any(|a| a.ty().is_field()) => Value::field(
                 FieldExpr::Call {

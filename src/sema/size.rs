@@ -21,11 +21,12 @@ impl Sizes {
     /// (depth, expanded size) of `v`; both saturate.
     pub fn measure(&mut self, v: &Value) -> (u32, u64) {
         let (key, children): (*const (), Vec<&Value>) = match v {
-            Value::Shape(n) | Value::Texture(n) => {
-                (std::rc::Rc::as_ptr(n) as *const (), n.args.iter().collect())
-            }
+            Value::Shape(n) | Value::Texture(n) => (
+                std::sync::Arc::as_ptr(n) as *const (),
+                n.args.iter().collect(),
+            ),
             Value::Field(e, _) => (
-                std::rc::Rc::as_ptr(e) as *const (),
+                std::sync::Arc::as_ptr(e) as *const (),
                 match &**e {
                     FieldExpr::Input(_) | FieldExpr::Atlas { .. } => Vec::new(),
                     FieldExpr::Unary { operand, .. } => vec![operand],
@@ -57,18 +58,18 @@ mod tests {
     use crate::sema::builtins::BuiltinId;
     use crate::sema::types::Node;
     use crate::span::Span;
-    use std::rc::Rc;
+    use std::sync::Arc;
 
     #[test]
     fn shared_nodes_count_once_per_use_but_are_measured_once() {
-        let leaf = Value::Shape(Rc::new(Node {
+        let leaf = Value::Shape(Arc::new(Node {
             builtin: BuiltinId::Sphere,
             args: vec![Value::Float(1.0)],
             span: Span::new(0, 0),
         }));
         let mut v = leaf;
         for _ in 0..40 {
-            v = Value::Shape(Rc::new(Node {
+            v = Value::Shape(Arc::new(Node {
                 builtin: BuiltinId::Union,
                 args: vec![v.clone(), v],
                 span: Span::new(0, 0),

@@ -3,7 +3,7 @@
 use crate::span::Span;
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use std::fmt;
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// The type of an expression.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -186,14 +186,14 @@ pub enum Value {
     Vec(Vec<f64>),
     Bool(bool),
     Str(String),
-    Shape(Rc<Node>),
-    Texture(Rc<Node>),
-    Camera(Rc<super::Camera>),
-    Light(Rc<super::Light>),
+    Shape(Arc<Node>),
+    Texture(Arc<Node>),
+    Camera(Arc<super::Camera>),
+    Light(Arc<super::Light>),
     Atlas(AtlasId),
     Material(MaterialId),
     /// A surface field with the type of its per-point values.
-    Field(Rc<FieldExpr>, Ty),
+    Field(Arc<FieldExpr>, Ty),
     Error,
 }
 
@@ -220,7 +220,7 @@ impl Value {
     }
 
     pub fn field(expr: FieldExpr, ty: Ty) -> Value {
-        Value::Field(Rc::new(expr), ty)
+        Value::Field(Arc::new(expr), ty)
     }
 
     pub fn as_float(&self) -> Option<f64> {

@@ -305,3 +305,50 @@ fn workspace_folders_bound_what_documents_read() {
     assert_eq!(refused, [1], "only the texture outside the workspace: {d}");
     assert!(p.stop().success());
 }
+
+/// While a large document is analysed (on the worker thread), requests about another
+/// document are answered at once, and the large one's diagnostics come later.
+#[test]
+fn requests_are_answered_while_a_large_document_is_analysed() {
+    let mut p = Pipe::spawn();
+    p.initialize();
+    p.send(did_open(super::URI, "let s = sphere(1);\nrender s;\n"));
+    p.diagnostics();
+    let big_uri = "file:///tmp/sdfc-lsp-test/big.sdf";
+    let big: String = (0..5_000)
+        .map(|i| format!("let a{i} = sphere(1).translate([{i}, 0, 0]);\n"))
+        .chain(["render a0;\n".to_string()])
+        .collect();
+    p.send(did_open(big_uri, &big));
+    let asked = std::time::Instant::now();
+    p.send(
+        json!({ "jsonrpc": "2.0", "id": 5, "method": "textDocument/hover", "params": {
+        "textDocument": { "uri": super::URI }, "position": { "line": 0, "character": 9 } } }),
+    );
+    let mut big_published_first = false;
+    loop {
+        let m = p.read();
+        if m["method"] == "textDocument/publishDiagnostics" && m["params"]["uri"] == big_uri {
+            big_published_first = true;
+        }
+        if m["id"] == 5 {
+            assert!(m["result"]["contents"].is_object(), "{m}");
+            break;
+        }
+    }
+    let answered = asked.elapsed();
+    // The big document's diagnostics still arrive, for its version.
+    let d = loop {
+        let d = p.diagnostics();
+        if d["uri"] == big_uri {
+            break d;
+        }
+    };
+    let analysed = asked.elapsed();
+    assert_eq!(d["version"], 1);
+    assert!(
+        !big_published_first && answered < analysed,
+        "the hover waited for the big analysis: answered after {answered:?}, analysed after {analysed:?}"
+    );
+    assert!(p.stop().success());
+}

@@ -205,3 +205,25 @@ fn checking_time_grows_near_linearly_with_the_file() {
         large / small
     );
 }
+
+/// The minimal scenes the random generator found (tests/random_scenes_found.md).
+#[test]
+fn scenes_found_by_the_random_generator() {
+    // A parameter or member named like a keyword.
+    compiles("material m { color = [1, 0, 0]; }\nrender paint(shape: sphere(1), material: m);\n");
+    compiles(
+        "let s = sphere(1);\natlas skin on s { seed a = [1, 0, 0]; }\n\
+         material m { roughness = skin.seed; color = [skin.uv.x, 0, 0]; }\nrender s.paint(m);\n",
+    );
+    // normalize of a float field is its sign (WGSL's normalize takes only vectors).
+    compiles("material m { metallic = normalize(position.x); }\nrender sphere(1).paint(m);\n");
+    // Constants beyond f32, even where unused.
+    assert_eq!(
+        codes("material m4 { emission = [1.0, 1.5, 1e39]; }\nlet s5 = pyramid();\nrender s5;"),
+        ["E0302"]
+    );
+    assert_eq!(
+        codes("let s5 = scale(sphere(1), 99999999999999999999999999999999999999999);\nrender s5;"),
+        ["E0302"]
+    );
+}

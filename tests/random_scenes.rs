@@ -366,6 +366,8 @@ struct Report {
     clean_ok: usize,
     mutated: usize,
     mutated_ok: usize,
+    /// Scenes without a mutation but with literals far from 1 (not in the pass rate).
+    far: usize,
     failures: Vec<String>,
     /// How often each code was reported by a scene without a mutation.
     clean_codes: std::collections::BTreeMap<&'static str, usize>,
@@ -379,6 +381,7 @@ fn run_seeds(seeds: std::ops::Range<u64>, shrink_failures: bool) -> Report {
         clean_ok: 0,
         mutated: 0,
         mutated_ok: 0,
+        far: 0,
         failures: Vec::new(),
         clean_codes: Default::default(),
         slowest: (Duration::ZERO, 0),
@@ -402,6 +405,8 @@ fn run_seeds(seeds: std::ops::Range<u64>, shrink_failures: bool) -> Report {
                 if scene.mutation.is_some() {
                     r.mutated += 1;
                     r.mutated_ok += usize::from(!errors);
+                } else if scene.far {
+                    r.far += 1;
                 } else {
                     r.clean += 1;
                     r.clean_ok += usize::from(!errors);
@@ -435,7 +440,7 @@ fn run_seeds(seeds: std::ops::Range<u64>, shrink_failures: bool) -> Report {
 
 fn print(r: &Report, took: Duration) {
     eprintln!(
-        "{} scenes in {:.1?} (slowest {:.2?}, seed {}); without a mutation: {}/{} with no error ({:.1}%); mutated: {}/{} with no error; {} failures",
+        "{} scenes in {:.1?} (slowest {:.2?}, seed {}); without a mutation: {}/{} with no error ({:.1}%); mutated: {}/{} with no error; {} with far literals; {} failures",
         r.scenes,
         took,
         r.slowest.0,
@@ -445,6 +450,7 @@ fn print(r: &Report, took: Duration) {
         100.0 * r.clean_ok as f64 / r.clean.max(1) as f64,
         r.mutated_ok,
         r.mutated,
+        r.far,
         r.failures.len()
     );
     eprintln!("codes in scenes without a mutation: {:?}", r.clean_codes);
@@ -501,6 +507,7 @@ fn one_seed() {
             seed: 0,
             text: std::fs::read_to_string(path).expect("SDFC_GEN_FILE"),
             mutation: None,
+            far: false,
         }
     } else if let Some(seed) = std::env::var("SDFC_GEN_SEED")
         .ok()

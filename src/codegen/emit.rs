@@ -487,6 +487,8 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
             format!("textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})")
         }
         B::Cross => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
+        // WGSL's normalize takes only vectors; a float's is its sign.
+        B::Normalize if args[0].ty().base() == &Ty::Float => format!("sign({})", f(&args[0])?),
         B::Length | B::Normalize => format!("{name}({})", f(&args[0])?),
         // The WGSL builtin of the same name, on arguments widened to the call's type.
         B::Sin

@@ -50,9 +50,15 @@ pub fn parse(src: &str, diags: &mut Vec<Diagnostic>) -> Parsed {
 
     let mut items = Vec::new();
     let mut start = 0;
+    // An item keyword used as a name (`x.material`, `paint(material: m)`) starts nothing.
+    let starts_item = |i: usize| {
+        tokens[i].0.starts_item()
+            && !(i > 0 && tokens[i - 1].0 == Token::Dot)
+            && tokens.get(i + 1).is_none_or(|(t, _)| *t != Token::Colon)
+    };
     while start < tokens.len() {
         let mut end = start + 1;
-        while end < tokens.len() && !tokens[end].0.starts_item() {
+        while end < tokens.len() && !starts_item(end) {
             end += 1;
         }
         let chunk = &tokens[start..end];
@@ -318,6 +324,30 @@ where
         .or_not()
 }
 
+/// A name after `.` or before `:` in a call: an identifier, or a keyword, since
+/// members and parameters may be named like one (`skin.seed`, `paint(material: m)`).
+fn member<'t, 'a: 't, I>() -> impl Parser<'t, I, Ident, Extra<'t, 'a>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
+{
+    select! {
+        Token::Ident(n) => n,
+        Token::Let => "let",
+        Token::Atlas => "atlas",
+        Token::Material => "material",
+        Token::Render => "render",
+        Token::On => "on",
+        Token::Seed => "seed",
+        Token::Tangent => "tangent",
+        Token::Merge => "merge",
+    }
+    .map_with(|n: &str, e| Ident {
+        name: n.to_string(),
+        span: to_span(e.span()),
+    })
+    .labelled("a name")
+}
+
 fn ident<'t, 'a: 't, I>() -> impl Parser<'t, I, Ident, Extra<'t, 'a>> + Clone
 where
     I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
@@ -376,7 +406,7 @@ where
     I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
 {
     recursive(|expr| {
-        let arg = ident()
+        let arg = member()
             .then_ignore(just(Token::Colon))
             .then(expr.clone())
             .map(|(name, value)| Arg {
@@ -452,7 +482,7 @@ where
 
         let postfix = atom.foldl_with(
             just(Token::Dot)
-                .ignore_then(ident())
+                .ignore_then(member())
                 .then(args.or_not())
                 .repeated(),
             |receiver, (name, args), e| {

@@ -490,6 +490,8 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
         // WGSL's normalize takes only vectors; a float's is its sign.
         B::Normalize if args[0].ty().base() == &Ty::Float => format!("sign({})", f(&args[0])?),
         B::Length | B::Normalize => format!("{name}({})", f(&args[0])?),
+        // WGSL's dot takes only vectors; two floats' is their product.
+        B::Dot if t_ty == Ty::Float => format!("({} * {})", f(&args[0])?, f(&args[1])?),
         // The WGSL builtin of the same name, on arguments widened to the call's type.
         B::Sin
         | B::Cos

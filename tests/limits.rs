@@ -230,3 +230,27 @@ fn scenes_found_by_the_random_generator() {
         ["E0302"]
     );
 }
+
+/// Every pass at the depth limits, on a test thread's default stack: the formatter,
+/// and lowering and the CPU evaluator on a shape as deep as `let`s may make it.
+#[test]
+fn the_formatter_and_the_cpu_evaluator_hold_at_the_limits() {
+    let at_limit = format!(
+        "render sphere(1){};\n",
+        ".round(0.001)".repeat(MAX_NESTING - 1)
+    );
+    let formatted = sdfc::ide::format::format(&at_limit).expect("formats");
+    assert_eq!(sdfc::ide::format::format(&formatted).unwrap(), formatted);
+    // A chain of `let`s, each one level deeper: about 500 levels after inlining.
+    let mut deep = String::from("let a0 = sphere(1);\n");
+    for i in 1..=490 {
+        deep.push_str(&format!("let a{i} = a{}.round(0.0001);\n", i - 1));
+    }
+    deep.push_str("render a490;\n");
+    let a = sdfc::driver::check(&deep, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics.first());
+    let shape = a.scene.as_ref().unwrap().render.as_ref().unwrap();
+    let d = sdfc::ir::eval::distance(shape, glam::DVec3::new(2.0, 0.0, 0.0));
+    // Each round subtracts 0.0001 from the sphere's distance (2 - 1 = 1).
+    assert!((d - (1.0 - 0.049)).abs() < 1e-9, "{d}");
+}

@@ -254,3 +254,31 @@ fn the_formatter_and_the_cpu_evaluator_hold_at_the_limits() {
     // Each round subtracts 0.0001 from the sphere's distance (2 - 1 = 1).
     assert!((d - (1.0 - 0.049)).abs() < 1e-9, "{d}");
 }
+
+/// A `let` used twice is one IR node with two parents, and one evaluation in the WGSL:
+/// 13 doublings give a DAG of a few dozen nodes, not 2^13, with the analytic distance.
+#[test]
+fn shared_lets_stay_shared_through_lowering_and_codegen() {
+    let mut s = String::from("let a0 = sphere(1);\n");
+    for i in 1..=13 {
+        s.push_str(&format!(
+            "let a{i} = a{0} | a{0}.translate([0.1, 0, 0]);\n",
+            i - 1
+        ));
+    }
+    s.push_str("render a13;\n");
+    let a = check_all(&s, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics.first());
+    let shape = a.scene.as_ref().unwrap().render.as_ref().unwrap();
+    assert!(
+        shape.nodes.len() <= 3 * 13 + 1,
+        "{} nodes",
+        shape.nodes.len()
+    );
+    // Unit spheres at x = 0, 0.1, …, 1.3: from (5, 0, 0) the nearest is 2.7 away.
+    let d = sdfc::ir::eval::distance(shape, glam::DVec3::new(5.0, 0.0, 0.0));
+    assert!((d - 2.7).abs() < 1e-12, "{d}");
+    let wgsl = &a.compiled.as_ref().unwrap().module.wgsl;
+    let calls = wgsl.matches("sd_sphere(").count();
+    assert!(calls < 100, "{calls} sphere evaluations in the WGSL");
+}

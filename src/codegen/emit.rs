@@ -56,6 +56,14 @@ pub struct Writer {
     prefix: String,
     /// Helper functions the code in `out` calls: module-scope WGSL to emit beside it.
     pub helpers: String,
+    /// The variable holding each node already evaluated at a point variable (every
+    /// `let` is at function scope): a node shared by two parents at the same point is
+    /// evaluated once.
+    done: std::collections::HashMap<(NodeId, String), String>,
+    /// Shared nodes already emitted as helper functions by this writer.
+    emitted: std::collections::HashSet<NodeId>,
+    /// The node whose helper function this writer is writing (not a helper again).
+    own: Option<NodeId>,
 }
 
 impl Writer {
@@ -67,6 +75,9 @@ impl Writer {
             next: 0,
             prefix: name.to_string(),
             helpers: String::new(),
+            done: std::collections::HashMap::new(),
+            emitted: std::collections::HashSet::new(),
+            own: None,
         }
     }
 
@@ -82,7 +93,33 @@ impl Writer {
     /// Emits the evaluation of `id` at the point variable `p`; returns the name of the
     /// `vec2<f32>` holding (distance, material).
     pub fn shape(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
-        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.shape_inner(shape, id, p))
+        let key = (id, p.to_string());
+        if let Some(d) = self.done.get(&key) {
+            return d.clone();
+        }
+        let d = if self.own != Some(id) && shape.is_shared(id) {
+            // A node with several parents (a `let` used twice) is one helper function,
+            // called from each: the WGSL stays linear in the scene.
+            let name = format!("{}_n{}", self.prefix, id.index());
+            if self.emitted.insert(id) {
+                let mut w = Writer::new(&name);
+                w.own = Some(id);
+                let dc = w.shape(shape, id, "p");
+                self.helpers.push_str(&w.helpers);
+                let _ = writeln!(
+                    self.helpers,
+                    "fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                    w.out
+                );
+            }
+            let d = self.fresh("d");
+            self.line(&format!("let {d} = {name}({p});"));
+            d
+        } else {
+            stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.shape_inner(shape, id, p))
+        };
+        self.done.insert(key, d.clone());
+        d
     }
 
     fn shape_inner(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {

@@ -24,12 +24,19 @@ pub fn lower(program: &Program) -> Scene {
 /// Lowers one shape value; `None` for values that are not (error-free) shapes.
 pub fn lower_shape(value: &Value) -> Option<Shape> {
     let mut shape = Shape::default();
-    Lowerer { out: &mut shape }.node(value)?;
+    Lowerer {
+        out: &mut shape,
+        shared: std::collections::HashMap::new(),
+    }
+    .node(value)?;
     Some(shape)
 }
 
 struct Lowerer<'a> {
     out: &'a mut Shape,
+    /// The node of each shape value already lowered: a `let` used twice is one node with
+    /// two parents (the IR is a DAG, its size linear in the checked program).
+    shared: std::collections::HashMap<*const crate::sema::Node, NodeId>,
 }
 
 fn f(v: &Value) -> Option<f64> {
@@ -109,7 +116,14 @@ impl Lowerer<'_> {
 
     /// Lowers a shape value (recursive: on a fresh stack segment when this one runs low).
     fn node(&mut self, value: &Value) -> Option<NodeId> {
-        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.node_inner(value))
+        let Value::Shape(n) = value else { return None };
+        let key = std::sync::Arc::as_ptr(n);
+        if let Some(&id) = self.shared.get(&key) {
+            return Some(id);
+        }
+        let id = stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.node_inner(value))?;
+        self.shared.insert(key, id);
+        Some(id)
     }
 
     fn node_inner(&mut self, value: &Value) -> Option<NodeId> {

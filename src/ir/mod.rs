@@ -166,6 +166,46 @@ pub enum Op {
     },
 }
 
+impl Op {
+    /// The nodes this one evaluates.
+    pub fn children(&self) -> Vec<NodeId> {
+        match self {
+            Op::Prim(_) => Vec::new(),
+            Op::Csg { a, b, .. } => vec![*a, *b],
+            Op::Translate { child, .. }
+            | Op::Rotate { child, .. }
+            | Op::Scale { child, .. }
+            | Op::Twist { child, .. }
+            | Op::Bend { child, .. }
+            | Op::Repeat { child, .. }
+            | Op::Mirror { child, .. }
+            | Op::Elongate { child, .. }
+            | Op::Round { child, .. }
+            | Op::Shell { child, .. }
+            | Op::Paint { child, .. } => vec![*child],
+        }
+    }
+}
+
+impl Shape {
+    /// Whether a node has more than one parent (a `let` used twice).
+    pub fn is_shared(&self, id: NodeId) -> bool {
+        self.shared
+            .get_or_init(|| {
+                let mut parents = vec![0u32; self.nodes.len()];
+                for n in &self.nodes {
+                    for c in n.op.children() {
+                        parents[c.index()] += 1;
+                    }
+                }
+                parents.into_iter().map(|p| p > 1).collect()
+            })
+            .get(id.index())
+            .copied()
+            .unwrap_or(false)
+    }
+}
+
 /// Where a twist or bend switches to the bounding-sphere distance: a margin
 /// beyond its bound, so that a ray stepping onto the bound lands inside the warp.
 pub fn warp_outer(radius: f64) -> f64 {
@@ -262,10 +302,19 @@ pub struct Node {
     pub lipschitz: f64,
 }
 
-/// A lowered shape: nodes in child-before-parent order, the last one the root.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// A lowered shape: nodes in child-before-parent order, the last one the root. A node
+/// may have several parents (a `let` used twice): the nodes form a DAG.
+#[derive(Debug, Clone, Default)]
 pub struct Shape {
     pub nodes: Vec<Node>,
+    /// Which nodes have several parents, computed on first use.
+    shared: std::sync::OnceLock<Vec<bool>>,
+}
+
+impl PartialEq for Shape {
+    fn eq(&self, other: &Shape) -> bool {
+        self.nodes == other.nodes
+    }
 }
 
 impl std::ops::Index<NodeId> for Shape {

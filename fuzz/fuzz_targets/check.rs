@@ -1,13 +1,11 @@
-//! The whole check (front end, atlas geometry, lowering): never a panic, every span
-//! inside the text.
+//! The whole check (see `targets::check`); textures resolve in tests/ui.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
-#[path = "common.rs"]
-mod common;
+#[path = "targets.rs"]
+mod targets;
 
-fuzz_target!(|data: &[u8]| {
-    let text = common::text(data);
-    let analysis = sdfc::driver::check(&text, Some(&common::base_dir()));
-    common::assert_spans(&text, &analysis.diagnostics);
-});
+fuzz_target!(|data: &[u8]| targets::check(
+    data,
+    std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/ui"))
+));

@@ -1,20 +1,11 @@
-//! The check, code generation and naga validation: never a panic, never an internal
-//! compiler error (E0900: naga rejected generated code), every span inside the text.
+//! Check, codegen and naga (see `targets::check_all`); textures resolve in tests/ui.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
-#[path = "common.rs"]
-mod common;
+#[path = "targets.rs"]
+mod targets;
 
-fuzz_target!(|data: &[u8]| {
-    let text = common::text(data);
-    let analysis = sdfc::driver::check_all(&text, Some(&common::base_dir()));
-    common::assert_spans(&text, &analysis.diagnostics);
-    if let Some(d) = analysis
-        .diagnostics
-        .iter()
-        .find(|d| d.code == sdfc::codes::E_INTERNAL)
-    {
-        panic!("internal compiler error: {} / {}", d.message, d.notes.join(" / "));
-    }
-});
+fuzz_target!(|data: &[u8]| targets::check_all(
+    data,
+    std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/ui"))
+));

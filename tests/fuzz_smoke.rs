@@ -1,0 +1,72 @@
+//! A smoke pass of every fuzz target (`fuzz/fuzz_targets/targets.rs`) over its seed
+//! corpus, the examples and the UI cases, plus a few byte-level mutations of each, on
+//! stable in every `cargo test`: the targets keep compiling and their properties hold
+//! on the seeds. The long runs use cargo-fuzz on nightly (README, Tests).
+
+#[path = "../fuzz/fuzz_targets/targets.rs"]
+mod targets;
+
+use std::path::{Path, PathBuf};
+
+fn corpus() -> Vec<Vec<u8>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<PathBuf> = ["examples", "tests/ui"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    files.sort();
+    let mut out = Vec::new();
+    for (i, f) in files.iter().enumerate() {
+        let bytes = std::fs::read(f).unwrap();
+        // The seed, and one cut and one flipped byte (deterministic).
+        let cut = bytes.len() * (i % 7 + 1) / 8;
+        let mut flipped = bytes.clone();
+        if !flipped.is_empty() {
+            let k = (i * 31) % flipped.len();
+            flipped[k] ^= 0x20;
+        }
+        out.push(bytes[..cut].to_vec());
+        out.push(flipped);
+        out.push(bytes);
+    }
+    out
+}
+
+fn ui() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui")
+}
+
+#[test]
+fn parse_and_format_targets_hold_on_the_corpus() {
+    for input in corpus() {
+        targets::parse(&input);
+        targets::format(&input);
+    }
+}
+
+#[test]
+fn check_targets_hold_on_the_corpus() {
+    for input in corpus() {
+        targets::check(&input, &ui());
+        targets::check_all(&input, &ui());
+    }
+}
+
+#[test]
+fn lsp_target_holds_on_the_examples() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    for name in ["sphere.sdf", "capsule.sdf"] {
+        let mut doc = b"#".to_vec();
+        doc.extend(std::fs::read(root.join(name)).unwrap());
+        targets::lsp(&doc);
+    }
+    // Raw framing: a request, a malformed message and an oversized claim.
+    let body = r#"{"jsonrpc":"2.0","id":7,"method":"textDocument/hover","params":{"textDocument":{"uri":"file:///x.sdf"},"position":{"line":0,"character":0}}}"#;
+    let framed = format!(
+        "Content-Length: {}\r\n\r\n{body}Content-Length: 5\r\n\r\n{{nopeContent-Length: 99999999999\r\n\r\n",
+        body.len()
+    );
+    targets::lsp(framed.as_bytes());
+}

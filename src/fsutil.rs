@@ -46,6 +46,18 @@ pub fn write_output(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     }
 }
 
+/// Replaces the file at `path` atomically without following a symbolic link or
+/// writing through a device or FIFO found there (whatever is at `path` is replaced):
+/// for files with predictable names in shared folders, such as internal-compiler-error
+/// reports in the temporary folder, where a link planted by someone else must not
+/// redirect the write.
+pub fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+        return Err(refused("is a folder; give a file name"));
+    }
+    write_atomic(path, bytes, None)
+}
+
 /// Paths the system owns (`/dev/…`, `/proc/…`): never replaced, only written to.
 fn is_system(path: &Path) -> bool {
     path.starts_with("/dev") || path.starts_with("/proc")

@@ -509,3 +509,22 @@ fn render_over_the_memory_limit_is_a_resource_error() {
     assert!(err.contains("limit"), "{err}");
     assert!(!out.exists());
 }
+
+/// An internal-compiler-error report has a predictable name in the shared temporary
+/// folder: a symbolic link planted there is replaced, never followed.
+#[cfg(unix)]
+#[test]
+fn ice_reports_do_not_follow_planted_links() {
+    let tmp = tempfile::tempdir().unwrap();
+    let victim = tmp.path().join("victim.txt");
+    std::fs::write(&victim, "precious").unwrap();
+    let report = tmp.path().join("sdfc-ice-scene.wgsl");
+    std::os::unix::fs::symlink(&victim, &report).unwrap();
+    sdfc::fsutil::replace_file(&report, b"fn broken(").unwrap();
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(!std::fs::symlink_metadata(&report)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(std::fs::read_to_string(&report).unwrap(), "fn broken(");
+}

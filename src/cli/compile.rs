@@ -71,7 +71,9 @@ fn save_for_report(name: &str, wgsl: &str) {
         })
         .collect();
     let path = std::env::temp_dir().join(format!("sdfc-ice-{stem}.wgsl"));
-    if write_output(&path, wgsl.as_bytes()).is_ok() {
+    // Not write_output: the name is predictable in a shared folder, so a link there is
+    // replaced, never followed.
+    if sdfc::fsutil::replace_file(&path, wgsl.as_bytes()).is_ok() {
         eprintln!(
             "note: the generated WGSL is saved at {}; please attach it to a bug report",
             path.display()

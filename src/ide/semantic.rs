@@ -177,20 +177,9 @@ pub fn semantic_tokens(doc: &Document) -> Vec<SemanticToken> {
                     token(TokenKind::Variable, false, false)
                 }
             }
-            Token::Plus
-            | Token::Minus
-            | Token::Star
-            | Token::Slash
-            | Token::Percent
-            | Token::Pipe
-            | Token::Amp
-            | Token::Bang
-            | Token::EqEq
-            | Token::NotEq
-            | Token::Lt
-            | Token::Le
-            | Token::Gt
-            | Token::Ge => token(TokenKind::Operator, false, false),
+            t if t.is_binary_operator() || *t == Token::Bang => {
+                token(TokenKind::Operator, false, false)
+            }
             _ => continue,
         };
         out.push(t);

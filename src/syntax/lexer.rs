@@ -131,12 +131,33 @@ pub const KEYWORDS: &[&str] = &[
 ];
 
 impl Token<'_> {
-    /// Keywords that start a top-level item. They never appear anywhere else,
-    /// so the parser splits the file at them to keep errors independent.
+    /// Keywords that start a top-level item. Elsewhere they appear only as names after
+    /// `.` or before `:` (`x.material`, `paint(material: m)`), so the parser splits the
+    /// file at them, outside those places, to keep errors independent.
     pub fn starts_item(&self) -> bool {
         matches!(
             self,
             Token::Let | Token::Atlas | Token::Material | Token::Render
+        )
+    }
+
+    /// The binary operators (`-` is also unary).
+    pub fn is_binary_operator(&self) -> bool {
+        matches!(
+            self,
+            Token::Plus
+                | Token::Minus
+                | Token::Star
+                | Token::Slash
+                | Token::Percent
+                | Token::Pipe
+                | Token::Amp
+                | Token::EqEq
+                | Token::NotEq
+                | Token::Lt
+                | Token::Le
+                | Token::Gt
+                | Token::Ge
         )
     }
 }

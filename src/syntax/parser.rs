@@ -133,24 +133,7 @@ fn check_nesting(chunk: &[(Token, SimpleSpan)], diags: &mut Vec<Diagnostic>) -> 
             )
         );
         let is_prefix = matches!(tok, Token::Minus | Token::Bang) && !after_operand;
-        let is_link = !is_prefix
-            && matches!(
-                tok,
-                Token::Dot
-                    | Token::Plus
-                    | Token::Minus
-                    | Token::Star
-                    | Token::Slash
-                    | Token::Percent
-                    | Token::Pipe
-                    | Token::Amp
-                    | Token::EqEq
-                    | Token::NotEq
-                    | Token::Lt
-                    | Token::Le
-                    | Token::Gt
-                    | Token::Ge
-            );
+        let is_link = !is_prefix && (*tok == Token::Dot || tok.is_binary_operator());
         match tok {
             Token::LParen | Token::LBracket | Token::LBrace => links.push(0),
             Token::RParen | Token::RBracket | Token::RBrace if links.len() > 1 => {

@@ -1,0 +1,131 @@
+//! Baking: a textured implicit scene becomes a textured mesh with a seamless atlas
+//! (Purnomo, Cohen and Kumar, "Seamless Texture Atlases"; `../shared/notes/seamless-atlas-notes.md`).
+//!
+//! The stages, one module each:
+//!
+//! ```text
+//!  shape ──mesh──▶ chart grid (dual contouring, quads) ──charts──▶ chart table
+//!        ──texels──▶ level-0 sample points (shared boundaries computed once)
+//!        ──GPU material pass──▶ attributes ──mips──▶ boundary-symmetric levels
+//!        ──layout──▶ flat atlas image ──export──▶ .glb / .ktx2 / charts.json
+//! ```
+
+
+
+use serde::{Deserialize, Serialize};
+
+/// A triangle mesh ready for export: every vertex has all four attributes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Unit tangents along +u of the chart, w = ±1 (glTF's bitangent sign).
+    pub tangents: Vec<[f32; 4]>,
+    /// Level-0 atlas coordinates in [0, 1]², origin at the image's top left (glTF's).
+    pub texcoords: Vec<[f32; 2]>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub indices: Vec<u32>,
+}
+
+/// The baked images of one material, all the same size (the flat atlas).
+#[derive(Debug, Clone)]
+pub struct Textures {
+    /// Base colour, sRGB-encoded, alpha 255.
+    pub base_color: image::RgbaImage,
+    /// glTF's metallicRoughness: linear; G = roughness, B = metallic.
+    pub metallic_roughness: image::RgbaImage,
+    /// Tangent-space normal map (glTF's convention: linear, +Y up in the chart's v).
+    pub normal: image::RgbaImage,
+    /// Emission, sRGB-encoded; `None` when the material emits nothing.
+    pub emissive: Option<image::RgbaImage>,
+}
+
+/// Where each chart's levels lie in the flat atlas (§3.3): every chart has the same
+/// level-0 resolution `chart_size` (a power of two), placed in a `columns` × `rows`
+/// grid; level `l` is the same grid with cells of `chart_size >> l` texels, with its
+/// top-left corner at `level_origins[l]` (texels). Level 0's origin is (0, 0). The
+/// outermost texel centres of a chart lie on its boundary (the half-texel inset):
+/// chart-local (u, v) ∈ [0, 1]² maps to texel coordinates
+/// `origin + cell · n + 0.5 + (u, v) · (n − 1)` with `n = chart_size >> l`.
+/// Serialized into the glTF's `extras.sdfc_atlas` so that `sdfc render OUT.glb` can
+/// select levels per fragment (Eq. 1–2).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FlatLayout {
+    /// The atlas image's width and height in texels.
+    pub width: u32,
+    pub height: u32,
+    pub chart_size: u32,
+    pub columns: u32,
+    pub rows: u32,
+    /// One origin per level, from level 0 (chart_size texels) to the last (2 texels).
+    pub level_origins: Vec<[u32; 2]>,
+}
+
+impl FlatLayout {
+    /// The number of levels.
+    pub fn levels(&self) -> usize {
+        self.level_origins.len()
+    }
+
+    /// The resolution of one chart at level `l`.
+    pub fn size_at(&self, level: usize) -> u32 {
+        self.chart_size >> level
+    }
+
+    /// The cell of chart `chart` (column, row).
+    pub fn cell(&self, chart: usize) -> [u32; 2] {
+        [chart as u32 % self.columns, chart as u32 / self.columns]
+    }
+
+    /// The top-left texel of chart `chart` at level `l`.
+    pub fn chart_origin(&self, chart: usize, level: usize) -> [u32; 2] {
+        let n = self.size_at(level);
+        let [cx, cy] = self.cell(chart);
+        let [ox, oy] = self.level_origins[level];
+        [ox + cx * n, oy + cy * n]
+    }
+
+    /// The level-0 atlas coordinate (glTF TEXCOORD_0, in [0, 1]) of chart-local (u, v).
+    pub fn texcoord(&self, chart: usize, u: f64, v: f64) -> [f32; 2] {
+        let n = self.chart_size as f64;
+        let [x, y] = self.chart_origin(chart, 0);
+        [
+            ((x as f64 + 0.5 + u * (n - 1.0)) / self.width as f64) as f32,
+            ((y as f64 + 0.5 + v * (n - 1.0)) / self.height as f64) as f32,
+        ]
+    }
+
+    /// The flat layout for `charts` charts in a square atlas of `size` texels: the
+    /// largest power-of-two chart size whose level-0 grid (top two thirds) and the
+    /// smaller levels (bottom third, side by side) fit. `None` when even 2-texel charts
+    /// do not fit.
+    pub fn fit(charts: usize, size: u32) -> Option<FlatLayout> {
+        let mut n = size;
+        while n >= 2 {
+            let columns = size / n;
+            let rows = (2 * size / 3) / n;
+            if (columns as u64) * (rows as u64) >= charts.max(1) as u64 {
+                let rows = (charts.max(1) as u32).div_ceil(columns);
+                let mut origins = vec![[0, 0]];
+                let mut x = 0;
+                let mut level = 1;
+                while n >> level >= 2 {
+                    origins.push([x, rows * n]);
+                    x += columns * (n >> level);
+                    level += 1;
+                }
+                return Some(FlatLayout {
+                    width: size,
+                    height: size,
+                    chart_size: n,
+                    columns,
+                    rows,
+                    level_origins: origins,
+                });
+            }
+            n /= 2;
+        }
+        None
+    }
+}

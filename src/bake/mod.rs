@@ -10,7 +10,7 @@
 //!        ──layout──▶ flat atlas image ──export──▶ .glb / .ktx2 / charts.json
 //! ```
 
-
+pub mod export;
 
 use serde::{Deserialize, Serialize};
 

@@ -1,0 +1,441 @@
+//! The bake's export formats (src/bake/export): the .glb round trip, the Khronos
+//! glTF-Validator's verdict on it, the reader on broken files, and the .ktx2 against an
+//! independent parser (the `ktx2` crate).
+
+mod common;
+
+use image::{Rgba, RgbaImage};
+use sdfc::bake::export::{check_layout, check_mesh, check_textures, glb, ktx2, read_glb};
+use sdfc::bake::{FlatLayout, MeshData, Textures};
+use serde_json::{json, Value};
+
+/// A unit quad (chart 0, two triangles) beside a unit cube (charts 1 to 6, a quad of
+/// four vertices per face), on a 64-texel atlas of 16-texel charts.
+fn quad_and_cube() -> (MeshData, FlatLayout) {
+    let layout = FlatLayout::fit(7, 64).unwrap();
+    assert_eq!((layout.chart_size, layout.levels()), (16, 4));
+    let mut mesh = MeshData::default();
+    let mut face = |chart: usize, corner: [f32; 3], t: [f32; 3], b: [f32; 3], n: [f32; 3]| {
+        let base = mesh.positions.len() as u32;
+        for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            let p = std::array::from_fn(|c| corner[c] + u * t[c] + v * b[c]);
+            mesh.positions.push(p);
+            mesh.normals.push(n);
+            mesh.tangents.push([t[0], t[1], t[2], 1.0]);
+            mesh.texcoords
+                .push(layout.texcoord(chart, u as f64, v as f64));
+        }
+        mesh.indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+    };
+    face(
+        0,
+        [-2.5, -0.5, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    );
+    // Each cube face: outward normal n, tangent t, bitangent n × t, so that (t, b) turns
+    // counter-clockwise seen from outside.
+    let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let faces = [
+        (0, 1.0),
+        (0, -1.0),
+        (1, 1.0),
+        (1, -1.0),
+        (2, 1.0),
+        (2, -1.0),
+    ];
+    for (chart, (i, sign)) in (1..).zip(faces) {
+        let n: [f32; 3] = axes[i].map(|x| x * sign);
+        let t = axes[(i + 1) % 3];
+        let b = [
+            n[1] * t[2] - n[2] * t[1],
+            n[2] * t[0] - n[0] * t[2],
+            n[0] * t[1] - n[1] * t[0],
+        ];
+        let corner = std::array::from_fn(|c| 0.5 * n[c] - 0.5 * t[c] - 0.5 * b[c]);
+        face(chart, corner, t, b, n);
+    }
+    (mesh, layout)
+}
+
+/// Small patterned textures of the layout's size; the metallic-roughness image has a
+/// varying alpha (stored as an RGBA PNG), the others are opaque (stored as RGB).
+fn textures(layout: &FlatLayout, emissive: bool) -> Textures {
+    let (w, h) = (layout.width, layout.height);
+    let image = |f: &dyn Fn(u32, u32) -> [u8; 4]| RgbaImage::from_fn(w, h, |x, y| Rgba(f(x, y)));
+    Textures {
+        base_color: image(&|x, y| [(x * 4) as u8, (y * 4) as u8, 200, 255]),
+        metallic_roughness: image(&|x, y| [0, (x ^ y) as u8 * 3, (x + y) as u8, (x * 3) as u8]),
+        normal: image(&|x, y| [128 + (x % 7) as u8, 128 - (y % 5) as u8, 250, 255]),
+        emissive: emissive.then(|| image(&|x, _| [(x * 2) as u8, 0, 0, 255])),
+    }
+}
+
+fn assert_textures_eq(a: &Textures, b: &Textures) {
+    assert!(a.base_color == b.base_color, "base colour differs");
+    assert!(
+        a.metallic_roughness == b.metallic_roughness,
+        "metallic-roughness differs"
+    );
+    assert!(a.normal == b.normal, "normal differs");
+    assert!(a.emissive == b.emissive, "emissive differs");
+}
+
+#[test]
+fn glb_round_trip() {
+    let (mesh, layout) = quad_and_cube();
+    for emissive in [true, false] {
+        let textures = textures(&layout, emissive);
+        let bytes = glb(&mesh, &textures, &layout, "quad and cube").unwrap();
+        assert_eq!(&bytes[..4], b"glTF");
+        assert_eq!(bytes.len() % 4, 0);
+        let (mesh2, textures2, layout2) = read_glb(&bytes).unwrap();
+        assert_eq!(mesh2, mesh);
+        assert_eq!(layout2, layout);
+        assert_textures_eq(&textures2, &textures);
+    }
+}
+
+#[test]
+fn glb_document_structure() {
+    let (mesh, layout) = quad_and_cube();
+    let bytes = glb(&mesh, &textures(&layout, true), &layout, "q").unwrap();
+    let (doc, _) = split(&bytes);
+    assert_eq!(doc["asset"]["version"], "2.0");
+    assert_eq!(
+        doc["asset"]["generator"],
+        format!("sdfc {}", env!("CARGO_PKG_VERSION"))
+    );
+    assert_eq!(
+        doc["extras"]["sdfc_atlas"],
+        serde_json::to_value(&layout).unwrap()
+    );
+    assert_eq!(
+        doc["samplers"],
+        json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}])
+    );
+    let material = &doc["materials"][0];
+    assert_eq!(material["emissiveFactor"], json!([1.0, 1.0, 1.0]));
+    assert!(material["normalTexture"].is_object());
+    assert!(material["pbrMetallicRoughness"]["metallicRoughnessTexture"].is_object());
+    for view in doc["bufferViews"].as_array().unwrap() {
+        assert_eq!(view["byteOffset"].as_u64().unwrap() % 4, 0);
+    }
+    let position = &doc["accessors"][0];
+    assert_eq!(position["min"], json!([-2.5, -0.5, -0.5]));
+    assert_eq!(position["max"], json!([0.5, 0.5, 0.5]));
+    for image in doc["images"].as_array().unwrap() {
+        assert_eq!(image["mimeType"], "image/png");
+    }
+
+    let plain = glb(&mesh, &textures(&layout, false), &layout, "q").unwrap();
+    let (doc, _) = split(&plain);
+    assert!(doc["materials"][0].get("emissiveTexture").is_none());
+    assert_eq!(
+        doc["materials"][0]["emissiveFactor"],
+        json!([0.0, 0.0, 0.0])
+    );
+    assert_eq!(doc["images"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn glb_passes_the_khronos_validator() {
+    let (mesh, layout) = quad_and_cube();
+    let dir = tempfile::tempdir().unwrap();
+    for emissive in [true, false] {
+        let bytes = glb(
+            &mesh,
+            &textures(&layout, emissive),
+            &layout,
+            "quad and cube",
+        )
+        .unwrap();
+        let path = dir.path().join(format!("export-{emissive}.glb"));
+        std::fs::write(&path, &bytes).unwrap();
+        let Some(report) = common::gltf_validate(&path) else {
+            return;
+        };
+        eprintln!(
+            "glTF-Validator on the export (emissive: {emissive}):\n{}",
+            report.json
+        );
+        assert_eq!(
+            (report.errors, report.warnings, report.infos, report.hints),
+            (0, 0, 0, 0),
+            "{:#?}",
+            report.messages
+        );
+    }
+}
+
+#[test]
+fn glb_refuses_bad_input() {
+    let (mesh, layout) = quad_and_cube();
+    let tex = textures(&layout, true);
+    let refused = |mesh: &MeshData, tex: &Textures, layout: &FlatLayout| {
+        assert!(glb(mesh, tex, layout, "x").is_err(), "bad input accepted");
+    };
+    let mut m = mesh.clone();
+    m.normals.pop();
+    refused(&m, &tex, &layout);
+    let mut m = mesh.clone();
+    m.indices[5] = m.positions.len() as u32;
+    refused(&m, &tex, &layout);
+    let mut m = mesh.clone();
+    m.indices.pop();
+    refused(&m, &tex, &layout);
+    let mut m = mesh.clone();
+    m.positions[3][1] = f32::NAN;
+    refused(&m, &tex, &layout);
+    refused(&MeshData::default(), &tex, &layout);
+    let mut t = tex.clone();
+    t.emissive = Some(RgbaImage::new(32, 64));
+    refused(&mesh, &t, &layout);
+    let mut l = layout.clone();
+    l.chart_size = 12;
+    refused(&mesh, &tex, &l);
+    let mut l = layout.clone();
+    l.level_origins.push([0, 60]); // 1-texel charts
+    refused(&mesh, &tex, &l);
+    let mut l = layout.clone();
+    l.level_origins[1] = [40, 32]; // past the right edge
+    refused(&mesh, &tex, &l);
+}
+
+/// The JSON and BIN chunks of a GLB written by `glb`.
+fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let doc = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    (doc, bytes[20 + len + 8..].to_vec())
+}
+
+/// A GLB of `doc` and `bin`, padded as the spec says.
+fn join(doc: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::to_vec(doc).unwrap();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((20 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// What `read_glb` returns must pass the checks (when it accepts a damaged file).
+fn read_checked(bytes: &[u8]) -> Result<(), String> {
+    let (mesh, textures, layout) = read_glb(bytes)?;
+    check_mesh(&mesh).unwrap();
+    check_layout(&layout).unwrap();
+    check_textures(&textures, &layout).unwrap();
+    Ok(())
+}
+
+#[test]
+fn read_glb_rejects_garbage_and_truncations() {
+    let (mesh, layout) = quad_and_cube();
+    let bytes = glb(&mesh, &textures(&layout, true), &layout, "q").unwrap();
+    for garbage in [
+        &b""[..],
+        b"glTF",
+        b"glTF\x02\0\0\0\xff\xff\xff\xff",
+        b"glTF\x01\0\0\0\x0c\0\0\0",
+        b"{\"asset\": {\"version\": \"2.0\"}}",
+        &[0xff; 64],
+    ] {
+        assert!(read_glb(garbage).is_err());
+    }
+    for len in 0..bytes.len() {
+        assert!(read_glb(&bytes[..len]).is_err(), "truncated to {len} bytes");
+    }
+    // The length in the header cut short, with the chunks intact after it.
+    let mut short = bytes.clone();
+    short[8..12].copy_from_slice(&((bytes.len() - 4) as u32).to_le_bytes());
+    assert!(read_glb(&short).is_err());
+}
+
+#[test]
+fn read_glb_survives_flipped_bytes() {
+    let (mesh, layout) = quad_and_cube();
+    let bytes = glb(&mesh, &textures(&layout, true), &layout, "q").unwrap();
+    let json_end = 20 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    // Every byte of the header and the JSON, every 7th of the buffer (mostly PNG data,
+    // whose checksums catch most changes).
+    let positions = (0..json_end).chain((json_end..bytes.len()).step_by(7));
+    let mut accepted = 0;
+    for at in positions {
+        // 0x08 turns digits into others ('1' into '9'), 0xff makes any byte non-ASCII.
+        for flip in [0xff, 0x08, 0x01] {
+            let mut broken = bytes.clone();
+            broken[at] ^= flip;
+            accepted += read_checked(&broken).is_ok() as usize;
+        }
+    }
+    eprintln!("{accepted} of the flipped files still read (harmless changes)");
+}
+
+#[test]
+fn read_glb_rejects_inconsistent_documents() {
+    let (mesh, layout) = quad_and_cube();
+    let bytes = glb(&mesh, &textures(&layout, false), &layout, "q").unwrap();
+    let (doc, bin) = split(&bytes);
+    read_checked(&join(&doc, &bin)).unwrap();
+    let edits: &[(&str, Value)] = &[
+        ("/accessors/0/count", json!(1_000_000_000_000u64)),
+        ("/accessors/0/count", json!(0)),
+        ("/accessors/3/count", json!(1)),
+        ("/accessors/4/byteOffset", json!(u64::MAX - 2)),
+        ("/accessors/4/componentType", json!(5126)),
+        ("/accessors/1/type", json!("VEC4")),
+        (
+            "/accessors/2/sparse",
+            json!({"count": 1, "indices": {"bufferView": 0, "componentType": 5125}, "values": {"bufferView": 0}}),
+        ),
+        ("/bufferViews/0/byteOffset", json!(4_294_967_295u32)),
+        ("/bufferViews/0/byteLength", json!(1_000_000_000_000_000u64)),
+        ("/bufferViews/0/byteStride", json!(4)),
+        ("/bufferViews/0/buffer", json!(1)),
+        ("/meshes/0/primitives/0/indices", json!(99)),
+        ("/meshes/0/primitives/0/attributes/POSITION", json!(4)),
+        ("/meshes/0/primitives/0/attributes/NORMAL", json!(5)),
+        ("/meshes/0/primitives/0/mode", json!(1)),
+        ("/meshes/0/primitives/0/material", json!(7)),
+        (
+            "/materials/0/pbrMetallicRoughness/baseColorTexture/index",
+            json!(99),
+        ),
+        ("/materials/0/normalTexture", json!(null)),
+        ("/textures/0/source", json!(99)),
+        ("/images/0/mimeType", json!("image/jpeg")),
+        ("/images/1/bufferView", json!(0)),
+        ("/buffers/0/byteLength", json!(bin.len() + 4)),
+        ("/buffers/0/uri", json!("x.bin")),
+        ("/extras", json!(null)),
+        ("/extras/sdfc_atlas/chart_size", json!(3)),
+        ("/extras/sdfc_atlas/width", json!(65)),
+        ("/extras/sdfc_atlas/columns", json!(0)),
+        ("/extras/sdfc_atlas/level_origins", json!([])),
+        (
+            "/extras/sdfc_atlas/level_origins",
+            json!([[0, 0], [60, 60]]),
+        ),
+        ("/asset", json!(null)),
+    ];
+    for (pointer, value) in edits {
+        let mut broken = doc.clone();
+        let (parent, key) = pointer.rsplit_once('/').unwrap();
+        match broken.pointer_mut(parent).unwrap() {
+            Value::Object(map) if value.is_null() => drop(map.remove(key)),
+            Value::Object(map) => drop(map.insert(key.into(), value.clone())),
+            _ => panic!("{pointer}"),
+        }
+        let error = read_glb(&join(&broken, &bin)).err();
+        assert!(error.is_some(), "{pointer} = {value} accepted");
+    }
+    // An index past the vertices, in the buffer.
+    let at = doc["bufferViews"][4]["byteOffset"].as_u64().unwrap() as usize;
+    let mut broken = bin.clone();
+    broken[at..at + 4].copy_from_slice(&1000u32.to_le_bytes());
+    assert!(read_glb(&join(&doc, &broken)).is_err());
+}
+
+/// The levels of a flat atlas's chart grid, stacked style: a 3 × 2 grid of 16-texel
+/// charts halved down to 2-texel charts (48 × 32 to 6 × 4, not powers of two).
+fn grid_levels() -> Vec<RgbaImage> {
+    (0..4)
+        .map(|l| {
+            let n = 16 >> l;
+            RgbaImage::from_fn(3 * n, 2 * n, |x, y| {
+                Rgba([x as u8, y as u8, l as u8 * 60, 255 - x as u8])
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn ktx2_parses_with_the_right_header_dfd_and_levels() {
+    let levels = grid_levels();
+    for srgb in [true, false] {
+        let bytes = ktx2(&levels, srgb).unwrap();
+        let reader = ::ktx2::Reader::new(&bytes[..]).expect("the ktx2 crate rejects the file");
+        let header = reader.header();
+        let format = if srgb {
+            ::ktx2::Format::R8G8B8A8_SRGB
+        } else {
+            ::ktx2::Format::R8G8B8A8_UNORM
+        };
+        assert_eq!(header.format, Some(format));
+        assert_eq!(header.type_size, 1);
+        assert_eq!(
+            (header.pixel_width, header.pixel_height, header.pixel_depth),
+            (48, 32, 0)
+        );
+        assert_eq!(
+            (header.layer_count, header.face_count, header.level_count),
+            (0, 1, 4)
+        );
+        assert_eq!(header.supercompression_scheme, None);
+        assert_eq!(
+            (header.index.sgd_byte_offset, header.index.sgd_byte_length),
+            (0, 0)
+        );
+
+        // The DFD is the one the ktx2 crate derives from the format, byte for byte.
+        let (basic, type_size) = ::ktx2::dfd::Basic::from_format(format).unwrap();
+        assert_eq!(type_size, 1);
+        assert_eq!(reader.basic_dfd(), Some(&basic));
+        assert_eq!(reader.dfd_blocks().len(), 1);
+        let dfd = header.index.dfd_byte_offset as usize
+            ..(header.index.dfd_byte_offset + header.index.dfd_byte_length) as usize;
+        assert_eq!(&bytes[dfd.clone()][..4], &(dfd.len() as u32).to_le_bytes());
+        assert_eq!(bytes[dfd][4..], ::ktx2::dfd::Block::Basic(basic).to_vec());
+        let transfer = if srgb {
+            ::ktx2::TransferFunction::SRGB
+        } else {
+            ::ktx2::TransferFunction::Linear
+        };
+        assert_eq!(reader.transfer_function(), Some(transfer));
+        let writer = format!("sdfc {}", env!("CARGO_PKG_VERSION"));
+        assert_eq!(
+            reader.writer().map(|w| w.trim_end_matches('\0')),
+            Some(&*writer)
+        );
+
+        // The levels: level 0 first in the index, their data smallest first in the file,
+        // each on a 4-byte boundary, and the texels as given.
+        let data: Vec<_> = reader.levels().collect();
+        assert_eq!(data.len(), 4);
+        let mut previous_offset = usize::MAX;
+        for (level, image) in data.iter().zip(&levels) {
+            assert_eq!(level.data, image.as_raw().as_slice());
+            assert_eq!(level.uncompressed_byte_length, image.as_raw().len() as u64);
+            let offset = level.data.as_ptr() as usize - bytes.as_ptr() as usize;
+            assert_eq!(offset % 4, 0);
+            assert!(offset < previous_offset, "levels not stored smallest first");
+            previous_offset = offset;
+        }
+        let last = data[3].data.as_ptr() as usize - bytes.as_ptr() as usize;
+        let kvd_end = (header.index.kvd_byte_offset + header.index.kvd_byte_length) as usize;
+        assert_eq!(last, kvd_end.next_multiple_of(4));
+        let first = data[0].data.as_ptr() as usize - bytes.as_ptr() as usize;
+        assert_eq!(first + data[0].data.len(), bytes.len());
+    }
+}
+
+#[test]
+fn ktx2_refuses_levels_that_are_not_halvings() {
+    let levels = grid_levels();
+    assert!(ktx2(&[], true).is_err());
+    assert!(ktx2(&[RgbaImage::new(0, 0)], true).is_err());
+    assert!(ktx2(&[levels[0].clone(), levels[2].clone()], true).is_err());
+    assert!(ktx2(&[levels[1].clone(), levels[0].clone()], true).is_err());
+    // 1 × 1 is a level too; below it there is none.
+    let tiny = [RgbaImage::new(2, 1), RgbaImage::new(1, 1)];
+    assert!(ktx2(&tiny, false).is_ok());
+    assert!(ktx2(&[tiny[0].clone(), tiny[1].clone(), tiny[1].clone()], false).is_err());
+    assert!(ktx2(&levels[..1], true).is_ok());
+}

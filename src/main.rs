@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => cli::eval::run(args),
         Command::Compile(args) => cli::compile::run(args),
         Command::Render(args) => cli::render::run(args),
+        Command::Bake(args) => cli::bake::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Fmt(args) => cli::fmt::run(args),
         Command::Lsp => match sdfc::lsp::run_stdio() {

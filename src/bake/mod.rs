@@ -10,7 +10,14 @@
 //!        ──layout──▶ flat atlas image ──export──▶ .glb / .ktx2 / charts.json
 //! ```
 
+pub mod charts;
 pub mod export;
+pub mod gpu;
+pub mod images;
+pub mod mesh;
+pub mod mips;
+pub mod pipeline;
+pub mod table;
 
 use serde::{Deserialize, Serialize};
 
@@ -96,10 +103,10 @@ impl FlatLayout {
         ]
     }
 
-    /// The flat layout for `charts` charts in a square atlas of `size` texels: the
-    /// largest power-of-two chart size whose level-0 grid (top two thirds) and the
-    /// smaller levels (bottom third, side by side) fit. `None` when even 2-texel charts
-    /// do not fit.
+    /// The flat layout for `charts` charts in an atlas at most `size` texels a side: the
+    /// largest power-of-two chart size whose level-0 grid (at most two thirds of the
+    /// height) and the smaller levels (below it, side by side) fit. The image is `size`
+    /// wide and only as tall as the charts need. `None` when even 2-texel charts do not fit.
     pub fn fit(charts: usize, size: u32) -> Option<FlatLayout> {
         let mut n = size;
         while n >= 2 {
@@ -115,9 +122,12 @@ impl FlatLayout {
                     x += columns * (n >> level);
                     level += 1;
                 }
+                // The image is as tall as the levels need (the paper's packed style
+                // does the same): level 0's rows, then half of that for the rest.
+                let height = rows * n + if origins.len() > 1 { rows * n / 2 } else { 0 };
                 return Some(FlatLayout {
                     width: size,
-                    height: size,
+                    height,
                     chart_size: n,
                     columns,
                     rows,
@@ -127,5 +137,15 @@ impl FlatLayout {
             n /= 2;
         }
         None
+    }
+}
+
+impl FlatLayout {
+    /// The texels that hold samples (every chart at every level) over the image's.
+    pub fn utilisation(&self, charts: usize) -> f64 {
+        let used: u64 = (0..self.levels())
+            .map(|l| (self.size_at(l) as u64).pow(2) * charts as u64)
+            .sum();
+        used as f64 / (self.width as u64 * self.height as u64) as f64
     }
 }

@@ -14,6 +14,7 @@ fn median(mut v: Vec<Duration>) -> Duration {
 pub fn run(args: BenchArgs) -> ExitCode {
     let scene = match &args.scene {
         Some(s) if args.lsp_latency => return super::latency::run(s, args.edits),
+        Some(s) if args.bake => return super::bake::bench(s, &args),
         Some(s) if !args.seed_sweep => s.clone(),
         _ => return super::sweep::run(&args),
     };

@@ -1,5 +1,6 @@
 //! The command line's definition and the commands.
 
+pub mod bake;
 pub mod bench;
 pub mod check;
 pub mod compile;
@@ -101,6 +102,17 @@ pub enum Command {
     /// Exit status: 0 on success, 1 when the scene has errors, 2 on usage or I/O
     /// problems, 3 on an internal compiler error, 4 when no GPU adapter can be used.
     Render(RenderArgs),
+    /// Bake a textured scene into a textured mesh with a seamless atlas (binary glTF).
+    ///
+    /// Meshes the shape's surface (dual contouring), makes one quadrilateral chart per
+    /// quad, samples the scene's material at every texel on the GPU (border texels are
+    /// computed once and shared), filters the boundary-symmetric mip levels of the
+    /// Seamless Texture Atlases paper, and writes a .glb with POSITION, NORMAL, TANGENT,
+    /// TEXCOORD_0 and a PBR material. Exit status: 0 on success, 1 when the scene has
+    /// errors, no material or no surface in the bounds, 2 on usage or I/O problems, 3 on
+    /// an internal compiler error, 4 when no GPU adapter can be used, 5 when the atlas
+    /// is over a limit.
+    Bake(BakeArgs),
     /// Measure frame times on the GPU and print ratios from one run: the shaded scene
     /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
     Bench(BenchArgs),
@@ -134,6 +146,13 @@ pub struct BenchArgs {
     /// (p50/p95 over --edits edits), instead of frame times.
     #[arg(long, requires = "scene")]
     pub lsp_latency: bool,
+    /// Bake the scene's atlas (2048², full mip chain, the default grid) and report the
+    /// time of each stage, for each walk form, instead of frame times.
+    #[arg(long, requires = "scene", conflicts_with = "lsp_latency")]
+    pub bake: bool,
+    /// The atlas side for --bake.
+    #[arg(long, default_value = "2048")]
+    pub atlas_size: u32,
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
     pub edits: u32,
@@ -185,6 +204,55 @@ pub struct RenderArgs {
     /// Print compile, pipeline, frame and readback times.
     #[arg(long)]
     pub timings: bool,
+}
+
+/// The atlas layouts `sdfc bake` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Layout {
+    /// Every chart at the same resolution, all levels in one image in a mip-map
+    /// pattern (the paper's §3.3).
+    Flat,
+}
+
+#[derive(clap::Args)]
+pub struct BakeArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The binary glTF to write (atomically).
+    #[arg(short, long, default_value = "out.glb")]
+    pub output: PathBuf,
+    /// Bake this named shape instead of the `render` item's target.
+    #[arg(long)]
+    pub shape: Option<String>,
+    /// The atlas width in texels, a power of two (its height is what the charts need).
+    #[arg(long, default_value = "2048")]
+    pub size: u32,
+    /// Mesh grid: cells along the longest side of the bounds (default 48).
+    #[arg(long, conflicts_with = "edge")]
+    pub grid: Option<usize>,
+    /// Mesh grid: the cells' edge length.
+    #[arg(long)]
+    pub edge: Option<f64>,
+    /// The atlas layout.
+    #[arg(long, value_enum, default_value = "flat")]
+    pub layout: Layout,
+    /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds).
+    #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true)]
+    pub bounds: Vec<[f64; 3]>,
+    /// Also write the colour atlas's full mip chain as an uncompressed KTX2 file (each
+    /// level the chart grid of that level, the paper's stacked style).
+    #[arg(long, value_name = "FILE")]
+    pub ktx2: Option<PathBuf>,
+    /// Also write the chart table as JSON: each chart's rectangle per level and its
+    /// neighbours along each side, with orientation.
+    #[arg(long, value_name = "FILE")]
+    pub charts: Option<PathBuf>,
+    /// The graphics API.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: sdfc::gpu::Backend,
+    /// How the geodesic walk is emitted.
+    #[arg(long, value_enum, default_value = "loop")]
+    pub walk: sdfc::codegen::WalkForm,
 }
 
 #[derive(clap::Args)]

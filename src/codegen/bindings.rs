@@ -56,7 +56,7 @@ pub const COMPUTE_GROUP: u32 = 1;
 
 /// The table for a module that samples `textures`.
 pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
-    let fragment = || vec!["fs_main"];
+    let fragment = || vec!["fs_main", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
         binding: 0,
@@ -100,14 +100,14 @@ pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
             Kind::StorageRead,
             "array<vec4<f32>>",
             Resource::Points,
-            vec!["cs_points", "cs_atlas"],
+            vec!["cs_points", "cs_atlas", "cs_bake"],
         ),
         (
             "results",
             Kind::StorageReadWrite,
             "array<vec4<f32>>",
             Resource::Results,
-            vec!["cs_points", "cs_grid", "cs_atlas"],
+            vec!["cs_points", "cs_grid", "cs_atlas", "cs_bake"],
         ),
     ];
     for (binding, (name, kind, ty, resource, used_by)) in compute.into_iter().enumerate() {

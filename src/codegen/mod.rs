@@ -152,6 +152,7 @@ pub const ENTRY_POINTS: &[(&str, &str)] = &[
     ("cs_points", "compute"),
     ("cs_grid", "compute"),
     ("cs_atlas", "compute"),
+    ("cs_bake", "compute"),
 ];
 
 /// Choices for [`generate`].

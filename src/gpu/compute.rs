@@ -166,16 +166,29 @@ fn run(
     points: &[DVec3],
     per_point: usize,
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    if points.is_empty() {
-        return Ok(Vec::new());
-    }
-    let d = &gpu.device;
     let data: Vec<[f32; 4]> = points
         .iter()
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
+    run_raw(gpu, wgsl, entry_name, &data, per_point)
+}
+
+/// The most points one dispatch takes (a dispatch has at most 65,535 workgroups of 64).
+pub const MAX_POINTS_PER_DISPATCH: usize = 1 << 20;
+
+fn run_raw(
+    gpu: &Gpu,
+    wgsl: &str,
+    entry_name: &str,
+    data: &[[f32; 4]],
+    per_point: usize,
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    if data.is_empty() {
+        return Ok(Vec::new());
+    }
+    let d = &gpu.device;
     let size = (data.len() * 16 * per_point) as u64;
-    let q = gpu.scoped(|| create_queries(d, wgsl, entry_name, &data, size))?;
+    let q = gpu.scoped(|| create_queries(d, wgsl, entry_name, data, size))?;
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("queries"),
@@ -188,7 +201,7 @@ fn run(
             pass.set_pipeline(&q.pipeline);
             pass.set_bind_group(0, &q.group0, &[]);
             pass.set_bind_group(1, &q.group1, &[]);
-            pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
+            pass.dispatch_workgroups((data.len() as u32).div_ceil(64), 1, 1);
         }
         enc.copy_buffer_to_buffer(&q.output, 0, &q.readback, 0, size);
         gpu.queue.submit([enc.finish()]);

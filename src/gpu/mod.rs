@@ -2,9 +2,9 @@
 //! queries. Every fallible wgpu call runs inside an error scope, so a device
 //! error becomes a [`GpuError`], never a panic.
 
-mod compute;
+pub mod compute;
 mod render;
-mod texture;
+pub mod texture;
 
 pub use compute::{eval_atlas, eval_points, AtlasValue};
 pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};

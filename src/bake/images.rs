@@ -1,0 +1,146 @@
+//! Stage 6: the flat atlas images (§3.3) and the exported mesh.
+
+use super::charts::{ChartTable, Samples};
+use super::mesh::QuadMesh;
+use super::mips::Texel;
+use super::pipeline::{bilinear, CHANNELS};
+use super::{FlatLayout, MeshData, Textures};
+use glam::DVec3;
+use image::{Rgba, RgbaImage};
+
+/// Linear → sRGB-encoded 8-bit.
+pub fn srgb8(x: f32) -> u8 {
+    let x = x.clamp(0.0, 1.0);
+    let s = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
+}
+
+/// Linear [0, 1] → 8-bit.
+pub fn unorm8(x: f32) -> u8 {
+    (x.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// The tangent frame the mesh carries at chart-local (u, v): the tangent along +u
+/// (orthogonal to the normal), the normal (bilinear in the corners' normals), and the
+/// bitangent sign w, chosen so that cross(N, T) · w points toward −v (glTF's normal
+/// maps have +Y up, and glTF's texture coordinates grow downward).
+pub fn frame(mesh: &QuadMesh, corners: [u32; 4], u: f64, v: f64) -> (DVec3, DVec3, f64) {
+    let p = corners.map(|i| mesh.vertices[i as usize]);
+    let nrm = corners.map(|i| mesh.normals[i as usize]);
+    let n = bilinear(nrm, u, v).normalize_or(DVec3::Y);
+    let du = (p[1] - p[0]) * (1.0 - v) + (p[2] - p[3]) * v;
+    let dv = (p[3] - p[0]) * (1.0 - u) + (p[2] - p[1]) * u;
+    let t = (du - n * n.dot(du))
+        .try_normalize()
+        .unwrap_or_else(|| n.any_orthonormal_vector());
+    let w = if n.cross(t).dot(-dv) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    (t, n, w)
+}
+
+/// Writes every level of every chart into the flat atlas: base colour (sRGB),
+/// metallic-roughness, tangent-space normals and emission (when any).
+pub fn flat_atlas(
+    mesh: &QuadMesh,
+    table: &ChartTable,
+    layout: &FlatLayout,
+    levels: &[Samples<Texel<CHANNELS>>],
+) -> Textures {
+    let (w, h) = (layout.width, layout.height);
+    let blank = || RgbaImage::from_pixel(w, h, Rgba([0, 0, 0, 255]));
+    let mut color = blank();
+    let mut mr = blank();
+    let mut normal = RgbaImage::from_pixel(w, h, Rgba([128, 128, 255, 255]));
+    let mut emission = blank();
+    let mut emits = false;
+    for (l, level) in levels.iter().enumerate().take(layout.levels()) {
+        let n = level.n;
+        for c in 0..table.len() {
+            let [x0, y0] = layout.chart_origin(c, l);
+            let grid = level.grid(table, c);
+            for j in 0..n {
+                for i in 0..n {
+                    let t = &grid[j * n + i];
+                    let (x, y) = (x0 + i as u32, y0 + j as u32);
+                    color.put_pixel(x, y, Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]));
+                    mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
+                    emits |= t[5] > 0.0 || t[6] > 0.0 || t[7] > 0.0;
+                    emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
+                    let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+                    let (tan, nrm, sign) = frame(mesh, table.corners[c], u, v);
+                    let bit = nrm.cross(tan) * sign;
+                    let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
+                    let ts = DVec3::new(o.dot(tan), o.dot(bit), o.dot(nrm));
+                    let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
+                    normal.put_pixel(x, y, Rgba([enc(ts.x), enc(ts.y), enc(ts.z), 255]));
+                }
+            }
+        }
+    }
+    Textures {
+        base_color: color,
+        metallic_roughness: mr,
+        normal,
+        emissive: emits.then_some(emission),
+    }
+}
+
+/// One chart's level-`l` grid as a stacked-style image (§3.2): the chart grid of that
+/// level alone, `columns · n × rows · n` texels, for the KTX2 mip chain.
+pub fn stacked_level(
+    table: &ChartTable,
+    layout: &FlatLayout,
+    level: &Samples<Texel<CHANNELS>>,
+    l: usize,
+) -> RgbaImage {
+    let n = level.n as u32;
+    let mut img = RgbaImage::from_pixel(layout.columns * n, layout.rows * n, Rgba([0, 0, 0, 255]));
+    for c in 0..table.len() {
+        let [cx, cy] = layout.cell(c);
+        let grid = level.grid(table, c);
+        for (k, t) in grid.iter().enumerate() {
+            let (i, j) = (k as u32 % n, k as u32 / n);
+            img.put_pixel(
+                cx * n + i,
+                cy * n + j,
+                Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]),
+            );
+        }
+    }
+    let _ = l;
+    img
+}
+
+/// The exported mesh: four vertices per chart (their texture coordinates differ
+/// between charts), two triangles split along the shorter diagonal.
+pub fn mesh_data(mesh: &QuadMesh, table: &ChartTable, layout: &FlatLayout) -> MeshData {
+    let mut out = MeshData::default();
+    let uv = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+    for (c, q) in table.corners.iter().enumerate() {
+        let base = out.positions.len() as u32;
+        for (k, &(u, v)) in uv.iter().enumerate() {
+            let p = mesh.vertices[q[k] as usize];
+            let (t, n, w) = frame(mesh, *q, u, v);
+            out.positions.push(p.as_vec3().to_array());
+            out.normals.push(n.as_vec3().to_array());
+            out.tangents
+                .push([t.x as f32, t.y as f32, t.z as f32, w as f32]);
+            out.texcoords.push(layout.texcoord(c, u, v));
+        }
+        let p = q.map(|i| mesh.vertices[i as usize]);
+        let tris = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+            [0, 1, 2, 0, 2, 3]
+        } else {
+            [0, 1, 3, 1, 2, 3]
+        };
+        out.indices.extend(tris.iter().map(|k| base + k));
+    }
+    out
+}

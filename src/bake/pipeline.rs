@@ -1,0 +1,364 @@
+//! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
+
+use super::charts::{ChartTable, Samples};
+use super::gpu::{BakePass, Shaded};
+use super::images;
+use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
+use super::mips::{self, Texel};
+use super::{FlatLayout, MeshData, Textures};
+use crate::codegen::Module;
+use crate::gpu::{Gpu, GpuError};
+use crate::ir::{Aabb, Op, Shape};
+use glam::DVec3;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// The channels filtered through the mip chain: colour (3), roughness, metallic,
+/// emission (3), object-space normal (3).
+pub const CHANNELS: usize = 11;
+
+/// How fine the mesh is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Resolution {
+    /// Cells along the longest side of the bounds.
+    Cells(usize),
+    /// The cell's edge length.
+    Edge(f64),
+}
+
+/// The default grid: cells along the longest side.
+pub const DEFAULT_GRID: usize = 48;
+/// The largest atlas side.
+pub const MAX_SIZE: u32 = 16384;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// The atlas side, a power of two.
+    pub size: u32,
+    pub resolution: Resolution,
+    /// Bounds for shapes without finite bounds (or to bake part of a shape).
+    pub bounds: Option<Aabb>,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            size: 2048,
+            resolution: Resolution::Cells(DEFAULT_GRID),
+            bounds: None,
+        }
+    }
+}
+
+/// Why a bake stopped.
+#[derive(Debug)]
+pub enum BakeError {
+    /// The shape has no material.
+    NoMaterial,
+    /// The shape has no finite bounds and no `--bounds` was given.
+    Unbounded,
+    /// No surface inside the bounds.
+    Empty,
+    /// A bad option (size, grid, bounds).
+    Option(String),
+    /// The charts do not fit, or the atlas is over the adapter's limits.
+    Resource(String),
+    Gpu(GpuError),
+}
+
+impl std::fmt::Display for BakeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BakeError::NoMaterial => f.write_str(
+                "the shape has no material to bake: paint it first, as in `render shape.paint(MATERIAL);`",
+            ),
+            BakeError::Unbounded => f.write_str(
+                "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds=-2,-2,-2 2,2,2",
+            ),
+            BakeError::Empty => f.write_str("the shape has no surface inside the bounds: nothing to bake"),
+            BakeError::Option(m) | BakeError::Resource(m) => f.write_str(m),
+            BakeError::Gpu(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl From<GpuError> for BakeError {
+    fn from(e: GpuError) -> BakeError {
+        BakeError::Gpu(e)
+    }
+}
+
+/// The stages' times and the quality figures.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Report {
+    pub grid: [usize; 3],
+    pub vertices: usize,
+    pub charts: usize,
+    pub chart_size: u32,
+    pub levels: usize,
+    /// Used texels (every chart at every level) over the atlas's texels.
+    pub utilisation: f64,
+    /// Coefficient of variation of the charts' texel density (texels per unit length),
+    /// over the charts that are not slivers.
+    pub density_spread: f64,
+    /// Charts with less than 1 % of the median chart's area.
+    pub slivers: usize,
+    /// The largest |f| at a level-0 sample point after projection, over the scale.
+    pub max_residual: f64,
+    pub samples: usize,
+    pub stages: Vec<(&'static str, Duration)>,
+}
+
+/// A finished bake.
+pub struct Baked {
+    pub quads: QuadMesh,
+    pub table: ChartTable,
+    pub layout: FlatLayout,
+    /// Every level's samples, level 0 first.
+    pub levels: Vec<Samples<Texel<CHANNELS>>>,
+    /// Level 0's projected sample points.
+    pub points: Samples<[f32; 3]>,
+    pub mesh: MeshData,
+    pub textures: Textures,
+    pub report: Report,
+}
+
+/// Whether any part of the shape is painted.
+pub fn has_material(shape: &Shape) -> bool {
+    shape.nodes.iter().any(|n| matches!(n.op, Op::Paint { .. }))
+}
+
+/// The bake's progress: a stage's name, then how far it is (done, total).
+pub trait Progress: Sync {
+    fn stage(&self, _name: &'static str, _total: usize) {}
+    fn advance(&self, _done: usize) {}
+    fn finish(&self) {}
+}
+
+/// No progress display.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// The level-0 sample points of a chart table over a quad mesh, each computed once:
+/// corners are the mesh vertices, side samples lie on the straight edge between its
+/// vertices, interior samples on the chart's bilinear patch. Each comes with the
+/// footprint of one texel (the spacing of the samples).
+pub fn sample_points(mesh: &QuadMesh, table: &ChartTable, n: usize) -> Samples<[f32; 4]> {
+    let v = &mesh.vertices;
+    let spacing = 1.0 / (n - 1) as f64;
+    let pack = |p: DVec3, footprint: f64| [p.x as f32, p.y as f32, p.z as f32, footprint as f32];
+    Samples::build(
+        table,
+        v.len(),
+        n,
+        |i| pack(v[i], mesh.cell * spacing),
+        |e, t| {
+            let edge = &table.edges[e];
+            let (a, b) = (v[edge.a as usize], v[edge.b as usize]);
+            pack(a.lerp(b, t), (b - a).length() * spacing)
+        },
+        |c, s, t| {
+            let q = table.corners[c].map(|i| v[i as usize]);
+            let p = bilinear(q, s, t);
+            let size = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) * 0.5;
+            let size = size.max(((q[3] - q[0]).length() + (q[2] - q[1]).length()) * 0.5);
+            pack(p, size * spacing)
+        },
+    )
+}
+
+/// The chart's bilinear patch: corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1), 3 at (0, 1).
+pub fn bilinear(q: [DVec3; 4], u: f64, v: f64) -> DVec3 {
+    q[0] * ((1.0 - u) * (1.0 - v))
+        + q[1] * (u * (1.0 - v))
+        + q[2] * (u * v)
+        + q[3] * ((1.0 - u) * v)
+}
+
+/// Runs the whole bake of `shape` with the compiled scene `module`.
+pub fn bake(
+    gpu: &Gpu,
+    module: &Module,
+    base_dir: &Path,
+    shape: &Shape,
+    options: &Options,
+    progress: &dyn Progress,
+) -> Result<Baked, BakeError> {
+    let mut report = Report::default();
+    let mut clock = Instant::now();
+    let mut lap = |report: &mut Report, name: &'static str| {
+        report.stages.push((name, clock.elapsed()));
+        clock = Instant::now();
+    };
+    if !has_material(shape) {
+        return Err(BakeError::NoMaterial);
+    }
+    if !options.size.is_power_of_two() || !(16..=MAX_SIZE).contains(&options.size) {
+        return Err(BakeError::Option(format!(
+            "--size {} is not a power of two between 16 and {MAX_SIZE}",
+            options.size
+        )));
+    }
+    let side = gpu.device.limits().max_texture_dimension_2d;
+    if options.size > side {
+        return Err(BakeError::Resource(format!(
+            "--size {} is over this GPU's limit of {side} texels a side",
+            options.size
+        )));
+    }
+    let own = shape.root_node().bounds;
+    let bounds = match options.bounds {
+        Some(b) => b.intersect(own),
+        None if own.is_finite() => own,
+        None => return Err(BakeError::Unbounded),
+    };
+    if !bounds.is_finite() || (bounds.max - bounds.min).min_element() < 0.0 {
+        return Err(BakeError::Empty);
+    }
+    let longest = (bounds.max - bounds.min).max_element();
+    let cells = match options.resolution {
+        Resolution::Cells(n) => n,
+        Resolution::Edge(e) if e > 0.0 && e.is_finite() => (longest / e).ceil() as usize,
+        Resolution::Edge(e) => {
+            return Err(BakeError::Option(format!(
+                "--edge {e} is not a positive length"
+            )))
+        }
+    };
+    if !(2..=MAX_GRID).contains(&cells) {
+        return Err(BakeError::Option(format!(
+            "the grid would have {cells} cells along its longest side; the range is 2 to {MAX_GRID} (change --grid or --edge)"
+        )));
+    }
+    let scale = crate::uv::atlas::scale(shape);
+    let grid = Grid::over(bounds, cells);
+    report.grid = grid.dims;
+
+    // 1. Mesh.
+    progress.stage("mesh", 1);
+    let quads = dual_contour(shape, &grid, 1e-5 * scale);
+    progress.finish();
+    if quads.quads.is_empty() {
+        return Err(BakeError::Empty);
+    }
+    report.vertices = quads.vertices.len();
+    lap(&mut report, "mesh");
+
+    // 2. Charts and layout.
+    let table = ChartTable::new(&quads);
+    let layout = FlatLayout::fit(table.len(), options.size).ok_or_else(|| {
+        let (charts, size) = (table.len(), options.size);
+        BakeError::Resource(format!(
+            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels each: use a coarser --grid or a larger --size"
+        ))
+    })?;
+    report.charts = table.len();
+    report.chart_size = layout.chart_size;
+    report.levels = layout.levels();
+    lap(&mut report, "charts");
+
+    // 3. Texel points, each shared one once.
+    let n = layout.chart_size as usize;
+    let points = sample_points(&quads, &table, n);
+    let flat: Vec<[f32; 4]> = points
+        .corners
+        .iter()
+        .chain(&points.edges)
+        .chain(&points.interiors)
+        .copied()
+        .collect();
+    report.samples = flat.len();
+    lap(&mut report, "texel points");
+
+    // 4. Attributes on the GPU.
+    progress.stage("shade", flat.len());
+    let pass = BakePass::new(gpu, module, base_dir)?;
+    let shaded = pass.run(gpu, &flat, &|k| progress.advance(k))?;
+    progress.finish();
+    let texel = |s: &Shaded| -> Texel<CHANNELS> {
+        [
+            s.color[0],
+            s.color[1],
+            s.color[2],
+            s.roughness,
+            s.metallic,
+            s.emission[0],
+            s.emission[1],
+            s.emission[2],
+            s.normal[0],
+            s.normal[1],
+            s.normal[2],
+        ]
+    };
+    let (nc, ne) = (points.corners.len(), points.edges.len());
+    let level0 = Samples {
+        n,
+        corners: shaded[..nc].iter().map(texel).collect(),
+        edges: shaded[nc..nc + ne].iter().map(texel).collect(),
+        interiors: shaded[nc + ne..].iter().map(texel).collect(),
+    };
+    let position = |s: &Shaded| s.position;
+    let projected = Samples {
+        n,
+        corners: shaded[..nc].iter().map(position).collect(),
+        edges: shaded[nc..nc + ne].iter().map(position).collect(),
+        interiors: shaded[nc + ne..].iter().map(position).collect(),
+    };
+    report.max_residual = shaded.iter().map(|s| s.residual as f64).fold(0.0, f64::max) / scale;
+    lap(&mut report, "shade (GPU)");
+
+    // 5. Mips.
+    progress.stage("mips", 1);
+    let levels = mips::chain(&table, level0);
+    progress.finish();
+    lap(&mut report, "mips");
+
+    // 6. Images and the mesh.
+    progress.stage("images", 1);
+    let textures = images::flat_atlas(&quads, &table, &layout, &levels);
+    let mesh = images::mesh_data(&quads, &table, &layout);
+    progress.finish();
+    lap(&mut report, "images");
+
+    report.utilisation = layout.utilisation(table.len());
+    (report.density_spread, report.slivers) = density_spread(&quads, &table, n);
+    Ok(Baked {
+        quads,
+        table,
+        layout,
+        levels,
+        points: projected,
+        mesh,
+        textures,
+        report,
+    })
+}
+
+/// The charts' texel density, (n − 1) texels over the square root of the chart's area:
+/// its coefficient of variation over the charts whose area is at least 1 % of the
+/// median, and how many are below that (slivers, where dual contouring put two
+/// vertices at one sharp feature).
+fn density_spread(mesh: &QuadMesh, table: &ChartTable, n: usize) -> (f64, usize) {
+    let areas: Vec<f64> = table
+        .corners
+        .iter()
+        .map(|q| {
+            let p = q.map(|i| mesh.vertices[i as usize]);
+            0.5 * ((p[1] - p[0]).cross(p[2] - p[0]).length()
+                + (p[2] - p[0]).cross(p[3] - p[0]).length())
+        })
+        .collect();
+    let mut sorted = areas.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    let densities: Vec<f64> = areas
+        .iter()
+        .filter(|&&a| a >= 0.01 * median && a > 0.0)
+        .map(|a| (n - 1) as f64 / a.sqrt())
+        .collect();
+    let slivers = areas.len() - densities.len();
+    let count = densities.len().max(1) as f64;
+    let mean = densities.iter().sum::<f64>() / count;
+    let var = densities.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / count;
+    (var.sqrt() / mean.max(1e-12), slivers)
+}

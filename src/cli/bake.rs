@@ -1,0 +1,310 @@
+//! `sdfc bake`: a textured scene → a textured mesh with a seamless atlas (.glb).
+
+use super::{compile, exit, BakeArgs};
+use indicatif::{ProgressBar, ProgressStyle};
+use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Resolution};
+use sdfc::bake::{export, table::ChartsFile};
+use sdfc::fsutil::write_output;
+use sdfc::gpu::Gpu;
+use sdfc::ir::Aabb;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Mutex;
+
+/// Parses `x,y,z`.
+pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let bad = || format!("expected x,y,z (three numbers), found {s:?}");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let mut out = [0.0; 3];
+    for (o, p) in out.iter_mut().zip(parts) {
+        *o = p.trim().parse::<f64>().map_err(|_| bad())?;
+        if !o.is_finite() {
+            return Err(bad());
+        }
+    }
+    Ok(out)
+}
+
+/// Progress bars on standard error (hidden when it is not a terminal).
+struct Bars {
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Progress for Bars {
+    fn stage(&self, name: &'static str, total: usize) {
+        let bar = ProgressBar::new(total as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>8} [{bar:30}] {pos}/{len} ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(name);
+        *self.bar.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar);
+    }
+    fn advance(&self, done: usize) {
+        if let Some(b) = &*self.bar.lock().unwrap_or_else(|e| e.into_inner()) {
+            b.inc(done as u64);
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn status(e: &BakeError) -> u8 {
+    match e {
+        BakeError::NoMaterial | BakeError::Empty => exit::SCENE,
+        BakeError::Unbounded | BakeError::Option(_) => exit::USAGE,
+        BakeError::Resource(_) => exit::RESOURCE,
+        BakeError::Gpu(g) => exit::gpu(g),
+    }
+}
+
+/// The options of `args`, checked before any work.
+pub fn options(args: &BakeArgs) -> Result<Options, String> {
+    let resolution = match (args.grid, args.edge) {
+        (Some(n), None) => Resolution::Cells(n),
+        (None, Some(e)) => Resolution::Edge(e),
+        (None, None) => Resolution::Cells(pipeline::DEFAULT_GRID),
+        (Some(_), Some(_)) => return Err("give --grid or --edge, not both".into()),
+    };
+    let bounds = match args.bounds.as_slice() {
+        [] => None,
+        [lo, hi] => {
+            let (min, max) = (glam::DVec3::from(*lo), glam::DVec3::from(*hi));
+            if !min.cmplt(max).all() {
+                return Err(format!(
+                    "--bounds: the minimum {lo:?} must be below the maximum {hi:?} on every axis"
+                ));
+            }
+            Some(Aabb { min, max })
+        }
+        _ => return Err("--bounds takes two points: MIN MAX, each x,y,z".into()),
+    };
+    Ok(Options {
+        size: args.size,
+        resolution,
+        bounds,
+    })
+}
+
+/// Writes every output, or none: all are encoded first, then each is written atomically.
+fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
+    for (path, bytes) in outputs {
+        write_output(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+    let mut out = vec![(
+        args.output.clone(),
+        export::glb(&baked.mesh, &baked.textures, &baked.layout, name)?,
+    )];
+    if let Some(path) = &args.ktx2 {
+        let levels: Vec<image::RgbaImage> = baked
+            .levels
+            .iter()
+            .enumerate()
+            .map(|(l, s)| sdfc::bake::images::stacked_level(&baked.table, &baked.layout, s, l))
+            .collect();
+        out.push((path.clone(), export::ktx2(&levels, true)?));
+    }
+    if let Some(path) = &args.charts {
+        let file = ChartsFile::new(&baked.table, &baked.layout);
+        let json = serde_json::to_vec_pretty(&file).map_err(|e| e.to_string())?;
+        out.push((path.clone(), json));
+    }
+    Ok(out)
+}
+
+pub fn run(args: BakeArgs) -> ExitCode {
+    let options = match options(&args) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    };
+    // An output folder that is missing fails now, not after the bake.
+    for path in std::iter::once(&args.output)
+        .chain(&args.ktx2)
+        .chain(&args.charts)
+    {
+        let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+        if parent.is_some_and(|p| !p.is_dir()) {
+            eprintln!(
+                "error: cannot write {}: its folder does not exist",
+                path.display()
+            );
+            return ExitCode::from(exit::USAGE);
+        }
+    }
+    let codegen_options = sdfc::codegen::Options {
+        shape: args.shape.clone(),
+        walk: args.walk,
+        seed_grid: sdfc::codegen::SeedGridChoice::Auto,
+        atlas: None,
+        plain: false,
+    };
+    let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let Some(scene) = &analysis.scene else {
+        return ExitCode::from(exit::SCENE);
+    };
+    let shape = match sdfc::driver::pick_shape(scene, args.shape.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    };
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::gpu(&e));
+        }
+    };
+    let bars = Bars {
+        bar: Mutex::new(None),
+    };
+    let base = super::base_dir(&args.scene);
+    let baked = match pipeline::bake(&gpu, &compiled.module, &base, shape, &options, &bars) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(status(&e));
+        }
+    };
+    let name = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let outputs = match encode(&args, &baked, &name) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: cannot encode the bake: {e}");
+            return ExitCode::from(exit::RESOURCE);
+        }
+    };
+    if let Err(e) = write_all(&outputs) {
+        eprintln!("error: {e}");
+        return ExitCode::from(exit::USAGE);
+    }
+    print_report(&baked, &gpu);
+    for (path, bytes) in &outputs {
+        eprintln!("wrote {} ({} bytes)", path.display(), bytes.len());
+    }
+    ExitCode::SUCCESS
+}
+
+/// The quality report: charts, utilisation, texel-density spread, time per stage.
+pub fn print_report(baked: &Baked, gpu: &Gpu) {
+    let r = &baked.report;
+    let l = &baked.layout;
+    eprintln!("adapter:        {}", gpu.describe());
+    eprintln!(
+        "mesh:           {} vertices, {} quads (grid {}×{}×{})",
+        r.vertices, r.charts, r.grid[0], r.grid[1], r.grid[2]
+    );
+    eprintln!(
+        "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²)",
+        l.width, l.height, r.charts, r.chart_size, r.levels
+    );
+    eprintln!(
+        "utilisation:    {:.1} % of the atlas's texels",
+        r.utilisation * 100.0
+    );
+    eprintln!(
+        "density spread: {:.3} (coefficient of variation of texels per unit length; {} sliver charts left out)",
+        r.density_spread, r.slivers
+    );
+    eprintln!(
+        "projection:     largest |f| at a texel point {:.2e} of the scale ({} samples)",
+        r.max_residual, r.samples
+    );
+    let total: f64 = r.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
+    for (name, d) in &r.stages {
+        eprintln!("  {name:<14} {:>8.3} s", d.as_secs_f64());
+    }
+    eprintln!("  {:<14} {total:>8.3} s", "total");
+}
+
+/// `sdfc bench --bake`: the time of each stage of one bake per walk form, measured in
+/// one run on one adapter.
+pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
+    let options = Options {
+        size: args.atlas_size,
+        ..Options::default()
+    };
+    let base = super::base_dir(scene);
+    let (source, analysis, _) = match compile::build(scene, &sdfc::codegen::Options::default()) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let Some(ir) = &analysis.scene else {
+        return ExitCode::from(exit::SCENE);
+    };
+    let shape = match sdfc::driver::pick_shape(ir, args.shape.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    };
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::gpu(&e));
+        }
+    };
+    let name = scene.display().to_string();
+    let mut totals = Vec::new();
+    for walk in [
+        sdfc::codegen::WalkForm::Loop,
+        sdfc::codegen::WalkForm::Unrolled,
+    ] {
+        let codegen = sdfc::codegen::Options {
+            shape: args.shape.clone(),
+            walk,
+            ..Default::default()
+        };
+        let module = match sdfc::driver::compile(&analysis, &codegen) {
+            Ok(c) => c.module,
+            Err(e) => return compile::report(&name, &source, e),
+        };
+        let baked = match pipeline::bake(&gpu, &module, &base, shape, &options, &pipeline::Quiet) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(status(&e));
+            }
+        };
+        println!("walk: {walk:?}");
+        print_report(&baked, &gpu);
+        let total: f64 = baked
+            .report
+            .stages
+            .iter()
+            .map(|(_, d)| d.as_secs_f64())
+            .sum();
+        totals.push(total);
+    }
+    println!(
+        "bake time, loop walk / unrolled walk: {:.3} ({:.2} s / {:.2} s)",
+        totals[0] / totals[1],
+        totals[0],
+        totals[1]
+    );
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,348 @@
+//! The bake (`src/bake`): border identity at every level, seams, the GPU against the
+//! CPU reference, and bad input. GPU tests skip loudly without an adapter unless
+//! SDFC_REQUIRE_GPU=1. Bakes are small (256² atlases, coarse grids): lavapipe is slow.
+
+mod common;
+
+use glam::DVec3;
+use sdfc::bake::charts::side_texel;
+use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Quiet, Resolution};
+use sdfc::bake::table::ChartsFile;
+use sdfc::gpu::gpu_for_tests;
+use sdfc::gpu::Gpu;
+use sdfc::ir::{eval, Aabb};
+use std::path::Path;
+
+fn bake_source(
+    gpu: &Gpu,
+    source: &str,
+    base: &Path,
+    options: &Options,
+) -> Result<Baked, BakeError> {
+    let analysis = sdfc::driver::check(source, Some(base));
+    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
+    let compiled = sdfc::driver::compile(
+        &analysis,
+        &sdfc::codegen::Options {
+            walk: sdfc::codegen::WalkForm::Loop,
+            ..Default::default()
+        },
+    )
+    .expect("compiles");
+    let scene = analysis.scene.as_ref().expect("scene");
+    let shape = sdfc::driver::pick_shape(scene, None).expect("shape");
+    pipeline::bake(gpu, &compiled.module, base, shape, options, &Quiet)
+}
+
+fn small(grid: usize) -> Options {
+    Options {
+        size: 256,
+        resolution: Resolution::Cells(grid),
+        bounds: None,
+    }
+}
+
+/// A smooth procedural material: colour is a smooth function of position.
+const SMOOTH: &str = "
+let s = sphere(1) | box([0.6, 0.6, 0.6]).translate([0.8, 0, 0]);
+material m {
+    color = [0.5 + 0.4 * sin(position.x * 2.0), 0.5 + 0.4 * cos(position.y * 1.5), 0.5 + 0.3 * sin(position.z * 2.5)];
+    roughness = 0.3 + 0.2 * position.y;
+    metallic = 0.2;
+}
+render s.paint(m);
+";
+
+/// Every texel two charts share, at every level, in an 8-bit image: equal, exactly.
+/// Returns how many side texels and corner texels were compared.
+fn assert_borders_identical(
+    img: &image::RgbaImage,
+    file: &ChartsFile,
+    what: &str,
+) -> (usize, usize) {
+    let mut sides = 0;
+    let mut corners = 0;
+    let texel = |c: usize, l: usize, (i, j): (usize, usize)| {
+        let r = file.charts[c].rects[l];
+        *img.get_pixel(r[0] + i as u32, r[1] + j as u32)
+    };
+    for (c, chart) in file.charts.iter().enumerate() {
+        for l in 0..file.layout.level_origins.len() {
+            let n = file.charts[c].rects[l][2] as usize;
+            for s in 0..4 {
+                for nb in &chart.neighbours[s] {
+                    for k in 0..n {
+                        let kk = if nb.reversed { n - 1 - k } else { k };
+                        let a = texel(c, l, side_texel(n, s, k, 0));
+                        let b = texel(nb.chart as usize, l, side_texel(n, nb.side as usize, kk, 0));
+                        assert_eq!(a, b, "{what}: level {l}, chart {c} side {s} texel {k} against chart {} side {}", nb.chart, nb.side);
+                        sides += 1;
+                    }
+                }
+            }
+        }
+    }
+    // Corners: every chart around a mesh vertex has the same corner texel.
+    let mut first: std::collections::HashMap<(u32, usize), image::Rgba<u8>> = Default::default();
+    for (c, chart) in file.charts.iter().enumerate() {
+        for l in 0..file.layout.level_origins.len() {
+            let n = chart.rects[l][2] as usize;
+            for q in 0..4 {
+                let t = texel(c, l, side_texel(n, q, 0, 0));
+                let seen = *first.entry((chart.corners[q], l)).or_insert(t);
+                assert_eq!(seen, t, "{what}: level {l}, corner {q} of chart {c}");
+                corners += 1;
+            }
+        }
+    }
+    (sides, corners)
+}
+
+#[test]
+fn borders_are_identical_at_every_level_and_seams_are_no_steeper_than_the_inside() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let options = Options {
+        size: 512,
+        ..small(10)
+    };
+    let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
+    let file = ChartsFile::new(&baked.table, &baked.layout);
+    assert!(file.layout.level_origins.len() >= 2, "{:?}", file.layout);
+    let (sides, corners) =
+        assert_borders_identical(&baked.textures.base_color, &file, "base colour");
+    assert_borders_identical(
+        &baked.textures.metallic_roughness,
+        &file,
+        "metallic-roughness",
+    );
+    assert!(
+        sides > 1000 && corners > 100,
+        "{sides} side texels, {corners} corners compared"
+    );
+    // Every chart has a neighbour on each side: the sphere-and-box mesh is closed.
+    assert!(file
+        .charts
+        .iter()
+        .all(|c| c.neighbours.iter().all(|n| n.len() == 1)));
+
+    // The float samples too, bitwise (before quantization).
+    for level in &baked.levels {
+        let n = level.n;
+        for (c, chart) in file.charts.iter().enumerate() {
+            let g = level.grid(&baked.table, c);
+            for s in 0..4 {
+                for nb in &chart.neighbours[s] {
+                    let h = level.grid(&baked.table, nb.chart as usize);
+                    for k in 0..n {
+                        let kk = if nb.reversed { n - 1 - k } else { k };
+                        let (i, j) = side_texel(n, s, k, 0);
+                        let (i2, j2) = side_texel(n, nb.side as usize, kk, 0);
+                        let (a, b) = (g[j * n + i], h[j2 * n + i2]);
+                        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+                    }
+                }
+            }
+        }
+    }
+
+    // Seams: per level, the largest colour step across a border — between the first
+    // inner texels on either side, two texel spacings apart, so halved — is no larger
+    // than the largest step between neighbouring texels inside the charts.
+    for (l, level) in baked.levels.iter().enumerate() {
+        let n = level.n;
+        if n < 3 {
+            continue;
+        }
+        let step = |a: &[f32; 11], b: &[f32; 11]| {
+            (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0f32, f32::max)
+        };
+        let (mut inside, mut across) = (0.0f32, 0.0f32);
+        for (c, chart) in file.charts.iter().enumerate() {
+            let g = level.grid(&baked.table, c);
+            for j in 0..n {
+                for i in 0..n {
+                    if i + 1 < n {
+                        inside = inside.max(step(&g[j * n + i], &g[j * n + i + 1]));
+                    }
+                    if j + 1 < n {
+                        inside = inside.max(step(&g[j * n + i], &g[(j + 1) * n + i]));
+                    }
+                }
+            }
+            for (s, nbs) in chart.neighbours.iter().enumerate() {
+                let nb = &nbs[0];
+                let h = level.grid(&baked.table, nb.chart as usize);
+                for k in 0..n {
+                    let kk = if nb.reversed { n - 1 - k } else { k };
+                    let (i, j) = side_texel(n, s, k, 1);
+                    let (i2, j2) = side_texel(n, nb.side as usize, kk, 1);
+                    across = across.max(step(&g[j * n + i], &h[j2 * n + i2]) / 2.0);
+                }
+            }
+        }
+        assert!(
+            across <= inside,
+            "level {l}: step across borders {across} against {inside} inside"
+        );
+        eprintln!("level {l} ({n}²): largest step inside {inside:.4}, across borders {across:.4}");
+    }
+}
+
+#[test]
+fn gpu_texel_points_and_colours_match_the_cpu_reference() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let baked = bake_source(&gpu, SMOOTH, dir.path(), &small(8)).expect("bakes");
+    let analysis = sdfc::driver::check(SMOOTH, None);
+    let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
+    let scale = sdfc::uv::atlas::scale(shape);
+    let p = &baked.points;
+    let all: Vec<&[f32; 3]> = p
+        .corners
+        .iter()
+        .chain(&p.edges)
+        .chain(&p.interiors)
+        .collect();
+    let mut worst = 0.0f64;
+    for x in all.iter().step_by(7) {
+        let x = DVec3::new(x[0] as f64, x[1] as f64, x[2] as f64);
+        // On the surface within 1e-4 of the scale, by the f64 distance …
+        worst = worst.max(eval::distance(shape, x).abs() / scale);
+        // … and near the f64 projection of the same point.
+        let y = eval::project(shape, x, 1e-12).expect("projects");
+        assert!((y - x).length() < 1e-4 * scale);
+    }
+    assert!(
+        worst < 1e-4,
+        "largest |f| at a GPU texel point: {worst:e} of the scale"
+    );
+    // Colours: the material is position-only, so the CPU evaluates it exactly.
+    let level0 = &baked.levels[0];
+    let texels: Vec<_> = level0
+        .corners
+        .iter()
+        .chain(&level0.edges)
+        .chain(&level0.interiors)
+        .collect();
+    let mut worst_colour = 0.0f64;
+    for (t, x) in texels.iter().zip(&all).step_by(5) {
+        let x = DVec3::new(x[0] as f64, x[1] as f64, x[2] as f64);
+        let want = [
+            0.5 + 0.4 * (x.x * 2.0).sin(),
+            0.5 + 0.4 * (x.y * 1.5).cos(),
+            0.5 + 0.3 * (x.z * 2.5).sin(),
+            0.3 + 0.2 * x.y,
+            0.2,
+        ];
+        for (k, w) in want.iter().enumerate() {
+            worst_colour = worst_colour.max((t[k] as f64 - w).abs());
+        }
+    }
+    assert!(
+        worst_colour < 1.0 / 255.0,
+        "colour difference {worst_colour}"
+    );
+}
+
+#[test]
+fn bad_input_gets_a_clear_error() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let plain = "render sphere(1);";
+    assert!(matches!(
+        bake_source(&gpu, plain, dir.path(), &small(8)),
+        Err(BakeError::NoMaterial)
+    ));
+    let plane = "material m { color = [1, 0, 0]; }\nrender plane([0, 1, 0], 0).paint(m);";
+    assert!(matches!(
+        bake_source(&gpu, plane, dir.path(), &small(8)),
+        Err(BakeError::Unbounded)
+    ));
+    // With bounds, the plane bakes: an open mesh, charts on its rim have no neighbour.
+    let bounded = Options {
+        bounds: Some(Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        }),
+        ..small(6)
+    };
+    let baked = bake_source(&gpu, plane, dir.path(), &bounded).expect("a bounded plane bakes");
+    assert!(baked.table.len() >= 16);
+    // Bounds with no surface in them.
+    let away = Options {
+        bounds: Some(Aabb {
+            min: DVec3::new(-1.0, 0.5, -1.0),
+            max: DVec3::new(1.0, 1.0, 1.0),
+        }),
+        ..small(6)
+    };
+    assert!(matches!(
+        bake_source(&gpu, plane, dir.path(), &away),
+        Err(BakeError::Empty)
+    ));
+    let sphere = "material m { color = [1, 0, 0]; }\nrender sphere(1).paint(m);";
+    for size in [100, 0, 8, 1 << 20] {
+        let o = Options { size, ..small(6) };
+        let e = bake_source(&gpu, sphere, dir.path(), &o).err();
+        assert!(
+            matches!(e, Some(BakeError::Option(_))),
+            "size {size}: {e:?}"
+        );
+    }
+    let too_fine = Options {
+        resolution: Resolution::Cells(100_000),
+        ..small(6)
+    };
+    assert!(matches!(
+        bake_source(&gpu, sphere, dir.path(), &too_fine),
+        Err(BakeError::Option(_))
+    ));
+}
+
+#[test]
+fn flat_layouts_fit_without_overlap() {
+    use sdfc::bake::FlatLayout;
+    for size in [16u32, 64, 256, 2048] {
+        for charts in [1usize, 2, 3, 7, 40, 100, 1000, 5000] {
+            let Some(l) = FlatLayout::fit(charts, size) else {
+                // Only when even 2² charts cannot fit.
+                assert!(
+                    charts * 4 > (size * size) as usize * 2 / 3,
+                    "{charts} in {size}"
+                );
+                continue;
+            };
+            assert!(l.chart_size.is_power_of_two() && l.chart_size >= 2);
+            assert!(l.width <= size && l.height <= size, "{l:?}");
+            assert_eq!(l.size_at(l.levels() - 1), 2, "down to 2² texels: {l:?}");
+            let mut used = vec![false; (l.width * l.height) as usize];
+            for c in 0..charts {
+                for lv in 0..l.levels() {
+                    let [x, y] = l.chart_origin(c, lv);
+                    let n = l.size_at(lv);
+                    for j in y..y + n {
+                        for i in x..x + n {
+                            assert!(i < l.width && j < l.height, "{l:?}: chart {c} level {lv}");
+                            let k = (j * l.width + i) as usize;
+                            assert!(!used[k], "{l:?}: chart {c} level {lv} overlaps");
+                            used[k] = true;
+                        }
+                    }
+                }
+            }
+            // A larger chart size would not fit (the largest is chosen).
+            let bigger = l.chart_size * 2;
+            if bigger <= size {
+                let rows = (charts as u32).div_ceil(size / bigger);
+                assert!(rows * bigger > 2 * size / 3, "{l:?}: {bigger} would fit");
+            }
+            // Texture coordinates of the chart corners land on texel centres.
+            let tc = l.texcoord(charts - 1, 1.0, 1.0);
+            let [x, y] = l.chart_origin(charts - 1, 0);
+            let n = l.chart_size as f32;
+            assert!((tc[0] * l.width as f32 - (x as f32 + n - 0.5)).abs() < 1e-3);
+            assert!((tc[1] * l.height as f32 - (y as f32 + n - 0.5)).abs() < 1e-3);
+        }
+    }
+}

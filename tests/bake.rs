@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::assert_borders_identical;
 use glam::DVec3;
 use sdfc::bake::charts::side_texel;
 use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Quiet, Resolution};
@@ -52,51 +53,6 @@ material m {
 }
 render s.paint(m);
 ";
-
-/// Every texel two charts share, at every level, in an 8-bit image: equal, exactly.
-/// Returns how many side texels and corner texels were compared.
-fn assert_borders_identical(
-    img: &image::RgbaImage,
-    file: &ChartsFile,
-    what: &str,
-) -> (usize, usize) {
-    let mut sides = 0;
-    let mut corners = 0;
-    let texel = |c: usize, l: usize, (i, j): (usize, usize)| {
-        let r = file.charts[c].rects[l];
-        *img.get_pixel(r[0] + i as u32, r[1] + j as u32)
-    };
-    for (c, chart) in file.charts.iter().enumerate() {
-        for l in 0..file.layout.level_origins.len() {
-            let n = file.charts[c].rects[l][2] as usize;
-            for s in 0..4 {
-                for nb in &chart.neighbours[s] {
-                    for k in 0..n {
-                        let kk = if nb.reversed { n - 1 - k } else { k };
-                        let a = texel(c, l, side_texel(n, s, k, 0));
-                        let b = texel(nb.chart as usize, l, side_texel(n, nb.side as usize, kk, 0));
-                        assert_eq!(a, b, "{what}: level {l}, chart {c} side {s} texel {k} against chart {} side {}", nb.chart, nb.side);
-                        sides += 1;
-                    }
-                }
-            }
-        }
-    }
-    // Corners: every chart around a mesh vertex has the same corner texel.
-    let mut first: std::collections::HashMap<(u32, usize), image::Rgba<u8>> = Default::default();
-    for (c, chart) in file.charts.iter().enumerate() {
-        for l in 0..file.layout.level_origins.len() {
-            let n = chart.rects[l][2] as usize;
-            for q in 0..4 {
-                let t = texel(c, l, side_texel(n, q, 0, 0));
-                let seen = *first.entry((chart.corners[q], l)).or_insert(t);
-                assert_eq!(seen, t, "{what}: level {l}, corner {q} of chart {c}");
-                corners += 1;
-            }
-        }
-    }
-    (sides, corners)
-}
 
 #[test]
 fn borders_are_identical_at_every_level_and_seams_are_no_steeper_than_the_inside() {
@@ -279,7 +235,7 @@ fn bad_input_gets_a_clear_error() {
     };
     assert!(matches!(
         bake_source(&gpu, plane, dir.path(), &away),
-        Err(BakeError::Empty)
+        Err(BakeError::Empty(_))
     ));
     let sphere = "material m { color = [1, 0, 0]; }\nrender sphere(1).paint(m);";
     for size in [100, 0, 8, 1 << 20] {

@@ -57,8 +57,9 @@ pub enum BakeError {
     NoMaterial,
     /// The shape has no finite bounds and no `--bounds` was given.
     Unbounded,
-    /// No surface inside the bounds.
-    Empty,
+    /// No surface inside the bounds, as sampled on a grid of this cell size (None: the
+    /// bounds themselves are empty).
+    Empty(Option<f64>),
     /// A bad option (size, grid, bounds).
     Option(String),
     /// The charts do not fit, or the atlas is over the adapter's limits.
@@ -75,7 +76,11 @@ impl std::fmt::Display for BakeError {
             BakeError::Unbounded => f.write_str(
                 "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds=-2,-2,-2 2,2,2",
             ),
-            BakeError::Empty => f.write_str("the shape has no surface inside the bounds: nothing to bake"),
+            BakeError::Empty(None) => f.write_str("the bounds are empty: nothing to bake"),
+            BakeError::Empty(Some(cell)) => write!(
+                f,
+                "found no surface inside the bounds on a grid of {cell:.3}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge finds it)"
+            ),
             BakeError::Option(m) | BakeError::Resource(m) => f.write_str(m),
             BakeError::Gpu(e) => write!(f, "{e}"),
         }
@@ -213,7 +218,7 @@ pub fn bake(
         None => return Err(BakeError::Unbounded),
     };
     if !bounds.is_finite() || (bounds.max - bounds.min).min_element() < 0.0 {
-        return Err(BakeError::Empty);
+        return Err(BakeError::Empty(None));
     }
     let longest = (bounds.max - bounds.min).max_element();
     let cells = match options.resolution {
@@ -239,7 +244,7 @@ pub fn bake(
     let quads = dual_contour(shape, &grid, 1e-5 * scale);
     progress.finish();
     if quads.quads.is_empty() {
-        return Err(BakeError::Empty);
+        return Err(BakeError::Empty(Some(grid.cell)));
     }
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");

@@ -58,7 +58,7 @@ impl Progress for Bars {
 
 fn status(e: &BakeError) -> u8 {
     match e {
-        BakeError::NoMaterial | BakeError::Empty => exit::SCENE,
+        BakeError::NoMaterial | BakeError::Empty(_) => exit::SCENE,
         BakeError::Unbounded | BakeError::Option(_) => exit::USAGE,
         BakeError::Resource(_) => exit::RESOURCE,
         BakeError::Gpu(g) => exit::gpu(g),

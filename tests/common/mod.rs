@@ -112,3 +112,52 @@ pub fn gltf_validate(path: &std::path::Path) -> Option<GltfReport> {
         json,
     })
 }
+
+/// Every texel two charts share, at every level, in an 8-bit image: equal, exactly.
+/// Returns how many side texels and corner texels were compared.
+pub fn assert_borders_identical(
+    img: &image::RgbaImage,
+    file: &sdfc::bake::table::ChartsFile,
+    what: &str,
+) -> (usize, usize) {
+    let mut sides = 0;
+    let mut corners = 0;
+    let texel = |c: usize, l: usize, (i, j): (usize, usize)| {
+        let r = file.charts[c].rects[l];
+        *img.get_pixel(r[0] + i as u32, r[1] + j as u32)
+    };
+    for (c, chart) in file.charts.iter().enumerate() {
+        for l in 0..file.layout.level_origins.len() {
+            let n = file.charts[c].rects[l][2] as usize;
+            for s in 0..4 {
+                for nb in &chart.neighbours[s] {
+                    for k in 0..n {
+                        let kk = if nb.reversed { n - 1 - k } else { k };
+                        let a = texel(c, l, sdfc::bake::charts::side_texel(n, s, k, 0));
+                        let b = texel(
+                            nb.chart as usize,
+                            l,
+                            sdfc::bake::charts::side_texel(n, nb.side as usize, kk, 0),
+                        );
+                        assert_eq!(a, b, "{what}: level {l}, chart {c} side {s} texel {k} against chart {} side {}", nb.chart, nb.side);
+                        sides += 1;
+                    }
+                }
+            }
+        }
+    }
+    // Corners: every chart around a mesh vertex has the same corner texel.
+    let mut first: std::collections::HashMap<(u32, usize), image::Rgba<u8>> = Default::default();
+    for (c, chart) in file.charts.iter().enumerate() {
+        for l in 0..file.layout.level_origins.len() {
+            let n = chart.rects[l][2] as usize;
+            for q in 0..4 {
+                let t = texel(c, l, sdfc::bake::charts::side_texel(n, q, 0, 0));
+                let seen = *first.entry((chart.corners[q], l)).or_insert(t);
+                assert_eq!(seen, t, "{what}: level {l}, corner {q} of chart {c}");
+                corners += 1;
+            }
+        }
+    }
+    (sides, corners)
+}

@@ -31,6 +31,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         let glb = dir.path().join(format!("{stem}.glb"));
         let charts = dir.path().join(format!("{stem}.json"));
         let ktx2 = dir.path().join(format!("{stem}.ktx2"));
+        let normals = dir.path().join(format!("{stem}.normals.png"));
         // The examples with a ground plane have no finite bounds: they need --bounds.
         let mut args = vec!["bake", example.to_str().unwrap()];
         if ["blend", "primitives"].contains(&stem.as_str()) {
@@ -40,7 +41,13 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         // bake a corner of each at a finer grid.
         let plate = stem.starts_with("plate");
         if plate {
-            args.extend(["--bounds", "-0.5,-0.5,-0.5", "0.5,0.5,0.5", "--edge", "0.08"]);
+            args.extend([
+                "--bounds",
+                "-0.5,-0.5,-0.5",
+                "0.5,0.5,0.5",
+                "--edge",
+                "0.08",
+            ]);
         }
         args.extend([
             "-o",
@@ -51,6 +58,8 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             charts.to_str().unwrap(),
             "--ktx2",
             ktx2.to_str().unwrap(),
+            "--object-normals",
+            normals.to_str().unwrap(),
         ]);
         if !plate {
             args.extend(["--grid", "8"]);
@@ -82,6 +91,8 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         let (sides, _) = assert_borders_identical(&textures.base_color, &file, &stem);
         assert_borders_identical(&textures.metallic_roughness, &file, &stem);
         assert!(sides > 0, "{stem}: no shared sides");
+        let normals = image::open(&normals).unwrap().to_rgba8();
+        assert_borders_identical(&normals, &file, &stem);
         // The KTX2 file holds one level per atlas level.
         let bytes = std::fs::read(&ktx2).unwrap();
         let reader = ktx2::Reader::new(&bytes[..]).expect("a KTX2 file");

@@ -144,3 +144,30 @@ pub fn mesh_data(mesh: &QuadMesh, table: &ChartTable, layout: &FlatLayout) -> Me
     }
     out
 }
+
+/// The object-space normals of every level in the flat atlas, encoded `n · 0.5 + 0.5`.
+/// Unlike the tangent-space map these are the filtered samples themselves, so their
+/// border texels are identical between charts, like the colours'.
+pub fn object_normals(
+    table: &ChartTable,
+    layout: &FlatLayout,
+    levels: &[Samples<Texel<CHANNELS>>],
+) -> RgbaImage {
+    let mut img = RgbaImage::from_pixel(layout.width, layout.height, Rgba([128, 128, 128, 255]));
+    for (l, level) in levels.iter().enumerate().take(layout.levels()) {
+        let n = level.n;
+        for c in 0..table.len() {
+            let [x0, y0] = layout.chart_origin(c, l);
+            for (k, t) in level.grid(table, c).iter().enumerate() {
+                let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or_zero();
+                let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
+                img.put_pixel(
+                    x0 + (k % n) as u32,
+                    y0 + (k / n) as u32,
+                    Rgba([enc(o.x), enc(o.y), enc(o.z), 255]),
+                );
+            }
+        }
+    }
+    img
+}

@@ -115,6 +115,13 @@ fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Ve
             .collect();
         out.push((path.clone(), export::ktx2(&levels, true)?));
     }
+    if let Some(path) = &args.object_normals {
+        let img = sdfc::bake::images::object_normals(&baked.table, &baked.layout, &baked.levels);
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| e.to_string())?;
+        out.push((path.clone(), png));
+    }
     if let Some(path) = &args.charts {
         let file = ChartsFile::new(&baked.table, &baked.layout);
         let json = serde_json::to_vec_pretty(&file).map_err(|e| e.to_string())?;

@@ -243,6 +243,10 @@ pub struct BakeArgs {
     /// level the chart grid of that level, the paper's stacked style).
     #[arg(long, value_name = "FILE")]
     pub ktx2: Option<PathBuf>,
+    /// Also write the object-space normals as a PNG in the same flat layout (the glTF
+    /// holds the tangent-space map that `normalTexture` needs).
+    #[arg(long, value_name = "FILE")]
+    pub object_normals: Option<PathBuf>,
     /// Also write the chart table as JSON: each chart's rectangle per level and its
     /// neighbours along each side, with orientation.
     #[arg(long, value_name = "FILE")]

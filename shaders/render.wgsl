@@ -16,7 +16,8 @@ struct Globals {
     light_color: vec4<f32>,
     // rgb: background (linear); w: unused.
     background: vec4<f32>,
-    // x, y: image size in pixels; z: time in seconds; w: view (0 color, 1 normal, 2 depth, 3 steps).
+    // x, y: image size in pixels; z: time in seconds; w: the view (ViewMode::index in src/gpu/render.rs).
+    // The mesh renderer (shaders/mesh.wgsl.in) uses the same block.
     resolution: vec4<f32>,
     // x: far distance; y: hit epsilon; z: maximum steps; w: scene scale.
     trace: vec4<f32>,

@@ -2,7 +2,7 @@
 //! from the scene's `render` item (or framed automatically), plus the f64 CPU
 //! sphere trace that the GPU renderer is tested against.
 
-use crate::ir::{eval, Shape};
+use crate::ir::{eval, Aabb, Shape};
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{self, RenderDef, RenderSettings};
 use glam::DVec3;
@@ -63,7 +63,11 @@ impl Camera {
 
     /// Frames a shape's bounds from a three-quarter view, with `orbit`'s default field of view.
     pub fn frame(shape: &Shape) -> Camera {
-        let b = shape.framing_bounds();
+        Camera::frame_bounds(shape.framing_bounds())
+    }
+
+    /// Frames an axis-aligned box (a baked mesh's bounds) as [`Camera::frame`] frames a shape.
+    pub fn frame_bounds(b: Aabb) -> Camera {
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
         let fov = BuiltinId::Orbit
             .builtin()
@@ -157,6 +161,31 @@ impl View {
         } else {
             far.max(100.0 * scale)
         };
+        View {
+            camera,
+            sun: Sun::new(&settings.light),
+            width: settings.size[0],
+            height: settings.size[1],
+            background: DVec3::from_array(settings.background),
+            ambient: settings.ambient,
+            far,
+            epsilon: 1e-4,
+            max_steps: 256,
+            scale,
+            atlas_aov: false,
+        }
+    }
+}
+
+impl View {
+    /// The view of a baked mesh with bounds `b` (a `.glb` carries no camera or light):
+    /// the framing camera of [`Camera::frame_bounds`] and the `render` item's defaults.
+    /// The tracing fields are unused by the mesh renderer, except `far`, its far plane.
+    pub fn framing(b: Aabb) -> View {
+        let settings = RenderSettings::default();
+        let camera = Camera::frame_bounds(b);
+        let scale = (b.max - b.min).max_element().max(1e-3);
+        let far = ((camera.eye - b.center()).length() + (b.max - b.min).length()) * 2.0;
         View {
             camera,
             sun: Sun::new(&settings.light),

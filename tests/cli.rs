@@ -247,3 +247,24 @@ fn fmt_formats_standard_input_to_standard_output() {
     assert_eq!(code, 0);
     assert_eq!(out, "render sphere(1);\n");
 }
+
+#[test]
+fn render_keeps_the_level_view_for_baked_meshes() {
+    let (code, _, err) = sdfc(&["render", "examples/sphere.sdf", "--view", "level"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no level view"), "{err}");
+}
+
+#[test]
+fn render_refuses_a_glb_that_is_not_a_baked_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.glb");
+    std::fs::write(&junk, b"not a glb").unwrap();
+    let junk = junk.to_str().unwrap();
+    let (code, _, err) = sdfc(&["render", junk, "-o", "/dev/null"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("is not a mesh baked by sdfc"), "{err}");
+    let (code, _, err) = sdfc(&["render", junk, "--view", "steps"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no steps view"), "{err}");
+}

@@ -108,7 +108,8 @@ impl FlatLayout {
     /// height) and the smaller levels (below it, side by side) fit. The image is `size`
     /// wide and only as tall as the charts need. `None` when even 2-texel charts do not fit.
     pub fn fit(charts: usize, size: u32) -> Option<FlatLayout> {
-        let mut n = size;
+        // Chart sizes are powers of two (each level halves them, down to 2).
+        let mut n = if size >= 2 { 1 << size.ilog2() } else { 0 };
         while n >= 2 {
             let columns = size / n;
             let rows = (2 * size / 3) / n;

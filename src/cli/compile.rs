@@ -54,7 +54,7 @@ pub fn report(name: &str, source: &str, error: CompileError) -> ExitCode {
 
 /// Saves the WGSL of an internal compiler error as `sdfc-ice-STEM.wgsl` in the temporary
 /// folder (one file per scene, replaced by the next report) and says where.
-fn save_for_report(name: &str, wgsl: &str) {
+pub(super) fn save_for_report(name: &str, wgsl: &str) {
     let stem = Path::new(name)
         .file_stem()
         .and_then(|s| s.to_str())

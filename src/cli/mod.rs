@@ -8,6 +8,7 @@ pub mod eval;
 pub mod fmt;
 pub mod latency;
 pub mod render;
+pub mod render_mesh;
 pub mod sweep;
 
 /// The exit statuses, one meaning each (the README's table).
@@ -99,8 +100,11 @@ pub enum Command {
     ///
     /// Camera, size and light come from the scene's `render` item; the flags override
     /// them. With no `render` item (or with --shape), the camera frames the shape.
-    /// Exit status: 0 on success, 1 when the scene has errors, 2 on usage or I/O
-    /// problems, 3 on an internal compiler error, 4 when no GPU adapter can be used.
+    /// A `.glb` baked by sdfc renders its mesh with its flat seamless atlas instead
+    /// (views color, albedo, normal, depth, uv, level; no shadows), framed on its bounds
+    /// with the default light. Exit status: 0 on success, 1 when the scene has errors,
+    /// 2 on usage or I/O problems (an unreadable .glb), 3 on an internal compiler error,
+    /// 4 when no GPU adapter can be used.
     Render(RenderArgs),
     /// Bake a textured scene into a textured mesh with a seamless atlas (binary glTF).
     ///
@@ -172,7 +176,7 @@ pub struct BenchArgs {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// The scene file.
+    /// The scene file, or a baked mesh (`.glb`).
     pub scene: PathBuf,
     /// The PNG to write (atomically).
     #[arg(short, long, default_value = "out.png")]

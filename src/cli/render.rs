@@ -76,6 +76,16 @@ fn encode_png(frame: &Frame) -> Result<Vec<u8>, String> {
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
+    if is_glb(&args.scene) {
+        return super::render_mesh::run(args);
+    }
+    if !args.view.for_scene() {
+        eprintln!(
+            "error: a scene has no {} view (it is a baked mesh's: render a .glb)",
+            format!("{:?}", args.view).to_ascii_lowercase()
+        );
+        return ExitCode::from(super::exit::USAGE);
+    }
     let compile_start = Instant::now();
     let options = sdfc::codegen::Options {
         shape: args.shape.clone(),
@@ -119,7 +129,26 @@ pub fn run(args: RenderArgs) -> ExitCode {
             return ExitCode::from(super::exit::gpu(&e));
         }
     };
-    let png = match encode_png(&frame) {
+    let timings = args.timings.then(|| {
+        format!(
+            "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL)\n",
+            gpu.describe(),
+            compile_time.as_secs_f64() * 1e3
+        )
+    });
+    write_frame(&args, &frame, timings)
+}
+
+/// Whether a path names a baked mesh (`.glb`, any case).
+pub fn is_glb(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+}
+
+/// Writes the PNG and the AOVs of a frame, and the timings after `header` when asked.
+pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> ExitCode {
+    let png = match encode_png(frame) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: cannot encode the image: {e}");
@@ -131,18 +160,14 @@ pub fn run(args: RenderArgs) -> ExitCode {
         return ExitCode::from(super::exit::USAGE);
     }
     for (name, path) in &args.aov {
-        if let Err(e) = write_exr(path, &frame, name) {
+        if let Err(e) = write_exr(path, frame, name) {
             eprintln!("error: cannot write {}: {e}", path.display());
             return ExitCode::from(super::exit::USAGE);
         }
     }
-    if args.timings {
+    if let Some(header) = header {
         let t = &frame.timings;
-        eprintln!("adapter:   {}", gpu.describe());
-        eprintln!(
-            "compile:   {:.2} ms (parse → validated WGSL)",
-            compile_time.as_secs_f64() * 1e3
-        );
+        eprint!("{header}");
         eprintln!("pipeline:  {:.2} ms", t.pipeline.as_secs_f64() * 1e3);
         eprintln!(
             "frame:     {:.2} ms ({}, {}x{})",

@@ -12,6 +12,7 @@
 mod atlas;
 pub mod bindings;
 mod emit;
+pub mod mesh;
 pub mod targets;
 pub mod template;
 

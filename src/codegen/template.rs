@@ -7,6 +7,8 @@
 pub const ATLAS: &str = include_str!("../../shaders/atlas.wgsl.in");
 /// The scene-independent tail of every module (tracing, normals, entry points).
 pub const ENTRY: &str = include_str!("../../shaders/entry.wgsl.in");
+/// A baked mesh's renderer, with the flat layout's constants.
+pub const MESH: &str = include_str!("../../shaders/mesh.wgsl.in");
 
 /// The placeholders of a template, in order of first use.
 pub fn placeholders(template: &str) -> Vec<&str> {

@@ -3,10 +3,12 @@
 //! error becomes a [`GpuError`], never a panic.
 
 pub mod compute;
+mod mesh;
 mod render;
 pub mod texture;
 
 pub use compute::{eval_atlas, eval_points, AtlasValue};
+pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
 pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};
 
 use std::fmt;

@@ -33,6 +33,12 @@ pub enum ViewMode {
     Distortion,
     /// Seams: red on frontiers between seeds that are not merged.
     Seams,
+    /// The unlit base colour, tonemapped as the colour view is (to compare a bake with
+    /// the scene exactly).
+    Albedo,
+    /// Baked meshes only: the flat atlas's level chosen per fragment (Eq. 2 of the
+    /// seamless-atlas paper), blue (level 0) to red (the last level).
+    Level,
 }
 
 impl ViewMode {
@@ -50,7 +56,28 @@ impl ViewMode {
             ViewMode::Blend => 9.0,
             ViewMode::Distortion => 10.0,
             ViewMode::Seams => 11.0,
+            ViewMode::Albedo => 12.0,
+            ViewMode::Level => 13.0,
         }
+    }
+
+    /// Whether a baked mesh ([`super::MeshRenderer`]), which has no SDF to trace and no
+    /// Implicit UVs, has this view.
+    pub fn for_mesh(self) -> bool {
+        matches!(
+            self,
+            ViewMode::Color
+                | ViewMode::Albedo
+                | ViewMode::Normal
+                | ViewMode::Depth
+                | ViewMode::Uv
+                | ViewMode::Level
+        )
+    }
+
+    /// Whether an implicit scene has this view (every view but [`ViewMode::Level`]).
+    pub fn for_scene(self) -> bool {
+        self != ViewMode::Level
     }
 }
 
@@ -80,7 +107,7 @@ pub struct Frame {
 }
 
 /// The Globals uniform block, laid out as in shaders/render.wgsl.
-fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
+pub(super) fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
     let c = &view.camera;
     let v3 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
     [
@@ -103,7 +130,7 @@ fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
 
 /// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
 /// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
-fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
+pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
     let f32_ok = gpu
         .adapter
         .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
@@ -172,11 +199,11 @@ pub struct Renderer {
 }
 
 /// The offscreen targets of one frame size and their readback buffers.
-struct Targets {
+pub(super) struct Targets {
     width: u32,
     height: u32,
     textures: Vec<wgpu::Texture>,
-    views: Vec<wgpu::TextureView>,
+    pub(super) views: Vec<wgpu::TextureView>,
     /// Each target's buffer and its padded row length in bytes.
     readbacks: Vec<(wgpu::Buffer, u32)>,
 }
@@ -247,48 +274,7 @@ impl Renderer {
     }
 
     fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Targets {
-        let d = &gpu.device;
-        let textures: Vec<wgpu::Texture> = self
-            .formats
-            .iter()
-            .map(|f| {
-                d.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("target"),
-                    size: extent(width, height),
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: *f,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                })
-            })
-            .collect();
-        let views = textures
-            .iter()
-            .map(|t| t.create_view(&Default::default()))
-            .collect();
-        let readbacks = self
-            .formats
-            .iter()
-            .map(|f| {
-                let row = (width * f.block_copy_size(None).unwrap_or(4)).div_ceil(256) * 256;
-                let buffer = d.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("readback"),
-                    size: (row * height) as u64,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                (buffer, row)
-            })
-            .collect();
-        Targets {
-            width,
-            height,
-            textures,
-            views,
-            readbacks,
-        }
+        targets(gpu, &self.formats, width, height)
     }
 
     /// One full-screen pass into every target.
@@ -341,13 +327,7 @@ impl Renderer {
         let d = &gpu.device;
         let (w, h) = (view.width.max(1), view.height.max(1));
         // Targets and their readback on the GPU, and the frame on the CPU.
-        let per_texel: u64 = self
-            .formats
-            .iter()
-            .map(|f| 2 * f.block_copy_size(None).unwrap_or(16) as u64)
-            .sum::<u64>()
-            + 52;
-        gpu.check_size(w, h, per_texel)?;
+        gpu.check_size(w, h, bytes_per_texel(&self.formats))?;
         let uniforms = globals(view, mode);
         let (targets, bind_group, queries, _globals) = gpu.scoped(|| {
             use wgpu::util::DeviceExt;
@@ -415,37 +395,11 @@ impl Renderer {
 
     /// Reads the targets back into a frame (timed: `timings.readback`).
     fn read(&self, gpu: &Gpu, targets: &Targets) -> Result<Frame, GpuError> {
-        let (w, h) = (targets.width, targets.height);
-        let read_start = Instant::now();
-        let mut planes = Vec::new();
-        for (f, (b, row)) in self.formats.iter().zip(&targets.readbacks) {
-            let bytes = gpu.read_buffer(b)?;
-            let bpp = f.block_copy_size(None).unwrap_or(4) as usize;
-            let mut out = Vec::with_capacity(w as usize * h as usize * bpp);
-            for y in 0..h as usize {
-                let start = y * *row as usize;
-                out.extend_from_slice(&bytes[start..start + w as usize * bpp]);
-            }
-            planes.push(out);
-        }
-        let readback = read_start.elapsed();
-        let half = self.formats[1] == wgpu::TextureFormat::Rgba16Float;
-        Ok(Frame {
-            width: w,
-            height: h,
-            position: floats(&planes[1], half),
-            normal: floats(&planes[2], half),
-            atlas: floats(&planes[3], half),
-            color: std::mem::take(&mut planes[0]),
-            timings: Timings {
-                readback,
-                ..Default::default()
-            },
-        })
+        read(gpu, &self.formats, targets)
     }
 }
 
-fn extent(width: u32, height: u32) -> wgpu::Extent3d {
+pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
     wgpu::Extent3d {
         width,
         height,
@@ -496,6 +450,100 @@ fn pipeline(
     })
 }
 
+/// The bytes per texel of targets of `formats` with their readback, and of the frame
+/// on the CPU.
+pub(super) fn bytes_per_texel(formats: &[wgpu::TextureFormat; 4]) -> u64 {
+    formats
+        .iter()
+        .map(|f| 2 * f.block_copy_size(None).unwrap_or(16) as u64)
+        .sum::<u64>()
+        + 52
+}
+
+/// Offscreen targets of `formats` and their readback buffers.
+pub(super) fn targets(
+    gpu: &Gpu,
+    formats: &[wgpu::TextureFormat; 4],
+    width: u32,
+    height: u32,
+) -> Targets {
+    let d = &gpu.device;
+    let textures: Vec<wgpu::Texture> = formats
+        .iter()
+        .map(|f| {
+            d.create_texture(&wgpu::TextureDescriptor {
+                label: Some("target"),
+                size: extent(width, height),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: *f,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        })
+        .collect();
+    let views = textures
+        .iter()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
+    let readbacks = formats
+        .iter()
+        .map(|f| {
+            let row = (width * f.block_copy_size(None).unwrap_or(4)).div_ceil(256) * 256;
+            let buffer = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: (row * height) as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            (buffer, row)
+        })
+        .collect();
+    Targets {
+        width,
+        height,
+        textures,
+        views,
+        readbacks,
+    }
+}
+
+/// Reads the targets back into a frame (timed: `timings.readback`).
+pub(super) fn read(
+    gpu: &Gpu,
+    formats: &[wgpu::TextureFormat; 4],
+    targets: &Targets,
+) -> Result<Frame, GpuError> {
+    let (w, h) = (targets.width, targets.height);
+    let read_start = Instant::now();
+    let mut planes = Vec::new();
+    for (f, (b, row)) in formats.iter().zip(&targets.readbacks) {
+        let bytes = gpu.read_buffer(b)?;
+        let bpp = f.block_copy_size(None).unwrap_or(4) as usize;
+        let mut out = Vec::with_capacity(w as usize * h as usize * bpp);
+        for y in 0..h as usize {
+            let start = y * *row as usize;
+            out.extend_from_slice(&bytes[start..start + w as usize * bpp]);
+        }
+        planes.push(out);
+    }
+    let readback = read_start.elapsed();
+    let half = formats[1] == wgpu::TextureFormat::Rgba16Float;
+    Ok(Frame {
+        width: w,
+        height: h,
+        position: floats(&planes[1], half),
+        normal: floats(&planes[2], half),
+        atlas: floats(&planes[3], half),
+        color: std::mem::take(&mut planes[0]),
+        timings: Timings {
+            readback,
+            ..Default::default()
+        },
+    })
+}
+
 /// Timestamp queries, where the adapter has them.
 fn queries(gpu: &Gpu) -> Option<Queries> {
     let d = &gpu.device;
@@ -529,7 +577,7 @@ fn gpu_time(gpu: &Gpu, read: &wgpu::Buffer) -> Result<Option<Duration>, GpuError
 }
 
 /// Copies every target into its readback buffer.
-fn copy_out(enc: &mut wgpu::CommandEncoder, targets: &Targets) {
+pub(super) fn copy_out(enc: &mut wgpu::CommandEncoder, targets: &Targets) {
     for (t, (b, row)) in targets.textures.iter().zip(&targets.readbacks) {
         enc.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {

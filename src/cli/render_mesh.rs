@@ -1,0 +1,87 @@
+//! `sdfc render MESH.glb`: a baked mesh and its flat seamless atlas → PNG (and EXR
+//! AOVs), through [`sdfc::gpu::MeshRenderer`]. A `.glb` carries no camera or light: the
+//! camera frames the mesh's bounds and the light is the `render` item's default.
+
+use super::render::write_frame;
+use super::RenderArgs;
+use sdfc::gpu::{Gpu, MeshError, MeshRenderer};
+use sdfc::view::View;
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// The largest `.glb` read.
+pub const MAX_GLB_BYTES: usize = 1 << 30;
+
+pub fn run(args: RenderArgs) -> ExitCode {
+    let usage = |message: String| {
+        eprintln!("error: {message}");
+        ExitCode::from(super::exit::USAGE)
+    };
+    if args.shape.is_some() || args.atlas.is_some() {
+        return usage(String::from(
+            "--shape and --atlas name parts of a scene; a baked mesh has neither",
+        ));
+    }
+    if !args.view.for_mesh() {
+        return usage(MeshError::View(args.view).to_string());
+    }
+    let name = args.scene.display().to_string();
+    let load_start = Instant::now();
+    let bytes = match super::read_bytes(&args.scene, MAX_GLB_BYTES) {
+        Ok(b) if b.len() > MAX_GLB_BYTES => {
+            return usage(format!(
+                "{name} is larger than the limit of {MAX_GLB_BYTES} bytes"
+            ))
+        }
+        Ok(b) => b,
+        Err(e) => return usage(format!("cannot read {name}: {e}")),
+    };
+    let (mesh, textures, layout) = match sdfc::bake::export::read_glb(&bytes) {
+        Ok(x) => x,
+        Err(e) => return usage(format!("{name} is not a mesh baked by sdfc: {e}")),
+    };
+    let load_time = load_start.elapsed();
+    let gpu = match Gpu::new(args.backend) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(super::exit::gpu(&e));
+        }
+    };
+    let fail = |e: MeshError| match e {
+        MeshError::Input(_) | MeshError::View(_) => usage(e.to_string()),
+        MeshError::Internal(ice) => {
+            eprintln!("error: {ice}");
+            super::compile::save_for_report(&name, &ice.wgsl);
+            ExitCode::from(super::exit::ICE)
+        }
+        MeshError::Gpu(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(super::exit::gpu(&e))
+        }
+    };
+    let renderer = match MeshRenderer::new(&gpu, &mesh, &textures, &layout) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let mut view = View::framing(renderer.bounds());
+    if let Some((w, h)) = args.size {
+        view.width = w;
+        view.height = h;
+    }
+    let frame = match renderer.render(&gpu, &view, args.view) {
+        Ok(f) => f,
+        Err(e) => return fail(e),
+    };
+    let header = args.timings.then(|| {
+        format!(
+            "adapter:   {}\nload:      {:.2} ms (.glb → mesh, {} triangles, {}×{} atlas)\n",
+            gpu.describe(),
+            load_time.as_secs_f64() * 1e3,
+            mesh.indices.len() / 3,
+            layout.width,
+            layout.height
+        )
+    });
+    write_frame(&args, &frame, header)
+}

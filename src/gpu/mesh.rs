@@ -1,0 +1,513 @@
+//! Rendering a baked mesh (`crate::bake`): its triangles rasterized through wgpu with
+//! the generated module of `shaders/mesh.wgsl.in`, whose fragment shader reads the flat
+//! seamless atlas as §6 of the paper says (the chart and chart-local (u, v) from the
+//! level-0 texture coordinate, the level by Eq. 1–2, two bilinear lookups at the
+//! half-texel-inset coordinates of the levels around it, blended).
+//!
+//! The frame is the implicit renderer's [`Frame`] from the same [`View`], so the two
+//! can be compared pixel for pixel: the same projection (`camera_ray` inverted), the
+//! same `shade` and `tonemap`. A mesh has no SDF, so the colour view has **no
+//! shadows**. Faces are drawn from both sides (culling off) with a depth buffer and no
+//! MSAA; a back face is shaded with its normal flipped. The AOVs: position (world, and
+//! the distance from the eye, -1 where nothing was drawn), the normal-mapped normal,
+//! and in `atlas` the chart-local (u, v), the level i and the chart's index.
+
+use super::render::{self, Frame, Timings, ViewMode};
+use super::{Gpu, GpuError};
+use crate::bake::{FlatLayout, MeshData, Textures};
+use crate::codegen::mesh::{mesh_module, MeshIce};
+use crate::ir::Aabb;
+use crate::view::View;
+use glam::DVec3;
+use std::fmt;
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// Why a mesh could not be rendered.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshError {
+    /// The mesh, its textures or its layout are inconsistent (a bad or foreign file).
+    Input(String),
+    /// The view is not one a mesh has (see [`ViewMode::for_mesh`]).
+    View(ViewMode),
+    /// The generated module failed naga's validation: a bug in sdfc.
+    Internal(MeshIce),
+    Gpu(GpuError),
+}
+
+impl fmt::Display for MeshError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            MeshError::Input(e) => write!(f, "the baked mesh cannot be rendered: {e}"),
+            MeshError::View(v) => write!(
+                f,
+                "a baked mesh has no {} view; choose color, albedo, normal, depth, uv or level",
+                format!("{v:?}").to_ascii_lowercase()
+            ),
+            MeshError::Internal(e) => e.fmt(f),
+            MeshError::Gpu(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for MeshError {}
+
+impl From<GpuError> for MeshError {
+    fn from(e: GpuError) -> Self {
+        MeshError::Gpu(e)
+    }
+}
+
+/// One vertex as the pipeline reads it: position, normal, tangent, texcoord.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Vertex([f32; 12]);
+
+/// A baked mesh on the GPU with its pipeline, ready for any number of frames.
+pub struct MeshRenderer {
+    pipeline: wgpu::RenderPipeline,
+    bind_group_layout: wgpu::BindGroupLayout,
+    /// Base colour, metallic-roughness, normal, emission.
+    textures: [wgpu::TextureView; 4],
+    sampler: wgpu::Sampler,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    formats: [wgpu::TextureFormat; 4],
+    bounds: Aabb,
+    /// The validated module (for `sdfc compile`-style inspection and bug reports).
+    pub wgsl: String,
+    /// The time the pipeline took to create.
+    pub pipeline_time: Duration,
+}
+
+/// The bounds of a mesh's positions (a unit box around the origin when it has none).
+pub fn mesh_bounds(mesh: &MeshData) -> Aabb {
+    let mut min = DVec3::splat(f64::INFINITY);
+    let mut max = DVec3::splat(f64::NEG_INFINITY);
+    for p in &mesh.positions {
+        let p = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        min = min.min(p);
+        max = max.max(p);
+    }
+    if min.is_finite() && max.is_finite() {
+        Aabb { min, max }
+    } else {
+        Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::ONE,
+        }
+    }
+}
+
+/// Checks that a flat layout is well formed: a chart size of at least 2, one origin
+/// per level (at most down to 2 texels), every level's grid inside the image. (The
+/// shader needs no power of two: level `l`'s charts are `chart_size >> l` texels, as
+/// [`FlatLayout::size_at`] says.)
+pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
+    let n = layout.chart_size;
+    if n < 2 {
+        return Err(format!("the chart size {n} is under 2 texels"));
+    }
+    let levels = layout.levels();
+    let max_levels = (0..32).take_while(|l| n >> l >= 2).count();
+    if levels == 0 || levels > max_levels {
+        return Err(format!(
+            "{levels} levels for {n}-texel charts (1 to {max_levels})"
+        ));
+    }
+    if layout.columns == 0 || layout.rows == 0 {
+        return Err(String::from("the chart grid is empty"));
+    }
+    if layout.level_origins[0] != [0, 0] {
+        return Err(String::from("level 0 does not start at (0, 0)"));
+    }
+    for (l, &[x, y]) in layout.level_origins.iter().enumerate() {
+        let s = layout.size_at(l) as u64;
+        let right = x as u64 + layout.columns as u64 * s;
+        let bottom = y as u64 + layout.rows as u64 * s;
+        if right > layout.width as u64 || bottom > layout.height as u64 {
+            return Err(format!(
+                "level {l} ({}×{} cells of {s} texels at ({x}, {y})) leaves the {}×{} image",
+                layout.columns, layout.rows, layout.width, layout.height
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the attributes, indices and images of a mesh agree with each other and
+/// with the layout.
+fn check_input(mesh: &MeshData, textures: &Textures, layout: &FlatLayout) -> Result<(), String> {
+    check_layout(layout)?;
+    let n = mesh.positions.len();
+    let lens = [
+        ("normals", mesh.normals.len()),
+        ("tangents", mesh.tangents.len()),
+        ("texture coordinates", mesh.texcoords.len()),
+    ];
+    for (what, len) in lens {
+        if len != n {
+            return Err(format!("{len} {what} for {n} vertices"));
+        }
+    }
+    if mesh.indices.len() % 3 != 0 {
+        return Err(format!(
+            "{} indices are not whole triangles",
+            mesh.indices.len()
+        ));
+    }
+    if let Some(i) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {i} past the {n} vertices"));
+    }
+    let size = (layout.width, layout.height);
+    let images = [
+        ("base colour", Some(&textures.base_color)),
+        ("metallic-roughness", Some(&textures.metallic_roughness)),
+        ("normal", Some(&textures.normal)),
+        ("emissive", textures.emissive.as_ref()),
+    ];
+    for (what, image) in images {
+        if let Some(image) = image {
+            if image.dimensions() != size {
+                let (w, h) = image.dimensions();
+                return Err(format!(
+                    "the {what} image is {w}×{h}; the layout's atlas is {}×{}",
+                    size.0, size.1
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+impl MeshRenderer {
+    /// Uploads the mesh and its atlas and creates the pipeline of the mesh module
+    /// generated for `layout` (validated by naga first).
+    pub fn new(
+        gpu: &Gpu,
+        mesh: &MeshData,
+        textures: &Textures,
+        layout: &FlatLayout,
+    ) -> Result<MeshRenderer, MeshError> {
+        check_input(mesh, textures, layout).map_err(MeshError::Input)?;
+        let side = gpu.device.limits().max_texture_dimension_2d;
+        if layout.width > side || layout.height > side {
+            return Err(MeshError::Gpu(GpuError::Resource(format!(
+                "the atlas is {}×{}; this GPU's limit is {side} texels a side",
+                layout.width, layout.height
+            ))));
+        }
+        let (wgsl, _) = mesh_module(layout).map_err(MeshError::Internal)?;
+        let formats = render::formats(gpu);
+        let d = &gpu.device;
+        let black = image::RgbaImage::from_pixel(1, 1, image::Rgba([0, 0, 0, 255]));
+        let vertices: Vec<Vertex> = (0..mesh.positions.len())
+            .map(|i| {
+                let (p, n, t, c) = (
+                    mesh.positions[i],
+                    mesh.normals[i],
+                    mesh.tangents[i],
+                    mesh.texcoords[i],
+                );
+                Vertex([
+                    p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], c[0], c[1],
+                ])
+            })
+            .collect();
+        let started = Instant::now();
+        let made = gpu.scoped(|| {
+            let upload = |image: &image::RgbaImage, srgb: bool| {
+                upload_image(gpu, image, srgb).create_view(&Default::default())
+            };
+            let textures = [
+                upload(&textures.base_color, true),
+                upload(&textures.metallic_roughness, false),
+                upload(&textures.normal, false),
+                upload(textures.emissive.as_ref().unwrap_or(&black), true),
+            ];
+            let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("flat atlas"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Nearest,
+                ..Default::default()
+            });
+            // wgpu rejects empty buffers with a binding; a zero-length draw reads nothing.
+            let vertex_bytes: &[u8] = if vertices.is_empty() {
+                &[0; 48]
+            } else {
+                bytemuck::cast_slice(&vertices)
+            };
+            let index_bytes: &[u8] = if mesh.indices.is_empty() {
+                &[0; 4]
+            } else {
+                bytemuck::cast_slice(&mesh.indices)
+            };
+            let vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh vertices"),
+                contents: vertex_bytes,
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            let indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mesh indices"),
+                contents: index_bytes,
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            let pipeline = pipeline(d, &wgsl, &formats);
+            let layout = pipeline.get_bind_group_layout(0);
+            (textures, sampler, vertices, indices, pipeline, layout)
+        })?;
+        gpu.wait()?;
+        let (textures, sampler, vertices, indices, pipeline, bind_group_layout) = made;
+        Ok(MeshRenderer {
+            pipeline,
+            bind_group_layout,
+            textures,
+            sampler,
+            vertices,
+            indices,
+            index_count: mesh.indices.len() as u32,
+            formats,
+            bounds: mesh_bounds(mesh),
+            wgsl,
+            pipeline_time: started.elapsed(),
+        })
+    }
+
+    /// The bounds of the mesh's positions, for framing ([`View::framing`]).
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Renders one frame of `view` (camera, sun, ambient, background, size; `far` is the
+    /// far plane, the tracing fields are unused).
+    pub fn render(&self, gpu: &Gpu, view: &View, mode: ViewMode) -> Result<Frame, MeshError> {
+        if !mode.for_mesh() {
+            return Err(MeshError::View(mode));
+        }
+        let d = &gpu.device;
+        let (w, h) = (view.width.max(1), view.height.max(1));
+        gpu.check_size(w, h, render::bytes_per_texel(&self.formats) + 4)?;
+        let uniforms = render::globals(view, mode);
+        let background = tonemap(view.background);
+        let (targets, depth, bind_group, _globals) = gpu.scoped(|| {
+            let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::cast_slice(&uniforms),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buffer.as_entire_binding(),
+            }];
+            for (k, t) in self.textures.iter().enumerate() {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: k as u32 + 1,
+                    resource: wgpu::BindingResource::TextureView(t),
+                });
+            }
+            entries.push(wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::Sampler(&self.sampler),
+            });
+            let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("mesh group"),
+                layout: &self.bind_group_layout,
+                entries: &entries,
+            });
+            let depth = d
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("depth"),
+                    size: render::extent(w, h),
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: DEPTH_FORMAT,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default());
+            (
+                render::targets(gpu, &self.formats, w, h),
+                depth,
+                bind_group,
+                buffer,
+            )
+        })?;
+        let submitted = Instant::now();
+        gpu.scoped(|| {
+            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("mesh frame"),
+            });
+            {
+                let clears = [
+                    wgpu::Color {
+                        r: background[0],
+                        g: background[1],
+                        b: background[2],
+                        a: 1.0,
+                    },
+                    wgpu::Color {
+                        r: 0.0,
+                        g: 0.0,
+                        b: 0.0,
+                        a: -1.0,
+                    },
+                    wgpu::Color::TRANSPARENT,
+                    wgpu::Color {
+                        r: 0.0,
+                        g: 0.0,
+                        b: -1.0,
+                        a: -1.0,
+                    },
+                ];
+                let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
+                    .views
+                    .iter()
+                    .zip(clears)
+                    .map(|(v, clear)| {
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: v,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(clear),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })
+                    })
+                    .collect();
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("mesh"),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.set_vertex_buffer(0, self.vertices.slice(..));
+                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..1);
+            }
+            render::copy_out(&mut enc, &targets);
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        gpu.wait()?;
+        let frame_time = submitted.elapsed();
+        let mut frame = render::read(gpu, &self.formats, &targets)?;
+        frame.timings = Timings {
+            pipeline: self.pipeline_time,
+            frame: frame_time,
+            frame_from_timestamps: false,
+            readback: frame.timings.readback,
+        };
+        Ok(frame)
+    }
+}
+
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// `tonemap` of shaders/render.wgsl, for the background (the clear colour is linear;
+/// the sRGB target encodes it as it encodes the shader's output).
+fn tonemap(c: DVec3) -> [f64; 3] {
+    let c = c / (DVec3::ONE + c * 0.15);
+    [c.x, c.y, c.z]
+}
+
+/// One image as a texture of one level.
+fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool) -> wgpu::Texture {
+    let (w, h) = image.dimensions();
+    gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("atlas"),
+            size: render::extent(w, h),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: if srgb {
+                wgpu::TextureFormat::Rgba8UnormSrgb
+            } else {
+                wgpu::TextureFormat::Rgba8Unorm
+            },
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        image.as_raw(),
+    )
+}
+
+/// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA.
+fn pipeline(
+    d: &wgpu::Device,
+    wgsl: &str,
+    formats: &[wgpu::TextureFormat; 4],
+) -> wgpu::RenderPipeline {
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("mesh"),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    let targets: Vec<Option<wgpu::ColorTargetState>> = formats
+        .iter()
+        .map(|f| {
+            Some(wgpu::ColorTargetState {
+                format: *f,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        })
+        .collect();
+    let attributes = wgpu::vertex_attr_array![
+        0 => Float32x3,
+        1 => Float32x3,
+        2 => Float32x4,
+        3 => Float32x2,
+    ];
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("mesh"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<Vertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &attributes,
+            })],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,144 @@
+//! Bake fidelity: the baked mesh, drawn by the mesh renderer with the flat atlas
+//! (Eq. 1–2 per fragment), against the implicit render of the same scene from the same
+//! camera. PSNR over the whole image (the background is the same in both).
+//! GPU tests skip loudly without an adapter unless SDFC_REQUIRE_GPU=1.
+
+use sdfc::bake::pipeline::{self, Options, Quiet, Resolution};
+use sdfc::gpu::{gpu_for_tests, Frame, MeshRenderer, ViewMode};
+use std::path::Path;
+
+fn psnr(a: &Frame, b: &Frame) -> f64 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let mut sum = 0.0;
+    let mut count = 0.0;
+    for (pa, pb) in a.color.chunks(4).zip(b.color.chunks(4)) {
+        for k in 0..3 {
+            let d = pa[k] as f64 - pb[k] as f64;
+            sum += d * d;
+            count += 1.0;
+        }
+    }
+    let mse = sum / count;
+    10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
+}
+
+/// Bakes `example` at `size` with `grid` cells, then renders both ways at `w × h`.
+fn compare(example: &str, size: u32, grid: usize, w: u32, h: u32, mode: ViewMode) -> f64 {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(example);
+    let source = std::fs::read_to_string(&path).unwrap();
+    compare_source(
+        example,
+        &source,
+        path.parent().unwrap(),
+        size,
+        grid,
+        (w, h),
+        mode,
+    )
+}
+
+fn compare_source(
+    example: &str,
+    source: &str,
+    base: &Path,
+    size: u32,
+    grid: usize,
+    (w, h): (u32, u32),
+    mode: ViewMode,
+) -> f64 {
+    let Some(gpu) = gpu_for_tests() else {
+        return f64::INFINITY;
+    };
+    let analysis = sdfc::driver::check(source, Some(base));
+    assert!(!analysis.has_errors());
+    let compiled = sdfc::driver::compile(
+        &analysis,
+        &sdfc::codegen::Options {
+            walk: sdfc::codegen::WalkForm::Loop,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let scene = analysis.scene.as_ref().unwrap();
+    let shape = sdfc::driver::pick_shape(scene, None).unwrap();
+    let options = Options {
+        size,
+        resolution: Resolution::Cells(grid),
+        bounds: None,
+    };
+    let baked = pipeline::bake(&gpu, &compiled.module, base, shape, &options, &Quiet).unwrap();
+    let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
+    view.width = w;
+    view.height = h;
+    let implicit = sdfc::gpu::render(&gpu, &compiled.module, &view, mode, base).unwrap();
+    let mesh = MeshRenderer::new(&gpu, &baked.mesh, &baked.textures, &baked.layout).unwrap();
+    let drawn = mesh.render(&gpu, &view, mode).unwrap();
+    let p = psnr(&implicit, &drawn);
+    if let Ok(dir) = std::env::var("SDFC_FIDELITY_DIR") {
+        for (name, f) in [("implicit", &implicit), ("mesh", &drawn)] {
+            let img = image::RgbaImage::from_raw(f.width, f.height, f.color.clone()).unwrap();
+            img.save(format!("{dir}/{example}-{mode:?}-{name}.png"))
+                .unwrap();
+        }
+    }
+    eprintln!(
+        "{example}: {size}² atlas, grid {grid}, {} charts of {}²: {mode:?} at {w}×{h}: PSNR {p:.2} dB",
+        baked.table.len(),
+        baked.layout.chart_size
+    );
+    p
+}
+
+/// A scene whose material varies smoothly (no texture, no hard edge): the bake's
+/// texels then represent it exactly up to their resolution, and the two renders differ
+/// by meshing, texel interpolation and the mesh's lack of shadows only.
+const SMOOTH: &str = "
+let body = smooth_union(sphere(0.8), box([1.2, 0.5, 0.5]).translate([0, -0.3, 0]), 0.2);
+material glaze {
+    color = [0.55 + 0.35 * sin(position.x * 3.0), 0.5 + 0.3 * cos(position.y * 4.0), 0.45 + 0.35 * sin(position.z * 2.0 + position.x)];
+    roughness = 0.35 + 0.2 * normal.y;
+    metallic = 0.1;
+}
+render body.paint(glaze) {
+    camera = orbit(distance: 3.2, yaw: 30deg, pitch: 20deg);
+    light = sun(direction: [0.4, 1, 0.7]);
+}
+";
+
+#[test]
+fn a_baked_smooth_material_matches_the_implicit_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = compare_source(
+        "smooth",
+        SMOOTH,
+        dir.path(),
+        512,
+        24,
+        (320, 240),
+        ViewMode::Color,
+    );
+    assert!(p >= 35.0, "colour view PSNR {p:.2} dB");
+    let p = compare_source(
+        "smooth",
+        SMOOTH,
+        dir.path(),
+        512,
+        24,
+        (320, 240),
+        ViewMode::Albedo,
+    );
+    assert!(p >= 35.0, "albedo PSNR {p:.2} dB");
+}
+
+/// Textured and checkered scenes: the bake filters what the implicit render point-
+/// samples (a checker's edges, a texture at the pixel's footprint), so edges differ by
+/// a pixel's width. The figures are printed; the bound is what filtering costs here.
+#[test]
+fn baked_textured_examples_stay_close_to_the_implicit_render() {
+    let p = compare("sphere.sdf", 1024, 24, 320, 240, ViewMode::Color);
+    assert!(p >= 24.0, "sphere colour view PSNR {p:.2} dB");
+    let p = compare("capsule.sdf", 1024, 32, 240, 320, ViewMode::Color);
+    assert!(p >= 24.0, "capsule colour view PSNR {p:.2} dB");
+}

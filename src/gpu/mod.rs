@@ -6,7 +6,7 @@ mod compute;
 mod render;
 mod texture;
 
-pub use compute::{eval_atlas, eval_points, AtlasValue};
+pub use compute::{eval_atlas, eval_materials, eval_points, AtlasValue, MaterialSample};
 pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};
 
 use std::fmt;

@@ -149,7 +149,8 @@ fn manifest_describes_bindings_and_textures() {
             (0, 2, "sampler"),
             (1, 0, "uniform"),
             (1, 1, "storage-read"),
-            (1, 2, "storage-read-write")
+            (1, 2, "storage-read-write"),
+            (1, 3, "storage-read")
         ]
         .map(|(g, b, k)| (g, b, k.to_string()))
     );

@@ -34,6 +34,8 @@ pub enum Resource {
     Points,
     /// The compute results, written.
     Results,
+    /// The unit normal at each compute point (`cs_material`), read.
+    Normals,
 }
 
 /// A resource binding of the generated module.
@@ -56,7 +58,7 @@ pub const COMPUTE_GROUP: u32 = 1;
 
 /// The table for a module that samples `textures`.
 pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
-    let fragment = || vec!["fs_main", "cs_bake"];
+    let fragment = || vec!["fs_main", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
         binding: 0,
@@ -100,14 +102,21 @@ pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
             Kind::StorageRead,
             "array<vec4<f32>>",
             Resource::Points,
-            vec!["cs_points", "cs_atlas", "cs_bake"],
+            vec!["cs_points", "cs_atlas", "cs_material", "cs_bake"],
         ),
         (
             "results",
             Kind::StorageReadWrite,
             "array<vec4<f32>>",
             Resource::Results,
-            vec!["cs_points", "cs_grid", "cs_atlas", "cs_bake"],
+            vec!["cs_points", "cs_grid", "cs_atlas", "cs_material", "cs_bake"],
+        ),
+        (
+            "normals",
+            Kind::StorageRead,
+            "array<vec4<f32>>",
+            Resource::Normals,
+            vec!["cs_material"],
         ),
     ];
     for (binding, (name, kind, ty, resource, used_by)) in compute.into_iter().enumerate() {

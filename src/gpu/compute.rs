@@ -1,6 +1,11 @@
-//! GPU queries through the generated `cs_points` entry point.
+//! GPU queries through the generated compute entry points (`cs_points`, `cs_atlas`,
+//! `cs_material`).
 
+use super::texture::{sampler, upload};
 use super::{Gpu, GpuError};
+use crate::codegen::bindings::{Resource, COMPUTE_GROUP, RENDER_GROUP};
+use crate::codegen::Module;
+use crate::ir::material::Textures;
 use glam::DVec3;
 
 /// Distance and gradient at each point, from the generated compute shader:
@@ -208,4 +213,244 @@ fn run_raw(
     })?;
     let bytes = gpu.read_buffer(&q.readback)?;
     Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec())
+}
+
+/// A material evaluated on the GPU (`cs_material`): the generated `Material` struct.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialSample {
+    pub color: [f32; 3],
+    pub roughness: f32,
+    pub metallic: f32,
+    pub emission: [f32; 3],
+}
+
+/// The most points one dispatch of [`eval_materials`] takes.
+pub const MATERIAL_CHUNK: usize = 1 << 20;
+
+/// The module's `scene_material` at surface points, each `(position, unit normal,
+/// footprint)`: the material is `scene_map`'s at the position (as `fs_main` picks it),
+/// evaluated with the normal given (not `scene_normal`'s finite difference), so the
+/// CPU reference (`ir::material::MaterialEval`) can be fed the same. `textures` holds
+/// the images of the module's texture bindings by path (`Textures::load` of the
+/// program), uploaded with the same mip levels the CPU samples. Inputs of any size are
+/// dispatched in chunks of at most [`MATERIAL_CHUNK`] points; every fallible call runs
+/// in an error scope.
+pub fn eval_materials(
+    gpu: &Gpu,
+    module: &Module,
+    textures: &Textures,
+    points: &[(DVec3, DVec3, f64)],
+) -> Result<Vec<MaterialSample>, GpuError> {
+    if points.is_empty() {
+        return Ok(Vec::new());
+    }
+    let d = &gpu.device;
+    let table = &module.manifest.bindings;
+    let images = module
+        .manifest
+        .textures
+        .iter()
+        .map(|t| {
+            let chain = textures.get(&t.path).ok_or_else(|| {
+                GpuError::Texture(format!("no decoded image for texture \"{}\"", t.path))
+            })?;
+            let image = upload(gpu, chain, &t.path, t.srgb)?;
+            Ok((
+                image.create_view(&Default::default()),
+                sampler(gpu, &t.wrap),
+            ))
+        })
+        .collect::<Result<Vec<_>, GpuError>>()?;
+    let slot = |r: Resource| {
+        table
+            .iter()
+            .find(|b| b.resource == r)
+            .map(|b| b.binding)
+            .ok_or_else(|| GpuError::Validation(format!("the module binds no {r:?}")))
+    };
+    let (points_at, normals_at, results_at) = (
+        slot(Resource::Points)?,
+        slot(Resource::Normals)?,
+        slot(Resource::Results)?,
+    );
+    let (pipeline, layout0, layout1) =
+        gpu.scoped(|| material_pipeline(d, module, [points_at, normals_at, results_at]))?;
+    let group0 = gpu.scoped(|| {
+        let entries: Vec<wgpu::BindGroupEntry> = table
+            .iter()
+            .filter(|b| b.group == RENDER_GROUP)
+            .filter_map(|b| {
+                let resource = match b.resource {
+                    Resource::Texture(i) => wgpu::BindingResource::TextureView(&images.get(i)?.0),
+                    Resource::Sampler(i) => wgpu::BindingResource::Sampler(&images.get(i)?.1),
+                    _ => return None,
+                };
+                Some(wgpu::BindGroupEntry {
+                    binding: b.binding,
+                    resource,
+                })
+            })
+            .collect();
+        d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("material textures"),
+            layout: &layout0,
+            entries: &entries,
+        })
+    })?;
+    // Results take 32 bytes a point: a chunk stays within the binding size limit.
+    let max_binding = d.limits().max_storage_buffer_binding_size as usize;
+    let chunk = MATERIAL_CHUNK.min(max_binding / 32).max(1);
+    let mut out = Vec::with_capacity(points.len());
+    for part in points.chunks(chunk) {
+        let input: Vec<[f32; 4]> = part
+            .iter()
+            .map(|(p, _, f)| [p.x as f32, p.y as f32, p.z as f32, *f as f32])
+            .collect();
+        let normals: Vec<[f32; 4]> = part
+            .iter()
+            .map(|(_, n, _)| [n.x as f32, n.y as f32, n.z as f32, 0.0])
+            .collect();
+        let size = (part.len() * 32) as u64;
+        let readback = gpu.scoped(|| {
+            use wgpu::util::DeviceExt;
+            let buffer = |label, data: &[[f32; 4]]| {
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytemuck::cast_slice(data),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            };
+            let (input, normals) = (buffer("points", &input), buffer("normals", &normals));
+            let results = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("results"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let readback = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("material points"),
+                layout: &layout1,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: points_at,
+                        resource: input.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: normals_at,
+                        resource: normals.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: results_at,
+                        resource: results.as_entire_binding(),
+                    },
+                ],
+            });
+            let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("materials"),
+            });
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("materials"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(RENDER_GROUP, &group0, &[]);
+                pass.set_bind_group(COMPUTE_GROUP, &group1, &[]);
+                pass.dispatch_workgroups((part.len() as u32).div_ceil(64), 1, 1);
+            }
+            enc.copy_buffer_to_buffer(&results, 0, &readback, 0, size);
+            gpu.queue.submit([enc.finish()]);
+            readback
+        })?;
+        let bytes = gpu.read_buffer(&readback)?;
+        let raw: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        out.extend(raw.chunks(2).map(|c| MaterialSample {
+            color: [c[0][0], c[0][1], c[0][2]],
+            roughness: c[0][3],
+            metallic: c[1][3],
+            emission: [c[1][0], c[1][1], c[1][2]],
+        }));
+    }
+    Ok(out)
+}
+
+/// The `cs_material` pipeline with explicit layouts: the module's textures and samplers
+/// in the render group, and points, normals and results (at `slots`) in the compute group.
+fn material_pipeline(
+    d: &wgpu::Device,
+    module: &Module,
+    slots: [u32; 3],
+) -> (
+    wgpu::ComputePipeline,
+    wgpu::BindGroupLayout,
+    wgpu::BindGroupLayout,
+) {
+    let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("scene"),
+        source: wgpu::ShaderSource::Wgsl(module.wgsl.as_str().into()),
+    });
+    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    };
+    let textures: Vec<wgpu::BindGroupLayoutEntry> = module
+        .manifest
+        .bindings
+        .iter()
+        .filter(|b| b.group == RENDER_GROUP)
+        .filter_map(|b| match b.resource {
+            Resource::Texture(_) => Some(entry(
+                b.binding,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+            )),
+            Resource::Sampler(_) => Some(entry(
+                b.binding,
+                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            )),
+            _ => None,
+        })
+        .collect();
+    let storage = |read_only| wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let layout0 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("material textures"),
+        entries: &textures,
+    });
+    let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("material points"),
+        entries: &[
+            entry(slots[0], storage(true)),
+            entry(slots[1], storage(true)),
+            entry(slots[2], storage(false)),
+        ],
+    });
+    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("materials"),
+        bind_group_layouts: &[Some(&layout0), Some(&layout1)],
+        immediate_size: 0,
+    });
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("cs_material"),
+        layout: Some(&layout),
+        module: &shader,
+        entry_point: Some("cs_material"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    (pipeline, layout0, layout1)
 }

@@ -258,7 +258,10 @@ impl Renderer {
                     Resource::Sampler(i) => {
                         wgpu::BindingResource::Sampler(&self.textures.get(i)?.1)
                     }
-                    Resource::GridParams | Resource::Points | Resource::Results => return None,
+                    Resource::GridParams
+                    | Resource::Points
+                    | Resource::Results
+                    | Resource::Normals => return None,
                 };
                 Some(wgpu::BindGroupEntry {
                     binding: b.binding,

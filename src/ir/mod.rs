@@ -10,6 +10,7 @@
 
 pub mod eval;
 mod lower;
+pub mod material;
 
 pub use lower::{lower, lower_shape};
 

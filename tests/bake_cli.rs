@@ -93,6 +93,31 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         assert!(sides > 0, "{stem}: no shared sides");
         let normals = image::open(&normals).unwrap().to_rgba8();
         assert_borders_identical(&normals, &file, &stem);
+        // The bake renders from the scene's own camera, at the scene's size or --size.
+        if stem == "sphere" {
+            let png = dir.path().join("sphere-mesh.png");
+            let (code, _, err) = sdfc(&[
+                "render",
+                glb.to_str().unwrap(),
+                "--camera-from",
+                example.to_str().unwrap(),
+                "--size",
+                "64x48",
+                "-o",
+                png.to_str().unwrap(),
+            ]);
+            assert_eq!(code, 0, "{err}");
+            let img = image::open(&png).unwrap();
+            assert_eq!((img.width(), img.height()), (64, 48));
+            let (code, _, err) = sdfc(&[
+                "render",
+                example.to_str().unwrap(),
+                "--camera-from",
+                example.to_str().unwrap(),
+            ]);
+            assert_eq!(code, 2, "{err}");
+            assert!(err.contains("--camera-from is for"), "{err}");
+        }
         // The KTX2 file holds one level per atlas level.
         let bytes = std::fs::read(&ktx2).unwrap();
         let reader = ktx2::Reader::new(&bytes[..]).expect("a KTX2 file");

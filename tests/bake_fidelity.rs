@@ -141,4 +141,7 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
     assert!(p >= 24.0, "sphere colour view PSNR {p:.2} dB");
     let p = compare("capsule.sdf", 1024, 32, 240, 320, ViewMode::Color);
     assert!(p >= 24.0, "capsule colour view PSNR {p:.2} dB");
+    // The robot's bricks, unlit (the colour view differs by the shadows the mesh lacks).
+    let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Albedo);
+    assert!(p >= 32.0, "robot albedo PSNR {p:.2} dB");
 }

@@ -208,6 +208,10 @@ pub struct RenderArgs {
     /// Print compile, pipeline, frame and readback times.
     #[arg(long)]
     pub timings: bool,
+    /// For a baked mesh (.glb): take the camera, light, size and background from this
+    /// scene's `render` item (the scene it was baked from), to compare the two renders.
+    #[arg(long, value_name = "SCENE")]
+    pub camera_from: Option<PathBuf>,
 }
 
 /// The atlas layouts `sdfc bake` writes.

@@ -79,6 +79,12 @@ pub fn run(args: RenderArgs) -> ExitCode {
     if is_glb(&args.scene) {
         return super::render_mesh::run(args);
     }
+    if args.camera_from.is_some() {
+        eprintln!(
+            "error: --camera-from is for rendering a baked mesh (.glb); a scene has its own camera"
+        );
+        return ExitCode::from(super::exit::USAGE);
+    }
     if !args.view.for_scene() {
         eprintln!(
             "error: a scene has no {} view (it is a baked mesh's: render a .glb)",

@@ -1,6 +1,7 @@
 //! `sdfc render MESH.glb`: a baked mesh and its flat seamless atlas → PNG (and EXR
 //! AOVs), through [`sdfc::gpu::MeshRenderer`]. A `.glb` carries no camera or light: the
-//! camera frames the mesh's bounds and the light is the `render` item's default.
+//! camera frames the mesh's bounds and the light is the `render` item's default, or
+//! both come from a scene's `render` item with `--camera-from SCENE`.
 
 use super::render::write_frame;
 use super::RenderArgs;
@@ -64,7 +65,19 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
-    let mut view = View::framing(renderer.bounds());
+    let mut view = match &args.camera_from {
+        Some(scene) => {
+            let (_, analysis) = match super::load(scene) {
+                Ok(x) => x,
+                Err(code) => return code,
+            };
+            match super::view_for(&analysis, None) {
+                Ok(v) => v,
+                Err(code) => return code,
+            }
+        }
+        None => View::framing(renderer.bounds()),
+    };
     if let Some((w, h)) = args.size {
         view.width = w;
         view.height = h;

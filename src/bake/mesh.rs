@@ -241,7 +241,8 @@ fn solve_qef(points: &[DVec3], normals: &[DVec3], mass: DVec3, _cell: f64) -> DV
         return mass;
     };
     let largest = svd.singular_values.max();
-    if !(largest > 0.0) {
+    // Also stops a NaN.
+    if largest.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return mass;
     }
     let mut inv = Matrix3::<f64>::zeros();

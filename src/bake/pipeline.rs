@@ -276,8 +276,9 @@ pub fn bake(
     lap(&mut report, "texel points");
 
     // 4. Attributes on the GPU.
-    progress.stage("shade", flat.len());
     let pass = BakePass::new(gpu, module, base_dir)?;
+    lap(&mut report, "pipeline (GPU)");
+    progress.stage("shade", flat.len());
     let shaded = pass.run(gpu, &flat, &|k| progress.advance(k))?;
     progress.finish();
     let texel = |s: &Shaded| -> Texel<CHANNELS> {

@@ -150,8 +150,8 @@ pub struct BenchArgs {
     /// (p50/p95 over --edits edits), instead of frame times.
     #[arg(long, requires = "scene")]
     pub lsp_latency: bool,
-    /// Bake the scene's atlas (2048², full mip chain, the default grid) and report the
-    /// time of each stage, for each walk form, instead of frame times.
+    /// Bake the scene's atlas (2048 wide, full mip chain, the default grid, the loop
+    /// walk) and report the time of each stage instead of frame times.
     #[arg(long, requires = "scene", conflicts_with = "lsp_latency")]
     pub bake: bool,
     /// The atlas side for --bake.

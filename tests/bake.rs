@@ -40,6 +40,7 @@ fn small(grid: usize) -> Options {
         size: 256,
         resolution: Resolution::Cells(grid),
         bounds: None,
+        chart_quads: 1,
     }
 }
 
@@ -375,4 +376,49 @@ fn baked_textured_texels_match_the_cpu_material_reference() {
         compared > 100 && share >= 0.9,
         "{within} of {compared} within 3/255"
     );
+}
+
+/// Larger charts (`chart_quads`): a chart covers m × m mesh quads. The charts still
+/// meet side to side, their border texels stay identical, and the mesh is watertight:
+/// every vertex on a chart's side has a twin, at the bitwise same position, in the
+/// chart across.
+#[test]
+fn larger_charts_keep_borders_identical_and_the_mesh_watertight() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let m = 3;
+    let options = Options {
+        chart_quads: m,
+        ..small(24)
+    };
+    let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
+    let file = ChartsFile::new(&baked.table, &baked.layout);
+    assert_borders_identical(&baked.textures.base_color, &file, "chart_quads 3");
+    let charts = baked.table.len();
+    assert_eq!(baked.mesh.indices.len(), charts * m * m * 6);
+    let n = m + 1;
+    let at = |c: usize, (i, j): (usize, usize)| baked.mesh.positions[c * n * n + j * n + i];
+    for (c, chart) in file.charts.iter().enumerate() {
+        for s in 0..4 {
+            let nb = &chart.neighbours[s][0];
+            for k in 0..n {
+                let kk = if nb.reversed { m - k } else { k };
+                let a = at(c, side_texel(n, s, k, 0));
+                let b = at(nb.chart as usize, side_texel(n, nb.side as usize, kk, 0));
+                assert_eq!(
+                    a.map(f32::to_bits),
+                    b.map(f32::to_bits),
+                    "chart {c} side {s} vertex {k}"
+                );
+            }
+        }
+    }
+    // Every mesh vertex lies on the surface.
+    let analysis = sdfc::driver::check(SMOOTH, None);
+    let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
+    let scale = sdfc::uv::atlas::scale(shape);
+    for p in &baked.mesh.positions {
+        let x = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        assert!(eval::distance(shape, x).abs() < 1e-5 * scale);
+    }
 }

@@ -161,11 +161,20 @@ fn glb_passes_the_khronos_validator() {
             report.json
         );
         assert_eq!(
-            (report.errors, report.warnings, report.infos, report.hints),
-            (0, 0, 0, 0),
+            (report.errors, report.warnings),
+            (0, 0),
             "{:#?}",
             report.messages
         );
+        // The one note allowed: the flat atlas is as tall as its charts need, which is
+        // rarely a power of two (only WebGL 1 cares, and only for mipmaps or repeat
+        // wrapping, which the atlas's sampler does not ask for).
+        let other: Vec<_> = report
+            .messages
+            .iter()
+            .filter(|m| m["code"] != "IMAGE_NPOT_DIMENSIONS")
+            .collect();
+        assert!(other.is_empty(), "{other:#?}");
     }
 }
 

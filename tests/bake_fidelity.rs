@@ -32,8 +32,7 @@ fn compare(example: &str, size: u32, grid: usize, w: u32, h: u32, mode: ViewMode
         example,
         &source,
         path.parent().unwrap(),
-        size,
-        grid,
+        (size, grid, 1),
         (w, h),
         mode,
     )
@@ -43,8 +42,7 @@ fn compare_source(
     example: &str,
     source: &str,
     base: &Path,
-    size: u32,
-    grid: usize,
+    (size, grid, chart_quads): (u32, usize, usize),
     (w, h): (u32, u32),
     mode: ViewMode,
 ) -> f64 {
@@ -67,6 +65,7 @@ fn compare_source(
         size,
         resolution: Resolution::Cells(grid),
         bounds: None,
+        chart_quads,
     };
     let baked = pipeline::bake(&gpu, &compiled.module, base, shape, &options, &Quiet).unwrap();
     let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
@@ -84,7 +83,7 @@ fn compare_source(
         }
     }
     eprintln!(
-        "{example}: {size}² atlas, grid {grid}, {} charts of {}²: {mode:?} at {w}×{h}: PSNR {p:.2} dB",
+        "{example}: {size}-wide atlas, grid {grid}, {} charts of {}² ({chart_quads}² quads each): {mode:?} at {w}×{h}: PSNR {p:.2} dB",
         baked.table.len(),
         baked.layout.chart_size
     );
@@ -114,8 +113,7 @@ fn a_baked_smooth_material_matches_the_implicit_render() {
         "smooth",
         SMOOTH,
         dir.path(),
-        512,
-        24,
+        (512, 24, 1),
         (320, 240),
         ViewMode::Color,
     );
@@ -124,12 +122,25 @@ fn a_baked_smooth_material_matches_the_implicit_render() {
         "smooth",
         SMOOTH,
         dir.path(),
-        512,
-        24,
+        (512, 24, 1),
         (320, 240),
         ViewMode::Albedo,
     );
     assert!(p >= 35.0, "albedo PSNR {p:.2} dB");
+    // Larger charts, 2 × 2 mesh quads each: the same mesh resolution, a quarter of the
+    // charts, twice the texels along each side.
+    let p = compare_source(
+        "smooth",
+        SMOOTH,
+        dir.path(),
+        (512, 24, 2),
+        (320, 240),
+        ViewMode::Color,
+    );
+    assert!(
+        p >= 35.0,
+        "colour view PSNR {p:.2} dB with 2 × 2 quads per chart"
+    );
 }
 
 /// Textured and checkered scenes: the bake filters what the implicit render point-

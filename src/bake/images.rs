@@ -118,29 +118,64 @@ pub fn stacked_level(
     img
 }
 
-/// The exported mesh: four vertices per chart (their texture coordinates differ
-/// between charts), two triangles split along the shorter diagonal.
-pub fn mesh_data(mesh: &QuadMesh, table: &ChartTable, layout: &FlatLayout) -> MeshData {
+/// The exported mesh. Each chart is split into `m × m` quads at the parameters
+/// (i/m, j/m), projected onto the surface (`project`); the points on a chart's sides
+/// are computed once per mesh edge, so neighbouring charts' vertices coincide and the
+/// mesh is watertight. Vertices are not shared between charts (their texture
+/// coordinates differ); each small quad is split along its shorter diagonal.
+pub fn mesh_data(
+    mesh: &QuadMesh,
+    table: &ChartTable,
+    layout: &FlatLayout,
+    m: usize,
+    project: &(dyn Fn(DVec3) -> DVec3 + Sync),
+) -> MeshData {
+    let v = &mesh.vertices;
+    let points: Samples<[f64; 3]> = Samples::build(
+        table,
+        v.len(),
+        m + 1,
+        |i| v[i].to_array(),
+        |e, t| {
+            let edge = &table.edges[e];
+            project(v[edge.a as usize].lerp(v[edge.b as usize], t)).to_array()
+        },
+        |c, s, t| project(bilinear(table.corners[c].map(|i| v[i as usize]), s, t)).to_array(),
+    );
+    let n = m + 1;
     let mut out = MeshData::default();
-    let uv = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
     for (c, q) in table.corners.iter().enumerate() {
         let base = out.positions.len() as u32;
-        for (k, &(u, v)) in uv.iter().enumerate() {
-            let p = mesh.vertices[q[k] as usize];
-            let (t, n, w) = frame(mesh, *q, u, v);
-            out.positions.push(p.as_vec3().to_array());
-            out.normals.push(n.as_vec3().to_array());
-            out.tangents
-                .push([t.x as f32, t.y as f32, t.z as f32, w as f32]);
-            out.texcoords.push(layout.texcoord(c, u, v));
+        let grid = points.grid(table, c);
+        for j in 0..n {
+            for i in 0..n {
+                let (u, w) = (i as f64 / m as f64, j as f64 / m as f64);
+                let p = DVec3::from_array(grid[j * n + i]);
+                let (t, nrm, sign) = frame(mesh, *q, u, w);
+                out.positions.push(p.as_vec3().to_array());
+                out.normals.push(nrm.as_vec3().to_array());
+                out.tangents
+                    .push([t.x as f32, t.y as f32, t.z as f32, sign as f32]);
+                out.texcoords.push(layout.texcoord(c, u, w));
+            }
         }
-        let p = q.map(|i| mesh.vertices[i as usize]);
-        let tris = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
-            [0, 1, 2, 0, 2, 3]
-        } else {
-            [0, 1, 3, 1, 2, 3]
-        };
-        out.indices.extend(tris.iter().map(|k| base + k));
+        for j in 0..m {
+            for i in 0..m {
+                let k = [
+                    j * n + i,
+                    j * n + i + 1,
+                    (j + 1) * n + i + 1,
+                    (j + 1) * n + i,
+                ];
+                let p = k.map(|k| DVec3::from_array(grid[k]));
+                let tris = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+                    [0, 1, 2, 0, 2, 3]
+                } else {
+                    [0, 1, 3, 1, 2, 3]
+                };
+                out.indices.extend(tris.iter().map(|&t| base + k[t] as u32));
+            }
+        }
     }
     out
 }

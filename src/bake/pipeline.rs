@@ -28,6 +28,10 @@ pub enum Resolution {
 
 /// The default grid: cells along the longest side.
 pub const DEFAULT_GRID: usize = 48;
+/// The default mesh quads along a chart's side.
+pub const DEFAULT_CHART_QUADS: usize = 1;
+/// The most mesh quads along a chart's side.
+pub const MAX_CHART_QUADS: usize = 16;
 /// The largest atlas side.
 pub const MAX_SIZE: u32 = 16384;
 
@@ -38,6 +42,9 @@ pub struct Options {
     pub resolution: Resolution,
     /// Bounds for shapes without finite bounds (or to bake part of a shape).
     pub bounds: Option<Aabb>,
+    /// Mesh quads along a chart's side: charts come from a grid this many times
+    /// coarser than the mesh's, and each is split into `chart_quads²` mesh quads.
+    pub chart_quads: usize,
 }
 
 impl Default for Options {
@@ -46,6 +53,7 @@ impl Default for Options {
             size: 2048,
             resolution: Resolution::Cells(DEFAULT_GRID),
             bounds: None,
+            chart_quads: DEFAULT_CHART_QUADS,
         }
     }
 }
@@ -96,7 +104,10 @@ impl From<GpuError> for BakeError {
 /// The stages' times and the quality figures.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Report {
+    /// The chart grid's cells per axis.
     pub grid: [usize; 3],
+    /// Mesh quads along a chart's side.
+    pub chart_quads: usize,
     pub vertices: usize,
     pub charts: usize,
     pub chart_size: u32,
@@ -235,9 +246,17 @@ pub fn bake(
             "the grid would have {cells} cells along its longest side; the range is 2 to {MAX_GRID} (change --grid or --edge)"
         )));
     }
+    let m = options.chart_quads;
+    if !(1..=MAX_CHART_QUADS).contains(&m) {
+        return Err(BakeError::Option(format!(
+            "--chart-quads {m} is not between 1 and {MAX_CHART_QUADS}"
+        )));
+    }
     let scale = crate::uv::atlas::scale(shape);
-    let grid = Grid::over(bounds, cells);
+    // Charts come from the coarser grid; the mesh splits each into m × m quads.
+    let grid = Grid::over(bounds, cells.div_ceil(m).max(1));
     report.grid = grid.dims;
+    report.chart_quads = m;
 
     // 1. Mesh.
     progress.stage("mesh", 1);
@@ -322,7 +341,9 @@ pub fn bake(
     // 6. Images and the mesh.
     progress.stage("images", 1);
     let textures = images::flat_atlas(&quads, &table, &layout, &levels);
-    let mesh = images::mesh_data(&quads, &table, &layout);
+    let tolerance = 1e-5 * scale;
+    let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
+    let mesh = images::mesh_data(&quads, &table, &layout, m, &project);
     progress.finish();
     lap(&mut report, "images");
 

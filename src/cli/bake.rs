@@ -90,6 +90,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         size: args.size,
         resolution,
         bounds,
+        chart_quads: args.chart_quads,
     })
 }
 
@@ -220,8 +221,14 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     let l = &baked.layout;
     eprintln!("adapter:        {}", gpu.describe());
     eprintln!(
-        "mesh:           {} vertices, {} quads (grid {}×{}×{})",
-        r.vertices, r.charts, r.grid[0], r.grid[1], r.grid[2]
+        "mesh:           {} charts (chart grid {}×{}×{}), {} triangles ({}×{} quads per chart)",
+        r.charts,
+        r.grid[0],
+        r.grid[1],
+        r.grid[2],
+        baked.mesh.indices.len() / 3,
+        r.chart_quads,
+        r.chart_quads
     );
     eprintln!(
         "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²)",

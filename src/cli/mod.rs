@@ -241,6 +241,11 @@ pub struct BakeArgs {
     /// Mesh grid: the cells' edge length.
     #[arg(long)]
     pub edge: Option<f64>,
+    /// Mesh quads along each chart's side: charts come from a grid M times coarser
+    /// than the mesh, so there are M² times fewer charts, each with more texels (less
+    /// border overhead); each chart is split into M × M quads projected onto the surface.
+    #[arg(long, value_name = "M", default_value = "1")]
+    pub chart_quads: usize,
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]
     pub layout: Layout,

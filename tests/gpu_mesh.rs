@@ -333,8 +333,8 @@ fn the_normal_map_is_read_in_the_tangent_frame() {
     for w in [1.0f32, -1.0] {
         let (mesh, mut textures, layout) = strip(1, 64, w);
         textures.normal = image::RgbaImage::from_pixel(
-            64,
-            64,
+            layout.width,
+            layout.height,
             image::Rgba([encoded[0], encoded[1], encoded[2], 255]),
         );
         let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout).unwrap();

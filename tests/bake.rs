@@ -422,3 +422,47 @@ fn larger_charts_keep_borders_identical_and_the_mesh_watertight() {
         assert!(eval::distance(shape, x).abs() < 1e-5 * scale);
     }
 }
+
+/// The tangent-space normal map decodes, in the frame a rasterizer rebuilds from the
+/// exported mesh (barycentric over the triangle that holds the texel), to the baked
+/// object-space normal, within 8-bit quantization. Checked at level 0 with 2 × 2 quads
+/// per chart, so texels fall in every triangle of every split.
+#[test]
+fn the_normal_map_decodes_to_the_object_space_normal() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let options = Options {
+        chart_quads: 2,
+        ..small(16)
+    };
+    let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
+    let level = &baked.levels[0];
+    let n = level.n;
+    let mut worst = 0.0f64;
+    for c in 0..baked.table.len() {
+        let [x0, y0] = baked.layout.chart_origin(c, 0);
+        let grid = level.grid(&baked.table, c);
+        for j in 0..n {
+            for i in 0..n {
+                let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+                let (t, nrm, w) = sdfc::bake::images::render_frame(&baked.mesh, 2, c, u, v);
+                let b = nrm.cross(t) * w;
+                let px = baked
+                    .textures
+                    .normal
+                    .get_pixel(x0 + i as u32, y0 + j as u32);
+                let d = |k: usize| px[k] as f64 / 255.0 * 2.0 - 1.0;
+                let decoded = (t * d(0) + b * d(1) + nrm * d(2)).normalize();
+                let g = &grid[j * n + i];
+                let want = DVec3::new(g[8] as f64, g[9] as f64, g[10] as f64).normalize();
+                worst = worst.max(decoded.angle_between(want));
+            }
+        }
+    }
+    // An 8-bit component is off by at most 1/255 in [-1, 1]: about 0.5° at worst.
+    assert!(
+        worst.to_degrees() < 0.8,
+        "worst angle {:.3}°",
+        worst.to_degrees()
+    );
+}

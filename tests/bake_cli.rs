@@ -209,6 +209,26 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("cannot write"), "{err}");
+    // Every output is checked before the bake: an unwritable --object-normals leaves
+    // no .glb behind.
+    let (code, _, err) = sdfc(&[
+        "bake",
+        &sphere,
+        "--grid",
+        "6",
+        "--size",
+        "64",
+        "-o",
+        &out_s,
+        "--object-normals",
+        missing.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot write") && !out.exists(), "{err}");
+    // Bounds that miss a bounded shape are a usage error.
+    let (code, _, err) = sdfc(&["bake", &sphere, "--bounds", "5,5,5", "6,6,6", "-o", &out_s]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("do not overlap"), "{err}");
     // Nothing but what the test made is in the folder: no temporary files left.
     let mut names: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()

@@ -155,7 +155,13 @@ fn expected_level(layout: &FlatLayout, distance: f64, side: u32) -> f64 {
     let n = layout.chart_size as f64;
     let du_dx = distance * 2.0 * (std::f64::consts::FRAC_PI_8).tan() / side as f64;
     let l = (n * du_dx).log2();
-    let i = l + (1.0 + l.exp2() / n).log2();
+    let i = l - (1.0 + l.exp2() / n).log2();
+    // The defining property: one texel of level i per pixel, counting the half-texel
+    // inset (level i spans n/2^i − 1 spacings over the chart), i.e. the paper's own
+    // i = l + log2(1 − 2^i/N) (its printed Eq. 2 flips the sign of the solution).
+    let texels_per_pixel = (n / i.exp2() - 1.0) * du_dx;
+    assert!((texels_per_pixel - 1.0).abs() < 1e-9, "{texels_per_pixel}");
+    assert!((i - (l + (1.0 - i.exp2() / n).log2())).abs() < 1e-9);
     i.clamp(0.0, (layout.levels() - 1) as f64)
 }
 
@@ -231,7 +237,7 @@ fn albedo_is_the_analytic_colour_at_level_0_and_at_coarse_levels() {
     let (r, layout) = renderer(&gpu, 1, 256, 1.0);
     assert_eq!((layout.chart_size, layout.levels()), (128, 7));
     // Close: 150 pixels a unit, more than the chart's 128 texels, so level 0. Coarse:
-    // 20 and 10 pixels a unit, levels 2–3 and 3–4 (Eq. 2: 2.75 and 3.82).
+    // 20 and 10 pixels a unit, levels 2–3 and 3–4 (Eq. 2: 2.61 and 3.54).
     for (side, pixels, levels) in [
         (128, 150.0, (0.0, 0.0)),
         (64, 20.0, (2.0, 3.0)),

@@ -45,10 +45,67 @@ pub fn frame(mesh: &QuadMesh, corners: [u32; 4], u: f64, v: f64) -> (DVec3, DVec
     (t, n, w)
 }
 
+/// The tangent frame a rasterizer rebuilds at chart-local (u, v) of chart `c` of the
+/// exported mesh (`m × m` quads per chart, as [`mesh_data`] writes them): the
+/// vertices' normals and tangents interpolated barycentrically over the triangle that
+/// holds (u, v), then N = normalize(n), T = normalize(t − N (N · t)), and the
+/// bitangent sign. The tangent-space normal map is encoded against exactly this
+/// frame, so the mesh renderer (and any glTF viewer) decodes the baked normal.
+pub fn render_frame(
+    exported: &MeshData,
+    m: usize,
+    c: usize,
+    u: f64,
+    v: f64,
+) -> (DVec3, DVec3, f64) {
+    let n = m + 1;
+    let (a, b) = (
+        ((u * m as f64).floor() as usize).min(m - 1),
+        ((v * m as f64).floor() as usize).min(m - 1),
+    );
+    let (s, t) = (u * m as f64 - a as f64, v * m as f64 - b as f64);
+    let base = c * n * n;
+    let k = [
+        b * n + a,
+        b * n + a + 1,
+        (b + 1) * n + a + 1,
+        (b + 1) * n + a,
+    ]
+    .map(|k| base + k);
+    let p = k.map(|k| DVec3::from_array(exported.positions[k].map(f64::from)));
+    // The split mesh_data chose, and the barycentric weights of (s, t) in its triangle.
+    let weights = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+        if s >= t {
+            [1.0 - s, s - t, t, 0.0]
+        } else {
+            [1.0 - t, 0.0, s, t - s]
+        }
+    } else if s + t <= 1.0 {
+        [1.0 - s - t, s, 0.0, t]
+    } else {
+        [0.0, 1.0 - t, s + t - 1.0, 1.0 - s]
+    };
+    let mut nrm = DVec3::ZERO;
+    let mut tan = DVec3::ZERO;
+    let mut sign = 0.0;
+    for (w, &k) in weights.iter().zip(&k) {
+        nrm += DVec3::from_array(exported.normals[k].map(f64::from)) * *w;
+        let t4 = exported.tangents[k];
+        tan += DVec3::new(t4[0] as f64, t4[1] as f64, t4[2] as f64) * *w;
+        sign += t4[3] as f64 * *w;
+    }
+    let nrm = nrm.normalize_or(DVec3::Y);
+    let tan = (tan - nrm * nrm.dot(tan))
+        .try_normalize()
+        .unwrap_or_else(|| nrm.any_orthonormal_vector());
+    (tan, nrm, if sign >= 0.0 { 1.0 } else { -1.0 })
+}
+
 /// Writes every level of every chart into the flat atlas: base colour (sRGB),
 /// metallic-roughness, tangent-space normals and emission (when any).
 pub fn flat_atlas(
-    mesh: &QuadMesh,
+    exported: &MeshData,
+    m: usize,
     table: &ChartTable,
     layout: &FlatLayout,
     levels: &[Samples<Texel<CHANNELS>>],
@@ -74,7 +131,7 @@ pub fn flat_atlas(
                     emits |= t[5] > 0.0 || t[6] > 0.0 || t[7] > 0.0;
                     emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
                     let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
-                    let (tan, nrm, sign) = frame(mesh, table.corners[c], u, v);
+                    let (tan, nrm, sign) = render_frame(exported, m, c, u, v);
                     let bit = nrm.cross(tan) * sign;
                     let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
                     let ts = DVec3::new(o.dot(tan), o.dot(bit), o.dot(nrm));

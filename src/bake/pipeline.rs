@@ -65,9 +65,8 @@ pub enum BakeError {
     NoMaterial,
     /// The shape has no finite bounds and no `--bounds` was given.
     Unbounded,
-    /// No surface inside the bounds, as sampled on a grid of this cell size (None: the
-    /// bounds themselves are empty).
-    Empty(Option<f64>),
+    /// No surface inside the bounds, as sampled on a grid of this cell size.
+    Empty(f64),
     /// A bad option (size, grid, bounds).
     Option(String),
     /// The charts do not fit, or the atlas is over the adapter's limits.
@@ -84,8 +83,7 @@ impl std::fmt::Display for BakeError {
             BakeError::Unbounded => f.write_str(
                 "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds=-2,-2,-2 2,2,2",
             ),
-            BakeError::Empty(None) => f.write_str("the bounds are empty: nothing to bake"),
-            BakeError::Empty(Some(cell)) => write!(
+            BakeError::Empty(cell) => write!(
                 f,
                 "found no surface inside the bounds on a grid of {cell:.3}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge finds it)"
             ),
@@ -229,7 +227,9 @@ pub fn bake(
         None => return Err(BakeError::Unbounded),
     };
     if !bounds.is_finite() || (bounds.max - bounds.min).min_element() < 0.0 {
-        return Err(BakeError::Empty(None));
+        return Err(BakeError::Option(String::from(
+            "--bounds do not overlap the shape's own bounds: there is nothing of it to bake there",
+        )));
     }
     let longest = (bounds.max - bounds.min).max_element();
     let cells = match options.resolution {
@@ -263,7 +263,7 @@ pub fn bake(
     let quads = dual_contour(shape, &grid, 1e-5 * scale);
     progress.finish();
     if quads.quads.is_empty() {
-        return Err(BakeError::Empty(Some(grid.cell)));
+        return Err(BakeError::Empty(grid.cell));
     }
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");
@@ -340,10 +340,10 @@ pub fn bake(
 
     // 6. Images and the mesh.
     progress.stage("images", 1);
-    let textures = images::flat_atlas(&quads, &table, &layout, &levels);
     let tolerance = 1e-5 * scale;
     let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
     let mesh = images::mesh_data(&quads, &table, &layout, m, &project);
+    let textures = images::flat_atlas(&mesh, m, &table, &layout, &levels);
     progress.finish();
     lap(&mut report, "images");
 

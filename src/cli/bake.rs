@@ -96,10 +96,45 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
 
 /// Writes every output, or none: all are encoded first, then each is written atomically.
 fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
+    let mut created: Vec<&PathBuf> = Vec::new();
     for (path, bytes) in outputs {
-        write_output(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        let existed = path.symlink_metadata().is_ok();
+        if let Err(e) = write_output(path, bytes) {
+            // All or nothing: remove the files this run created before the failure.
+            for p in created {
+                let _ = std::fs::remove_file(p);
+            }
+            return Err(format!("cannot write {}: {e}", path.display()));
+        }
+        if !existed {
+            created.push(path);
+        }
     }
     Ok(())
+}
+
+/// Whether `path` can be written: not a folder, in a folder that exists and takes a
+/// new file (tried with a temporary file there, removed at once).
+fn writable(path: &std::path::Path) -> Result<(), String> {
+    if path.is_dir() {
+        return Err("it is a folder".into());
+    }
+    let parent = match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(p) => p,
+        None => std::path::Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err("its folder does not exist".into());
+    }
+    // Device files (/dev/stdout) and FIFOs are written through, not replaced.
+    if path.starts_with("/dev") || path.starts_with("/proc") {
+        return Ok(());
+    }
+    tempfile::Builder::new()
+        .prefix(".sdfc-bake-check")
+        .tempfile_in(parent)
+        .map(drop)
+        .map_err(|e| format!("its folder does not take new files ({e})"))
 }
 
 fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
@@ -139,17 +174,16 @@ pub fn run(args: BakeArgs) -> ExitCode {
             return ExitCode::from(exit::USAGE);
         }
     };
-    // An output folder that is missing fails now, not after the bake.
-    for path in std::iter::once(&args.output)
+    // Outputs that cannot be written fail now, not after the bake: a missing or
+    // read-only folder, a folder in the file's place.
+    let outputs: Vec<&PathBuf> = std::iter::once(&args.output)
         .chain(&args.ktx2)
         .chain(&args.charts)
-    {
-        let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-        if parent.is_some_and(|p| !p.is_dir()) {
-            eprintln!(
-                "error: cannot write {}: its folder does not exist",
-                path.display()
-            );
+        .chain(&args.object_normals)
+        .collect();
+    for path in &outputs {
+        if let Err(e) = writable(path) {
+            eprintln!("error: cannot write {}: {e}", path.display());
             return ExitCode::from(exit::USAGE);
         }
     }

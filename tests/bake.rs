@@ -41,6 +41,7 @@ fn small(grid: usize) -> Options {
         resolution: Resolution::Cells(grid),
         bounds: None,
         chart_quads: 1,
+        gutter: false,
     }
 }
 
@@ -465,4 +466,99 @@ fn the_normal_map_decodes_to_the_object_space_normal() {
         "worst angle {:.3}°",
         worst.to_degrees()
     );
+}
+
+/// The gutter (`--gutter`): each level-0 chart is padded with half a chart of texels
+/// from the charts across its sides. A generic engine's own mip chain (a 2 × 2 box
+/// filter of the whole image) then averages each chart's border with its real
+/// neighbour's texels: at that chain's level 1, the two sides of every chart border
+/// agree far better than without the gutter, where they average unrelated charts.
+#[test]
+fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let seam = |gutter: bool, size: u32| -> (f64, Baked) {
+        let options = Options {
+            gutter,
+            size,
+            ..small(10)
+        };
+        let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
+        let img = &baked.textures.base_color;
+        let (w, h) = (img.width() / 2, img.height() / 2);
+        // The generic chain's level 1: a 2 × 2 box filter of the image.
+        let half: Vec<[f64; 3]> = (0..w * h)
+            .map(|k| {
+                let (x, y) = (2 * (k % w), 2 * (k / w));
+                let mut acc = [0.0; 3];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let p = img.get_pixel(x + dx, y + dy);
+                    for c in 0..3 {
+                        acc[c] += p[c] as f64 / 4.0;
+                    }
+                }
+                acc
+            })
+            .collect();
+        // Bilinear at level-0 texel centre (x, y), as a sampler would read level 1.
+        let sample = |x: u32, y: u32| -> [f64; 3] {
+            let (fx, fy) = ((x as f64 + 0.5) / 2.0 - 0.5, (y as f64 + 0.5) / 2.0 - 0.5);
+            let (x0, y0) = (fx.floor().max(0.0) as u32, fy.floor().max(0.0) as u32);
+            let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
+            let at = |x: u32, y: u32| half[(y.min(h - 1) * w + x.min(w - 1)) as usize];
+            std::array::from_fn(|c| {
+                let top = at(x0, y0)[c] * (1.0 - tx) + at(x0 + 1, y0)[c] * tx;
+                let bottom = at(x0, y0 + 1)[c] * (1.0 - tx) + at(x0 + 1, y0 + 1)[c] * tx;
+                top * (1.0 - ty) + bottom * ty
+            })
+        };
+        let file = ChartsFile::new(&baked.table, &baked.layout);
+        let mut worst = 0.0f64;
+        for chart in &file.charts {
+            let n = chart.rects[0][2] as usize;
+            for s in 0..4 {
+                let nb = &chart.neighbours[s][0];
+                let other = &file.charts[nb.chart as usize];
+                for k in 1..n - 1 {
+                    let kk = if nb.reversed { n - 1 - k } else { k };
+                    let (i, j) = side_texel(n, s, k, 0);
+                    let (i2, j2) = side_texel(n, nb.side as usize, kk, 0);
+                    let a = sample(chart.rects[0][0] + i as u32, chart.rects[0][1] + j as u32);
+                    let b = sample(other.rects[0][0] + i2 as u32, other.rects[0][1] + j2 as u32);
+                    worst = worst.max((0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f64::max));
+                }
+            }
+        }
+        (worst, baked)
+    };
+    let (with, baked) = seam(true, 256);
+    let (without, _) = seam(false, 256);
+    eprintln!("largest step across borders at a generic chain's level 1: {with:.1} with the gutter, {without:.1} without (of 255)");
+    assert!(
+        with * 4.0 < without,
+        "{with} with the gutter, {without} without"
+    );
+    assert!(with <= 12.0, "{with}");
+    // The gutter holds the neighbours' texels, and the borders stay identical.
+    let file = ChartsFile::new(&baked.table, &baked.layout);
+    assert_eq!(baked.layout.gutter, baked.layout.chart_size / 2);
+    assert_borders_identical(&baked.textures.base_color, &file, "with a gutter");
+    // sdfc's own renderer reads inside the charts only: with and without a gutter
+    // (the same chart size: twice the width for the gutter's), the renders agree.
+    let (_, baked) = seam(true, 512);
+    let (_, plain) = seam(false, 256);
+    assert_eq!(plain.layout.chart_size, baked.layout.chart_size);
+    let analysis = sdfc::driver::check(SMOOTH, None);
+    let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
+    let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
+    (view.width, view.height) = (96, 72);
+    let draw = |b: &Baked| {
+        let r = sdfc::gpu::MeshRenderer::new(&gpu, &b.mesh, &b.textures, &b.layout).unwrap();
+        r.render(&gpu, &view, sdfc::gpu::ViewMode::Color)
+            .unwrap()
+            .color
+    };
+    let (a, b) = (draw(&baked), draw(&plain));
+    let worst = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+    assert!(worst <= 2, "the renders differ by {worst}");
 }

@@ -64,6 +64,10 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         if !plate {
             args.extend(["--grid", "8"]);
         }
+        // One example with a gutter: the same checks hold.
+        if stem == "capsule" {
+            args.push("--gutter");
+        }
         let (code, _, err) = sdfc(&args);
         assert_eq!(code, 0, "{stem}: {err}");
         assert!(

@@ -66,6 +66,7 @@ fn compare_source(
         resolution: Resolution::Cells(grid),
         bounds: None,
         chart_quads,
+        gutter: false,
     };
     let baked = pipeline::bake(&gpu, &compiled.module, base, shape, &options, &Quiet).unwrap();
     let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);

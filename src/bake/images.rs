@@ -1,6 +1,6 @@
 //! Stage 6: the flat atlas images (§3.3) and the exported mesh.
 
-use super::charts::{ChartTable, Samples};
+use super::charts::{side_texel, ChartTable, Samples};
 use super::mesh::QuadMesh;
 use super::mips::Texel;
 use super::pipeline::{bilinear, CHANNELS};
@@ -137,6 +137,69 @@ pub fn flat_atlas(
                     let ts = DVec3::new(o.dot(tan), o.dot(bit), o.dot(nrm));
                     let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
                     normal.put_pixel(x, y, Rgba([enc(ts.x), enc(ts.y), enc(ts.z), 255]));
+                }
+            }
+        }
+    }
+    if layout.gutter > 0 {
+        let g = layout.gutter as i64;
+        let level = &levels[0];
+        let n = level.n as i64;
+        let grids: Vec<Vec<Texel<CHANNELS>>> =
+            (0..table.len()).map(|c| level.grid(table, c)).collect();
+        for c in 0..table.len() {
+            let [x0, y0] = layout.chart_origin(c, 0);
+            for j in -g..n + g {
+                for i in -g..n + g {
+                    if (0..n).contains(&i) && (0..n).contains(&j) {
+                        continue;
+                    }
+                    // Past a corner, continue the side along u (clamp v into the chart).
+                    let jc = j.clamp(0, n - 1);
+                    let (side, k, depth) = if i < 0 {
+                        (3, n - 1 - jc, -i)
+                    } else if i >= n {
+                        (1, jc, i - (n - 1))
+                    } else if j < 0 {
+                        (0, i, -j)
+                    } else {
+                        (2, n - 1 - i, j - (n - 1))
+                    };
+                    let t = match table.neighbours(c, side as usize).first() {
+                        Some(&(c2, s2, reversed)) => {
+                            let kk = if reversed { n - 1 - k } else { k };
+                            let (a, b) = side_texel(
+                                n as usize,
+                                s2 as usize,
+                                kk as usize,
+                                depth.min(n - 1) as usize,
+                            );
+                            grids[c2 as usize][b * n as usize + a]
+                        }
+                        // A mesh boundary: the chart's own border texel.
+                        None => {
+                            let (a, b) = side_texel(n as usize, side as usize, k as usize, 0);
+                            grids[c][b * n as usize + a]
+                        }
+                    };
+                    let (x, y) = ((x0 as i64 + i) as u32, (y0 as i64 + j) as u32);
+                    color.put_pixel(x, y, Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]));
+                    mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
+                    emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
+                    // The neighbour's normal in this chart's frame at the nearest border point.
+                    let (u, v) = (
+                        i.clamp(0, n - 1) as f64 / (n - 1) as f64,
+                        jc as f64 / (n - 1) as f64,
+                    );
+                    let (tan, nrm, sign) = render_frame(exported, m, c, u, v);
+                    let bit = nrm.cross(tan) * sign;
+                    let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
+                    let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
+                    normal.put_pixel(
+                        x,
+                        y,
+                        Rgba([enc(o.dot(tan)), enc(o.dot(bit)), enc(o.dot(nrm)), 255]),
+                    );
                 }
             }
         }

@@ -67,6 +67,13 @@ pub struct FlatLayout {
     pub rows: u32,
     /// One origin per level, from level 0 (chart_size texels) to the last (2 texels).
     pub level_origins: Vec<[u32; 2]>,
+    /// Texels of gutter around each level-0 chart, filled from the neighbouring charts
+    /// across each side (0: none). A level-0 cell is then `chart_size + 2 · gutter`
+    /// texels and the chart sits `gutter` texels in: for engines that build their own
+    /// mip chain of the image, whose coarse texels then average a chart with its real
+    /// neighbours' texels instead of an unrelated chart's.
+    #[serde(default)]
+    pub gutter: u32,
 }
 
 impl FlatLayout {
@@ -85,16 +92,24 @@ impl FlatLayout {
         [chart as u32 % self.columns, chart as u32 / self.columns]
     }
 
-    /// The top-left texel of chart `chart` at level `l`.
+    /// The texels from one cell of level `l` to the next: the chart's size, plus the
+    /// gutter on both sides at level 0.
+    pub fn stride(&self, level: usize) -> u32 {
+        self.size_at(level) + if level == 0 { 2 * self.gutter } else { 0 }
+    }
+
+    /// The top-left texel of chart `chart` at level `l` (inside its gutter).
     pub fn chart_origin(&self, chart: usize, level: usize) -> [u32; 2] {
-        let n = self.size_at(level);
+        let stride = self.stride(level);
+        let inset = if level == 0 { self.gutter } else { 0 };
         let [cx, cy] = self.cell(chart);
         let [ox, oy] = self.level_origins[level];
-        [ox + cx * n, oy + cy * n]
+        [ox + cx * stride + inset, oy + cy * stride + inset]
     }
 
     /// The level-0 atlas coordinate (glTF TEXCOORD_0, in [0, 1]) of chart-local (u, v).
     pub fn texcoord(&self, chart: usize, u: f64, v: f64) -> [f32; 2] {
+        // (Through chart_origin, which includes the gutter.)
         let n = self.chart_size as f64;
         let [x, y] = self.chart_origin(chart, 0);
         [
@@ -108,24 +123,32 @@ impl FlatLayout {
     /// height) and the smaller levels (below it, side by side) fit. The image is `size`
     /// wide and only as tall as the charts need. `None` when even 2-texel charts do not fit.
     pub fn fit(charts: usize, size: u32) -> Option<FlatLayout> {
+        FlatLayout::fit_with(charts, size, false)
+    }
+
+    /// [`FlatLayout::fit`], with a gutter of half a chart around each level-0 chart
+    /// when `gutter` is set (its cells are then twice the chart's size, a power of two).
+    pub fn fit_with(charts: usize, size: u32, gutter: bool) -> Option<FlatLayout> {
         // Chart sizes are powers of two (each level halves them, down to 2).
         let mut n = if size >= 2 { 1 << size.ilog2() } else { 0 };
         while n >= 2 {
-            let columns = size / n;
-            let rows = (2 * size / 3) / n;
+            let g = if gutter { n / 2 } else { 0 };
+            let stride = n + 2 * g;
+            let columns = size / stride;
+            let rows = (2 * size / 3) / stride;
             if (columns as u64) * (rows as u64) >= charts.max(1) as u64 {
                 let rows = (charts.max(1) as u32).div_ceil(columns);
                 let mut origins = vec![[0, 0]];
                 let mut x = 0;
                 let mut level = 1;
                 while n >> level >= 2 {
-                    origins.push([x, rows * n]);
+                    origins.push([x, rows * stride]);
                     x += columns * (n >> level);
                     level += 1;
                 }
                 // The image is as tall as the levels need (the paper's packed style
-                // does the same): level 0's rows, then half of that for the rest.
-                let height = rows * n + if origins.len() > 1 { rows * n / 2 } else { 0 };
+                // does the same): level 0's rows, then half a chart per row for the rest.
+                let height = rows * stride + if origins.len() > 1 { rows * n / 2 } else { 0 };
                 return Some(FlatLayout {
                     width: size,
                     height,
@@ -133,6 +156,7 @@ impl FlatLayout {
                     columns,
                     rows,
                     level_origins: origins,
+                    gutter: g,
                 });
             }
             n /= 2;

@@ -45,6 +45,9 @@ pub struct Options {
     /// Mesh quads along a chart's side: charts come from a grid this many times
     /// coarser than the mesh's, and each is split into `chart_quads²` mesh quads.
     pub chart_quads: usize,
+    /// A gutter of half a chart around each level-0 chart, filled from its neighbours
+    /// (for engines that build their own mip chains; see [`FlatLayout::gutter`]).
+    pub gutter: bool,
 }
 
 impl Default for Options {
@@ -54,6 +57,7 @@ impl Default for Options {
             resolution: Resolution::Cells(DEFAULT_GRID),
             bounds: None,
             chart_quads: DEFAULT_CHART_QUADS,
+            gutter: false,
         }
     }
 }
@@ -270,7 +274,7 @@ pub fn bake(
 
     // 2. Charts and layout.
     let table = ChartTable::new(&quads);
-    let layout = FlatLayout::fit(table.len(), options.size).ok_or_else(|| {
+    let layout = FlatLayout::fit_with(table.len(), options.size, options.gutter).ok_or_else(|| {
         let (charts, size) = (table.len(), options.size);
         BakeError::Resource(format!(
             "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels each: use a coarser --grid or a larger --size"

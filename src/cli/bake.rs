@@ -91,6 +91,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         resolution,
         bounds,
         chart_quads: args.chart_quads,
+        gutter: args.gutter,
     })
 }
 

@@ -246,6 +246,11 @@ pub struct BakeArgs {
     /// border overhead); each chart is split into M × M quads projected onto the surface.
     #[arg(long, value_name = "M", default_value = "1")]
     pub chart_quads: usize,
+    /// Pad every level-0 chart with a gutter of half its size, filled from the charts
+    /// across its sides, for engines that build their own mip chain of the image (its
+    /// coarse texels then average real neighbours); costs a quarter of the charts' size.
+    #[arg(long)]
+    pub gutter: bool,
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]
     pub layout: Layout,

@@ -20,6 +20,7 @@ pub fn mesh_wgsl(layout: &FlatLayout) -> Result<String, template::Mismatch> {
         ("width", f(layout.width)),
         ("height", f(layout.height)),
         ("chart_size", f(layout.chart_size)),
+        ("gutter", f(layout.gutter)),
         ("columns", f(layout.columns)),
         ("rows", f(layout.rows)),
         ("levels", layout.levels().to_string()),

@@ -122,8 +122,14 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
     if layout.level_origins[0] != [0, 0] {
         return Err(String::from("level 0 does not start at (0, 0)"));
     }
+    if layout.gutter > n {
+        return Err(format!(
+            "a gutter of {} texels around {n}-texel charts",
+            layout.gutter
+        ));
+    }
     for (l, &[x, y]) in layout.level_origins.iter().enumerate() {
-        let s = layout.size_at(l) as u64;
+        let s = layout.stride(l) as u64;
         let right = x as u64 + layout.columns as u64 * s;
         let bottom = y as u64 + layout.rows as u64 * s;
         if right > layout.width as u64 || bottom > layout.height as u64 {

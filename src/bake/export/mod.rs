@@ -85,8 +85,14 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
             "the atlas has {levels} levels for charts of {chart_size} texels"
         ));
     }
+    if layout.gutter > chart_size {
+        return Err(format!(
+            "the atlas's gutter of {} texels is wider than its {chart_size}-texel charts",
+            layout.gutter
+        ));
+    }
     for (level, &[x, y]) in layout.level_origins.iter().enumerate() {
-        let n = layout.size_at(level) as u64;
+        let n = layout.stride(level) as u64;
         if x as u64 + columns as u64 * n > width as u64
             || y as u64 + rows as u64 * n > height as u64
         {

@@ -1,0 +1,536 @@
+//! The interpreter of [`super::MaterialEval`]: per-point values ([`V`]) and one
+//! evaluation's state ([`Cx`]), with every operator and builtin the WGSL emitter
+//! accepts in a field.
+
+use super::*;
+
+/// A per-point value: up to four components, or a bool.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum V {
+    Num([f64; 4], usize),
+    Bool(bool),
+}
+
+impl V {
+    pub(super) fn float(x: f64) -> V {
+        V::Num([x, 0.0, 0.0, 0.0], 1)
+    }
+
+    pub(super) fn from_slice(c: &[f64]) -> V {
+        let mut a = [0.0; 4];
+        for (d, s) in a.iter_mut().zip(c) {
+            *d = *s;
+        }
+        V::Num(a, c.len().min(4))
+    }
+
+    pub(super) fn comps(&self) -> &[f64] {
+        match self {
+            V::Num(c, n) => &c[..*n],
+            V::Bool(_) => &[],
+        }
+    }
+
+    pub(super) fn x(&self) -> f64 {
+        self.comps().first().copied().unwrap_or(0.0)
+    }
+
+    pub(super) fn bool(&self) -> bool {
+        matches!(self, V::Bool(true))
+    }
+
+    pub(super) fn vec2(&self) -> DVec2 {
+        let c = self.widen(2);
+        DVec2::new(c.comps()[0], c.comps()[1])
+    }
+
+    pub(super) fn vec3(&self) -> DVec3 {
+        let c = self.widen(3);
+        DVec3::new(c.comps()[0], c.comps()[1], c.comps()[2])
+    }
+
+    /// A float broadcast to `n` components (WGSL's `vecN<f32>(x)`); others unchanged.
+    pub(super) fn widen(self, n: usize) -> V {
+        match self {
+            V::Num(c, 1) if n > 1 => V::Num([c[0]; 4], n),
+            other => other,
+        }
+    }
+
+    pub(super) fn map(self, f: impl Fn(f64) -> f64) -> V {
+        match self {
+            V::Num(mut c, n) => {
+                for x in &mut c[..n] {
+                    *x = f(*x);
+                }
+                V::Num(c, n)
+            }
+            b => b,
+        }
+    }
+
+    pub(super) fn zip(self, o: V, f: impl Fn(f64, f64) -> f64) -> V {
+        match (self, o) {
+            (V::Num(mut a, n), V::Num(b, _)) => {
+                for i in 0..n {
+                    a[i] = f(a[i], b[i]);
+                }
+                V::Num(a, n)
+            }
+            (a, _) => a,
+        }
+    }
+}
+
+pub(super) fn vec3v(v: DVec3) -> V {
+    V::Num([v.x, v.y, v.z, 0.0], 3)
+}
+
+/// The state of one evaluation.
+pub(super) struct Cx<'e> {
+    pub(super) textures: &'e Textures,
+    pub(super) atlas: &'e mut dyn FnMut(AtlasId) -> AtlasValues,
+    pub(super) samples: Vec<Option<AtlasValues>>,
+    pub(super) p: DVec3,
+    pub(super) n: DVec3,
+    pub(super) footprint: f64,
+    pub(super) tangent_u: DVec3,
+    pub(super) tangent_v: DVec3,
+    /// While a texture's derivatives are evaluated: the displacement of atlas uv and of
+    /// `position` (the emitter's `Uses::offset`).
+    pub(super) offset: Option<(DVec2, DVec3)>,
+    /// Whether textures sampled now hold colour (the field is `color` or `emission`).
+    pub(super) srgb: bool,
+    pub(super) margin: f64,
+}
+
+/// Distance of x from the nearest integer.
+pub(super) fn to_integer(x: f64) -> f64 {
+    (x - x.round()).abs()
+}
+
+impl Cx<'_> {
+    pub(super) fn jump(&mut self, distance: f64) {
+        if !distance.is_nan() {
+            self.margin = self.margin.min(distance);
+        }
+    }
+
+    pub(super) fn atlas_sample(&mut self, k: AtlasId) -> AtlasValues {
+        if let Some(s) = self.samples.get(k.index()).copied().flatten() {
+            return s;
+        }
+        let s = (self.atlas)(k);
+        if let Some(slot) = self.samples.get_mut(k.index()) {
+            *slot = Some(s);
+        }
+        s
+    }
+
+    pub(super) fn value(&mut self, v: &Value) -> V {
+        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.value_inner(v))
+    }
+
+    pub(super) fn value_inner(&mut self, v: &Value) -> V {
+        let (expr, ty) = match v {
+            Value::Float(x) => return V::float(*x),
+            Value::Vec(c) => return V::from_slice(c),
+            Value::Bool(b) => return V::Bool(*b),
+            Value::Field(e, ty) => (&**e, ty),
+            // Rejected by `MaterialEval::new`.
+            _ => return V::float(0.0),
+        };
+        match expr {
+            FieldExpr::Input(SurfaceInput::Position) => {
+                vec3v(self.p + self.offset.map_or(DVec3::ZERO, |o| o.1))
+            }
+            FieldExpr::Input(SurfaceInput::Normal) => vec3v(self.n),
+            FieldExpr::Atlas { atlas, attr } => {
+                let s = self.atlas_sample(*atlas);
+                match attr {
+                    AtlasAttr::Uv => {
+                        let uv = s.uv + self.offset.map_or(DVec2::ZERO, |o| o.0);
+                        V::from_slice(&[uv.x, uv.y])
+                    }
+                    AtlasAttr::Distance => V::float(s.distance),
+                    AtlasAttr::Status => V::float(s.status),
+                    AtlasAttr::Transport => V::from_slice(&s.transport.to_array()),
+                    AtlasAttr::Seed => V::float(s.seed),
+                }
+            }
+            FieldExpr::Unary { op, operand } => {
+                let o = self.value(operand);
+                match (op, o) {
+                    (UnaryOp::Neg, o) => o.map(|x| -x),
+                    (UnaryOp::Not, V::Bool(b)) => V::Bool(!b),
+                    (UnaryOp::Not, o) => o,
+                }
+            }
+            FieldExpr::Binary { op, lhs, rhs } => {
+                let (l, r) = (self.value(lhs), self.value(rhs));
+                self.binary(*op, l, r)
+            }
+            FieldExpr::Swizzle { base, components } => {
+                let b = self.value(base);
+                let c: Vec<f64> = components
+                    .iter()
+                    .map(|&k| b.comps().get(k as usize).copied().unwrap_or(0.0))
+                    .collect();
+                V::from_slice(&c)
+            }
+            FieldExpr::Vector(args) => {
+                let mut c = Vec::with_capacity(4);
+                for a in args {
+                    c.extend_from_slice(self.value(a).comps());
+                }
+                match ty {
+                    Ty::Vec(n) if c.len() == 1 => V::float(c[0]).widen(*n as usize),
+                    _ => V::from_slice(&c),
+                }
+            }
+            FieldExpr::Call { builtin, args } => self.call(*builtin, args),
+        }
+    }
+
+    /// `binary` of the emitter: floats widened to the vector operand's size.
+    pub(super) fn binary(&mut self, op: BinaryOp, l: V, r: V) -> V {
+        use BinaryOp::*;
+        let n = l.comps().len().max(r.comps().len());
+        let (a, b) = (l.widen(n), r.widen(n));
+        match op {
+            Or => V::Bool(a.bool() || b.bool()),
+            And => V::Bool(a.bool() && b.bool()),
+            Add => a.zip(b, |x, y| x + y),
+            Sub => a.zip(b, |x, y| x - y),
+            Mul => a.zip(b, |x, y| x * y),
+            Div => a.zip(b, |x, y| x / y),
+            Rem => {
+                for (x, y) in a.comps().iter().zip(b.comps()) {
+                    self.jump(to_integer(x / y));
+                }
+                a.zip(b, |x, y| x - y * (x / y).floor())
+            }
+            Eq | Ne => {
+                if let (V::Bool(x), V::Bool(y)) = (a, b) {
+                    return V::Bool((x == y) == (op == Eq));
+                }
+                for (x, y) in a.comps().iter().zip(b.comps()) {
+                    self.jump((x - y).abs());
+                }
+                // `all(a == b)` / `all(a != b)` for vectors, as the emitter writes it.
+                V::Bool(
+                    a.comps()
+                        .iter()
+                        .zip(b.comps())
+                        .all(|(x, y)| (x == y) == (op == Eq)),
+                )
+            }
+            Lt | Le | Gt | Ge => {
+                let (x, y) = (a.x(), b.x());
+                self.jump((x - y).abs());
+                V::Bool(match op {
+                    Lt => x < y,
+                    Le => x <= y,
+                    Gt => x > y,
+                    _ => x >= y,
+                })
+            }
+        }
+    }
+
+    pub(super) fn call(&mut self, builtin: BuiltinId, args: &[Value]) -> V {
+        use BuiltinId as B;
+        if builtin == B::Sample {
+            return self.sample(args);
+        }
+        let vals: Vec<V> = args.iter().map(|a| self.value(a)).collect();
+        // The call's type: the first vector argument's (the emitter's `t_ty`).
+        let n = args
+            .iter()
+            .find_map(|a| match a.ty().base() {
+                Ty::Vec(k) => Some(*k as usize),
+                _ => None,
+            })
+            .unwrap_or(1);
+        let arg = |i: usize| vals.get(i).copied().unwrap_or(V::float(0.0));
+        match builtin {
+            B::Checker => {
+                let q = arg(0).vec2() * arg(1).x();
+                self.jump(to_integer(q.x).min(to_integer(q.y)));
+                let c = q.floor();
+                V::float((c.x + c.y).abs() % 2.0)
+            }
+            B::Grid => {
+                let width = arg(2).x();
+                let q = arg(0).vec2() * arg(1).x() + DVec2::splat(width * 0.5);
+                let f = q - q.floor();
+                for (qi, fi) in [(q.x, f.x), (q.y, f.y)] {
+                    self.jump(to_integer(qi).min((fi - width).abs()));
+                }
+                V::float(if f.x < width || f.y < width { 1.0 } else { 0.0 })
+            }
+            B::Cross => vec3v(arg(0).vec3().cross(arg(1).vec3())),
+            B::Normalize if n == 1 => {
+                let x = arg(0).x();
+                self.jump(x.abs());
+                V::float(wgsl_sign(x))
+            }
+            B::Normalize => {
+                let len = arg(0).comps().iter().map(|x| x * x).sum::<f64>().sqrt();
+                arg(0).map(|x| x / len)
+            }
+            B::Length => V::float(arg(0).comps().iter().map(|x| x * x).sum::<f64>().sqrt()),
+            B::Dot if n == 1 => V::float(arg(0).x() * arg(1).x()),
+            _ => {
+                let widened: Vec<V> = vals.iter().map(|v| v.widen(n)).collect();
+                self.math(builtin, &widened)
+            }
+        }
+    }
+
+    /// The builtins the emitter writes as the WGSL builtin of the same name, on
+    /// arguments widened to the call's type.
+    pub(super) fn math(&mut self, builtin: BuiltinId, a: &[V]) -> V {
+        use BuiltinId as B;
+        let arg = |i: usize| a.get(i).copied().unwrap_or(V::float(0.0));
+        let x = arg(0);
+        match builtin {
+            B::Sin => x.map(f64::sin),
+            B::Cos => x.map(f64::cos),
+            B::Tan => x.map(f64::tan),
+            B::Asin => x.map(f64::asin),
+            B::Acos => x.map(f64::acos),
+            B::Atan => x.map(f64::atan),
+            B::Atan2 => x.zip(arg(1), f64::atan2),
+            B::Sqrt => x.map(f64::sqrt),
+            B::Abs => x.map(f64::abs),
+            B::Floor | B::Ceil | B::Fract => {
+                for c in x.comps() {
+                    self.jump(to_integer(*c));
+                }
+                x.map(match builtin {
+                    B::Floor => f64::floor,
+                    B::Ceil => f64::ceil,
+                    _ => |v: f64| v - v.floor(),
+                })
+            }
+            B::Sign => {
+                for c in x.comps() {
+                    self.jump(c.abs());
+                }
+                x.map(wgsl_sign)
+            }
+            B::Exp => x.map(f64::exp),
+            B::Log => x.map(f64::ln),
+            B::Pow => x.zip(arg(1), f64::powf),
+            B::Min => x.zip(arg(1), f64::min),
+            B::Max => x.zip(arg(1), f64::max),
+            B::Clamp => x.zip(arg(1), f64::max).zip(arg(2), f64::min),
+            B::Mix => {
+                let t = arg(2);
+                let one_minus = t.map(|t| 1.0 - t);
+                x.zip(one_minus, |a, w| a * w)
+                    .zip(arg(1).zip(t, |b, t| b * t), |p, q| p + q)
+            }
+            B::Smoothstep => {
+                let (lo, hi) = (x, arg(1));
+                let mut out = arg(2);
+                if let V::Num(c, k) = &mut out {
+                    for ((v, l), h) in c[..*k].iter_mut().zip(lo.comps()).zip(hi.comps()) {
+                        let t = ((*v - l) / (h - l)).clamp(0.0, 1.0);
+                        *v = t * t * (3.0 - 2.0 * t);
+                    }
+                }
+                out
+            }
+            B::Step => {
+                for (e, v) in x.comps().iter().zip(arg(1).comps()) {
+                    self.jump((v - e).abs());
+                }
+                x.zip(arg(1), |e, v| if e <= v { 1.0 } else { 0.0 })
+            }
+            B::Distance => V::float(
+                x.comps()
+                    .iter()
+                    .zip(arg(1).comps())
+                    .map(|(p, q)| (p - q) * (p - q))
+                    .sum::<f64>()
+                    .sqrt(),
+            ),
+            B::Dot => V::float(
+                x.comps()
+                    .iter()
+                    .zip(arg(1).comps())
+                    .map(|(p, q)| p * q)
+                    .sum(),
+            ),
+            B::Radians => x.map(f64::to_radians),
+            B::Degrees => x.map(f64::to_degrees),
+            // Handled by `call`, or not surface fields (rejected by `MaterialEval::new`,
+            // as by the emitter).
+            B::Checker
+            | B::Grid
+            | B::Sample
+            | B::Cross
+            | B::Normalize
+            | B::Length
+            | B::Sphere
+            | B::Box
+            | B::RoundBox
+            | B::BoxFrame
+            | B::Torus
+            | B::Capsule
+            | B::Cylinder
+            | B::Cone
+            | B::CappedCone
+            | B::Plane
+            | B::Ellipsoid
+            | B::Octahedron
+            | B::HexPrism
+            | B::TriPrism
+            | B::Pyramid
+            | B::Link
+            | B::Union
+            | B::Intersection
+            | B::Difference
+            | B::SmoothUnion
+            | B::SmoothIntersection
+            | B::SmoothDifference
+            | B::Translate
+            | B::Rotate
+            | B::RotateX
+            | B::RotateY
+            | B::RotateZ
+            | B::Scale
+            | B::Paint
+            | B::Twist
+            | B::Bend
+            | B::Repeat
+            | B::Mirror
+            | B::Elongate
+            | B::Round
+            | B::Shell
+            | B::Image
+            | B::Orbit
+            | B::LookAt
+            | B::Sun => V::float(0.0),
+        }
+    }
+
+    /// `sample(texture, uv, wrap)`: `textureSampleGrad` with the emitter's analytic
+    /// derivatives (the uv expression displaced by one footprint along each tangent).
+    pub(super) fn sample(&mut self, args: &[Value]) -> V {
+        let zero = V::Num([0.0; 4], 4);
+        let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(2))
+        else {
+            return zero;
+        };
+        let Some(Value::Str(path)) = node.args.first() else {
+            return zero;
+        };
+        let uv = self.value(&args[1]).vec2();
+        let saved = self.offset.take();
+        let f = self.footprint;
+        self.offset = Some((DVec2::new(f, 0.0), self.tangent_u * f));
+        let ux = self.value(&args[1]).vec2();
+        self.offset = Some((DVec2::new(0.0, f), self.tangent_v * f));
+        let uy = self.value(&args[1]).vec2();
+        self.offset = saved;
+        let Some(chain) = self.textures.get(path) else {
+            return zero;
+        };
+        let c = chain.sample_grad(uv, ux - uv, uy - uv, Wrap::parse(wrap), self.srgb);
+        V::from_slice(&c.to_array())
+    }
+}
+
+/// WGSL's `sign`: 0 at 0.
+pub(super) fn wgsl_sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// Whether the emitter accepts `builtin` in a surface field. Exhaustive: a new builtin
+/// must be sorted here (and in [`Cx::math`]) before this compiles.
+pub(super) fn is_field_builtin(builtin: BuiltinId) -> bool {
+    use BuiltinId as B;
+    match builtin {
+        B::Checker
+        | B::Grid
+        | B::Sample
+        | B::Cross
+        | B::Normalize
+        | B::Length
+        | B::Dot
+        | B::Sin
+        | B::Cos
+        | B::Tan
+        | B::Asin
+        | B::Acos
+        | B::Atan
+        | B::Atan2
+        | B::Sqrt
+        | B::Abs
+        | B::Floor
+        | B::Ceil
+        | B::Fract
+        | B::Sign
+        | B::Exp
+        | B::Log
+        | B::Pow
+        | B::Min
+        | B::Max
+        | B::Clamp
+        | B::Mix
+        | B::Smoothstep
+        | B::Step
+        | B::Distance
+        | B::Radians
+        | B::Degrees => true,
+        B::Sphere
+        | B::Box
+        | B::RoundBox
+        | B::BoxFrame
+        | B::Torus
+        | B::Capsule
+        | B::Cylinder
+        | B::Cone
+        | B::CappedCone
+        | B::Plane
+        | B::Ellipsoid
+        | B::Octahedron
+        | B::HexPrism
+        | B::TriPrism
+        | B::Pyramid
+        | B::Link
+        | B::Union
+        | B::Intersection
+        | B::Difference
+        | B::SmoothUnion
+        | B::SmoothIntersection
+        | B::SmoothDifference
+        | B::Translate
+        | B::Rotate
+        | B::RotateX
+        | B::RotateY
+        | B::RotateZ
+        | B::Scale
+        | B::Paint
+        | B::Twist
+        | B::Bend
+        | B::Repeat
+        | B::Mirror
+        | B::Elongate
+        | B::Round
+        | B::Shell
+        | B::Image
+        | B::Orbit
+        | B::LookAt
+        | B::Sun => false,
+    }
+}

@@ -153,7 +153,10 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
     assert!(p >= 24.0, "sphere colour view PSNR {p:.2} dB");
     let p = compare("capsule.sdf", 1024, 32, 240, 320, ViewMode::Color);
     assert!(p >= 24.0, "capsule colour view PSNR {p:.2} dB");
-    // The robot's bricks, unlit (the colour view differs by the shadows the mesh lacks).
+    // The robot in the colour view: shadows from the mesh renderer's shadow map.
+    let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Color);
+    assert!(p >= 35.0, "robot colour view PSNR {p:.2} dB");
+    // The robot's bricks, unlit.
     let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Albedo);
     assert!(p >= 32.0, "robot albedo PSNR {p:.2} dB");
 }

@@ -6,8 +6,10 @@
 //!
 //! The frame is the implicit renderer's [`Frame`] from the same [`View`], so the two
 //! can be compared pixel for pixel: the same projection (`camera_ray` inverted), the
-//! same `shade` and `tonemap`. A mesh has no SDF, so the colour view has **no
-//! shadows**. Faces are drawn from both sides (culling off) with a depth buffer and no
+//! same `shade` and `tonemap`. A mesh has no SDF to trace shadow rays in: the colour
+//! view's sun shadows come from a 2048² shadow map of the mesh seen from the sun
+//! (orthographic over its bounding sphere, 2 × 2 PCF, depth and normal-offset biases),
+//! drawn before each frame. Faces are drawn from both sides (culling off) with a depth buffer and no
 //! MSAA; a back face is shaded with its normal flipped. The AOVs: position (world, and
 //! the distance from the eye, -1 where nothing was drawn), the normal-mapped normal,
 //! and in `atlas` the chart-local (u, v), the level i and the chart's index.
@@ -75,6 +77,12 @@ pub struct MeshRenderer {
     index_count: u32,
     formats: [wgpu::TextureFormat; 4],
     bounds: Aabb,
+    /// The sun's shadow map: its depth-only pipeline, its group layout (the light), the
+    /// map and its comparison sampler.
+    shadow_pipeline: wgpu::RenderPipeline,
+    shadow_layout: wgpu::BindGroupLayout,
+    shadow_view: wgpu::TextureView,
+    shadow_sampler: wgpu::Sampler,
     /// The validated module (for `sdfc compile`-style inspection and bug reports).
     pub wgsl: String,
     /// The time the pipeline took to create.
@@ -264,10 +272,38 @@ impl MeshRenderer {
             });
             let pipeline = pipeline(d, &wgsl, &formats);
             let layout = pipeline.get_bind_group_layout(0);
-            (textures, sampler, vertices, indices, pipeline, layout)
+            let shadow_pipeline = shadow_pipeline(d, &wgsl);
+            let shadow_layout = shadow_pipeline.get_bind_group_layout(0);
+            let shadow_view = d
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("shadow map"),
+                    size: render::extent(SHADOW_SIZE, SHADOW_SIZE),
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: DEPTH_FORMAT,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default());
+            let shadow_sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow map"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            });
+            let shadow = (shadow_pipeline, shadow_layout, shadow_view, shadow_sampler);
+            (
+                textures, sampler, vertices, indices, pipeline, layout, shadow,
+            )
         })?;
         gpu.wait()?;
-        let (textures, sampler, vertices, indices, pipeline, bind_group_layout) = made;
+        let (textures, sampler, vertices, indices, pipeline, bind_group_layout, shadow) = made;
+        let (shadow_pipeline, shadow_layout, shadow_view, shadow_sampler) = shadow;
         Ok(MeshRenderer {
             pipeline,
             bind_group_layout,
@@ -278,6 +314,10 @@ impl MeshRenderer {
             index_count: mesh.indices.len() as u32,
             formats,
             bounds: mesh_bounds(mesh),
+            shadow_pipeline,
+            shadow_layout,
+            shadow_view,
+            shadow_sampler,
             wgsl,
             pipeline_time: started.elapsed(),
         })
@@ -299,11 +339,25 @@ impl MeshRenderer {
         gpu.check_size(w, h, render::bytes_per_texel(&self.formats) + 4)?;
         let uniforms = render::globals(view, mode);
         let background = tonemap(view.background);
-        let (targets, depth, bind_group, _globals) = gpu.scoped(|| {
+        let light = light_uniform(&self.bounds, view.sun.direction);
+        let (targets, depth, bind_group, shadow_group, _globals) = gpu.scoped(|| {
             let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
                 contents: bytemuck::cast_slice(&uniforms),
                 usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let light = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("light"),
+                contents: bytemuck::cast_slice(&light),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let shadow_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shadow group"),
+                layout: &self.shadow_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: light.as_entire_binding(),
+                }],
             });
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,
@@ -318,6 +372,18 @@ impl MeshRenderer {
             entries.push(wgpu::BindGroupEntry {
                 binding: 5,
                 resource: wgpu::BindingResource::Sampler(&self.sampler),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: 6,
+                resource: wgpu::BindingResource::TextureView(&self.shadow_view),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: 7,
+                resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: 8,
+                resource: light.as_entire_binding(),
             });
             let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("mesh group"),
@@ -340,6 +406,7 @@ impl MeshRenderer {
                 render::targets(gpu, &self.formats, w, h),
                 depth,
                 bind_group,
+                shadow_group,
                 buffer,
             )
         })?;
@@ -348,6 +415,28 @@ impl MeshRenderer {
             let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("mesh frame"),
             });
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("shadow map"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &self.shadow_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.shadow_pipeline);
+                pass.set_bind_group(0, &shadow_group, &[]);
+                pass.set_vertex_buffer(0, self.vertices.slice(..));
+                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..1);
+            }
             {
                 let clears = [
                     wgpu::Color {
@@ -424,6 +513,88 @@ impl MeshRenderer {
 }
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The shadow map's side in texels.
+const SHADOW_SIZE: u32 = 2048;
+
+/// The `Light` uniform of shaders/mesh.wgsl.in: an orthographic view of the mesh's
+/// bounding sphere from the sun (`towards_sun`, unit), and the biases: a depth bias of
+/// a texel's depth and a normal offset of 1.5 texels, against shadow acne.
+fn light_uniform(bounds: &Aabb, towards_sun: DVec3) -> [f32; 20] {
+    let centre = bounds.center();
+    let r = ((bounds.max - bounds.min).length() * 0.5).max(1e-6);
+    let dir = towards_sun.try_normalize().unwrap_or(DVec3::Y);
+    let up = if dir.y.abs() > 0.99 {
+        DVec3::Z
+    } else {
+        DVec3::Y
+    };
+    let eye = centre + dir * (2.0 * r);
+    // An orthographic camera at `eye` looking at the centre: x and y over [−r, r], depth
+    // over [0, 4r] mapped to [0, 1] (wgpu's clip space).
+    let f = (centre - eye).normalize();
+    let side = f.cross(up).normalize();
+    let u = side.cross(f);
+    let row = |a: DVec3, k: f64| glam::DVec4::new(a.x * k, a.y * k, a.z * k, -a.dot(eye) * k);
+    let rows = [
+        row(side, 1.0 / r),
+        row(u, 1.0 / r),
+        row(f, 1.0 / (4.0 * r)),
+        glam::DVec4::W,
+    ];
+    let m = glam::DMat4::from_cols(rows[0], rows[1], rows[2], rows[3])
+        .transpose()
+        .as_mat4()
+        .to_cols_array();
+    let texel = 2.0 * r / SHADOW_SIZE as f64;
+    let mut out = [0.0f32; 20];
+    out[..16].copy_from_slice(&m);
+    out[16] = (2.0 * texel / (4.0 * r)) as f32;
+    out[17] = (1.5 * texel) as f32;
+    out
+}
+
+/// The shadow map's pipeline: vs_shadow into a depth target, no fragment stage.
+fn shadow_pipeline(d: &wgpu::Device, wgsl: &str) -> wgpu::RenderPipeline {
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("mesh shadow"),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    let attributes = wgpu::vertex_attr_array![
+        0 => Float32x3,
+        1 => Float32x3,
+        2 => Float32x4,
+        3 => Float32x2,
+    ];
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("mesh shadow"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_shadow"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<Vertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &attributes,
+            })],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
 
 /// `tonemap` of shaders/render.wgsl, for the background (the clear colour is linear;
 /// the sRGB target encodes it as it encodes the shader's output).

@@ -41,7 +41,7 @@ fn small(grid: usize) -> Options {
         resolution: Resolution::Cells(grid),
         bounds: None,
         chart_quads: 1,
-        gutter: false,
+        ..Options::default()
     }
 }
 
@@ -65,8 +65,8 @@ fn borders_are_identical_at_every_level_and_seams_are_no_steeper_than_the_inside
         ..small(10)
     };
     let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
-    let file = ChartsFile::new(&baked.table, &baked.layout);
-    assert!(file.layout.level_origins.len() >= 2, "{:?}", file.layout);
+    let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
+    assert!(file.levels >= 2, "{:?}", file.layout);
     let (sides, corners) =
         assert_borders_identical(&baked.textures.base_color, &file, "base colour");
     assert_borders_identical(
@@ -393,7 +393,7 @@ fn larger_charts_keep_borders_identical_and_the_mesh_watertight() {
         ..small(24)
     };
     let baked = bake_source(&gpu, SMOOTH, dir.path(), &options).expect("bakes");
-    let file = ChartsFile::new(&baked.table, &baked.layout);
+    let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
     assert_borders_identical(&baked.textures.base_color, &file, "chart_quads 3");
     let charts = baked.table.len();
     assert_eq!(baked.mesh.indices.len(), charts * m * m * 6);
@@ -441,7 +441,7 @@ fn the_normal_map_decodes_to_the_object_space_normal() {
     let n = level.n;
     let mut worst = 0.0f64;
     for c in 0..baked.table.len() {
-        let [x0, y0] = baked.layout.chart_origin(c, 0);
+        let [x0, y0] = baked.atlas.cell_origin(&baked.patches, c, 0);
         let grid = level.grid(&baked.table, c);
         for j in 0..n {
             for i in 0..n {
@@ -512,7 +512,7 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
                 top * (1.0 - ty) + bottom * ty
             })
         };
-        let file = ChartsFile::new(&baked.table, &baked.layout);
+        let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
         let mut worst = 0.0f64;
         for chart in &file.charts {
             let n = chart.rects[0][2] as usize;
@@ -540,20 +540,24 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
     );
     assert!(with <= 12.0, "{with}");
     // The gutter holds the neighbours' texels, and the borders stay identical.
-    let file = ChartsFile::new(&baked.table, &baked.layout);
-    assert_eq!(baked.layout.gutter, baked.layout.chart_size / 2);
+    let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
+    let flat = |b: &Baked| match &b.atlas {
+        sdfc::bake::Atlas::Flat(l) => l.clone(),
+        sdfc::bake::Atlas::Packed(_) => panic!("a flat bake"),
+    };
+    assert_eq!(flat(&baked).gutter, flat(&baked).chart_size / 2);
     assert_borders_identical(&baked.textures.base_color, &file, "with a gutter");
     // sdfc's own renderer reads inside the charts only: with and without a gutter
     // (the same chart size: twice the width for the gutter's), the renders agree.
     let (_, baked) = seam(true, 512);
     let (_, plain) = seam(false, 256);
-    assert_eq!(plain.layout.chart_size, baked.layout.chart_size);
+    assert_eq!(flat(&plain).chart_size, flat(&baked).chart_size);
     let analysis = sdfc::driver::check(SMOOTH, None);
     let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
     let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
     (view.width, view.height) = (96, 72);
     let draw = |b: &Baked| {
-        let r = sdfc::gpu::MeshRenderer::new(&gpu, &b.mesh, &b.textures, &b.layout).unwrap();
+        let r = sdfc::gpu::MeshRenderer::new(&gpu, &b.mesh, &b.textures, &b.atlas).unwrap();
         r.render(&gpu, &view, sdfc::gpu::ViewMode::Color)
             .unwrap()
             .color

@@ -3,7 +3,7 @@
 //! camera. PSNR over the whole image (the background is the same in both).
 //! GPU tests skip loudly without an adapter unless SDFC_REQUIRE_GPU=1.
 
-use sdfc::bake::pipeline::{self, Options, Quiet, Resolution};
+use sdfc::bake::pipeline::{self, Options, Quiet, Resolution, Style};
 use sdfc::gpu::{gpu_for_tests, Frame, MeshRenderer, ViewMode};
 use std::path::Path;
 
@@ -24,6 +24,17 @@ fn psnr(a: &Frame, b: &Frame) -> f64 {
 
 /// Bakes `example` at `size` with `grid` cells, then renders both ways at `w × h`.
 fn compare(example: &str, size: u32, grid: usize, w: u32, h: u32, mode: ViewMode) -> f64 {
+    compare_style(example, size, grid, (w, h), mode, Style::Flat)
+}
+
+fn compare_style(
+    example: &str,
+    size: u32,
+    grid: usize,
+    (w, h): (u32, u32),
+    mode: ViewMode,
+    style: Style,
+) -> f64 {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples")
         .join(example);
@@ -35,6 +46,7 @@ fn compare(example: &str, size: u32, grid: usize, w: u32, h: u32, mode: ViewMode
         (size, grid, 1),
         (w, h),
         mode,
+        style,
     )
 }
 
@@ -45,6 +57,7 @@ fn compare_source(
     (size, grid, chart_quads): (u32, usize, usize),
     (w, h): (u32, u32),
     mode: ViewMode,
+    style: Style,
 ) -> f64 {
     let Some(gpu) = gpu_for_tests() else {
         return f64::INFINITY;
@@ -66,14 +79,15 @@ fn compare_source(
         resolution: Resolution::Cells(grid),
         bounds: None,
         chart_quads,
-        gutter: false,
+        style,
+        ..Options::default()
     };
     let baked = pipeline::bake(&gpu, &compiled.module, base, shape, &options, &Quiet).unwrap();
     let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
     view.width = w;
     view.height = h;
     let implicit = sdfc::gpu::render(&gpu, &compiled.module, &view, mode, base).unwrap();
-    let mesh = MeshRenderer::new(&gpu, &baked.mesh, &baked.textures, &baked.layout).unwrap();
+    let mesh = MeshRenderer::new(&gpu, &baked.mesh, &baked.textures, &baked.atlas).unwrap();
     let drawn = mesh.render(&gpu, &view, mode).unwrap();
     let p = psnr(&implicit, &drawn);
     if let Ok(dir) = std::env::var("SDFC_FIDELITY_DIR") {
@@ -84,9 +98,10 @@ fn compare_source(
         }
     }
     eprintln!(
-        "{example}: {size}-wide atlas, grid {grid}, {} charts of {}² ({chart_quads}² quads each): {mode:?} at {w}×{h}: PSNR {p:.2} dB",
+        "{example}: {size}-wide {style:?} atlas, grid {grid}, {} charts of {} cells, {}² texels a cell ({chart_quads}² quads each): {mode:?} at {w}×{h}: PSNR {p:.2} dB",
+        baked.patches.len(),
         baked.table.len(),
-        baked.layout.chart_size
+        baked.atlas.cell_size()
     );
     p
 }
@@ -117,6 +132,7 @@ fn a_baked_smooth_material_matches_the_implicit_render() {
         (512, 24, 1),
         (320, 240),
         ViewMode::Color,
+        Style::Flat,
     );
     assert!(p >= 35.0, "colour view PSNR {p:.2} dB");
     let p = compare_source(
@@ -126,6 +142,7 @@ fn a_baked_smooth_material_matches_the_implicit_render() {
         (512, 24, 1),
         (320, 240),
         ViewMode::Albedo,
+        Style::Flat,
     );
     assert!(p >= 35.0, "albedo PSNR {p:.2} dB");
     // Larger charts, 2 × 2 mesh quads each: the same mesh resolution, a quarter of the
@@ -137,6 +154,7 @@ fn a_baked_smooth_material_matches_the_implicit_render() {
         (512, 24, 2),
         (320, 240),
         ViewMode::Color,
+        Style::Flat,
     );
     assert!(
         p >= 35.0,
@@ -156,6 +174,9 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
     // The robot in the colour view: shadows from the mesh renderer's shadow map.
     let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Color);
     assert!(p >= 35.0, "robot colour view PSNR {p:.2} dB");
+    // The packed layout: grown charts (the boxes' faces), the same cell resolution.
+    let p = compare_style("robot.sdf", 1024, 48, (240, 320), ViewMode::Color, Style::Packed);
+    assert!(p >= 35.0, "robot colour view PSNR {p:.2} dB, packed");
     // The robot's bricks, unlit.
     let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Albedo);
     assert!(p >= 32.0, "robot albedo PSNR {p:.2} dB");

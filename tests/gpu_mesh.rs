@@ -182,7 +182,7 @@ fn levels_seen(frame: &Frame, view: &View, charts: usize) -> (f64, f64) {
 fn renderer(gpu: &Gpu, charts: usize, size: u32, w: f32) -> (MeshRenderer, FlatLayout) {
     let (mesh, textures, layout) = strip(charts, size, w);
     (
-        MeshRenderer::new(gpu, &mesh, &textures, &layout).unwrap(),
+        MeshRenderer::new(gpu, &mesh, &textures, &layout.clone().into()).unwrap(),
         layout,
     )
 }
@@ -200,7 +200,7 @@ fn the_mesh_module_validates_for_several_layouts() {
     for layout in layouts {
         let layout = layout.expect("the charts fit");
         check_layout(&layout).unwrap();
-        let wgsl = mesh_wgsl(&layout).unwrap();
+        let wgsl = mesh_wgsl(&layout.clone().into()).unwrap();
         if let Err(e) = sdfc::codegen::validate(&wgsl) {
             panic!("{layout:?}:\n{e}");
         }
@@ -343,7 +343,7 @@ fn the_normal_map_is_read_in_the_tangent_frame() {
             layout.height,
             image::Rgba([encoded[0], encoded[1], encoded[2], 255]),
         );
-        let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout).unwrap();
+        let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout.clone().into()).unwrap();
         let v = view(1, distance_for(40.0, 32), 32);
         let frame = r.render(&gpu, &v, ViewMode::Normal).unwrap();
         let n = frame.normal[(16 * 32 + 16) as usize];
@@ -379,13 +379,13 @@ fn a_mesh_refuses_views_it_has_not_and_inconsistent_input() {
     small.normal = image::RgbaImage::new(32, 32);
     let Some(gpu) = gpu_for_tests() else { return };
     for (m, t) in [(&short, &textures), (&mesh, &small)] {
-        match MeshRenderer::new(&gpu, m, t, &layout) {
+        match MeshRenderer::new(&gpu, m, t, &layout.clone().into()) {
             Err(MeshError::Input(_)) => {}
             Err(e) => panic!("{e}"),
             Ok(_) => panic!("accepted"),
         }
     }
-    let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout).unwrap();
+    let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout.clone().into()).unwrap();
     let v = view(1, 2.0, 16);
     assert_eq!(
         r.render(&gpu, &v, ViewMode::Steps).unwrap_err(),

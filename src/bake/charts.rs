@@ -102,6 +102,16 @@ pub fn side_texel(n: usize, side: usize, k: usize, depth: usize) -> (usize, usiz
     }
 }
 
+/// [`side_texel`] on a `w × h` chart (sides 0 and 2 are `w` texels long, 1 and 3 `h`).
+pub fn side_texel_rect(w: usize, h: usize, side: usize, k: usize, depth: usize) -> (usize, usize) {
+    match side {
+        0 => (k, depth),
+        1 => (w - 1 - depth, k),
+        2 => (w - 1 - k, h - 1 - depth),
+        _ => (depth, h - 1 - k),
+    }
+}
+
 /// Chart-local texel of corner `q`.
 pub fn corner_texel(n: usize, q: usize) -> (usize, usize) {
     side_texel(n, q, 0, 0)

@@ -1,10 +1,10 @@
-//! Stage 6: the flat atlas images (§3.3) and the exported mesh.
+//! Stage 6: the atlas images (flat §3.3, packed §3.4) and the exported mesh.
 
 use super::charts::{side_texel, ChartTable, Samples};
 use super::mesh::QuadMesh;
 use super::mips::Texel;
 use super::pipeline::{bilinear, CHANNELS};
-use super::{FlatLayout, MeshData, Textures};
+use super::{Atlas, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
 
@@ -24,15 +24,58 @@ pub fn unorm8(x: f32) -> u8 {
     (x.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
+/// Each cell's tangents along +u at its four corners: at every vertex of a chart's
+/// grid, the mean of the u-edges (bottom or top side) of the chart's cells there. For a
+/// one-cell chart they are the cell's own sides, and their bilinear blend is the
+/// patch's ∂/∂u; in a grown chart they agree between neighbouring cells, so the
+/// tangent frame is continuous across the cells inside a chart.
+pub fn corner_tangents(mesh: &QuadMesh, patches: &Patches) -> Vec<[DVec3; 4]> {
+    let v = &mesh.vertices;
+    let mut out = vec![[DVec3::ZERO; 4]; mesh.quads.len()];
+    for p in 0..patches.len() {
+        let [a, b] = patches.dims[p].map(|d| d as usize);
+        let mut sum = vec![(DVec3::ZERO, 0.0); (a + 1) * (b + 1)];
+        let cells = &patches.cells[p];
+        for j in 0..b {
+            for i in 0..a {
+                let q = mesh.quads[cells[j * a + i] as usize].map(|k| v[k as usize]);
+                let (bottom, top) = (q[1] - q[0], q[2] - q[3]);
+                for (di, dj, e) in [(0, 0, bottom), (1, 0, bottom), (1, 1, top), (0, 1, top)] {
+                    let s = &mut sum[(j + dj) * (a + 1) + i + di];
+                    s.0 += e;
+                    s.1 += 1.0;
+                }
+            }
+        }
+        for j in 0..b {
+            for i in 0..a {
+                let at = |di: usize, dj: usize| {
+                    let (t, k) = sum[(j + dj) * (a + 1) + i + di];
+                    t / k
+                };
+                out[cells[j * a + i] as usize] = [at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
+            }
+        }
+    }
+    out
+}
+
 /// The tangent frame the mesh carries at chart-local (u, v): the tangent along +u
-/// (orthogonal to the normal), the normal (bilinear in the corners' normals), and the
-/// bitangent sign w, chosen so that cross(N, T) · w points toward −v (glTF's normal
-/// maps have +Y up, and glTF's texture coordinates grow downward).
-pub fn frame(mesh: &QuadMesh, corners: [u32; 4], u: f64, v: f64) -> (DVec3, DVec3, f64) {
+/// (bilinear in the corner tangents of [`corner_tangents`], orthogonal to the normal),
+/// the normal (bilinear in the corners' normals), and the bitangent sign w, chosen so
+/// that cross(N, T) · w points toward −v (glTF's normal maps have +Y up, and glTF's
+/// texture coordinates grow downward).
+pub fn frame(
+    mesh: &QuadMesh,
+    corners: [u32; 4],
+    tangents: [DVec3; 4],
+    u: f64,
+    v: f64,
+) -> (DVec3, DVec3, f64) {
     let p = corners.map(|i| mesh.vertices[i as usize]);
     let nrm = corners.map(|i| mesh.normals[i as usize]);
     let n = bilinear(nrm, u, v).normalize_or(DVec3::Y);
-    let du = (p[1] - p[0]) * (1.0 - v) + (p[2] - p[3]) * v;
+    let du = bilinear(tangents, u, v);
     let dv = (p[3] - p[0]) * (1.0 - u) + (p[2] - p[1]) * u;
     let t = (du - n * n.dot(du))
         .try_normalize()
@@ -101,26 +144,29 @@ pub fn render_frame(
     (tan, nrm, if sign >= 0.0 { 1.0 } else { -1.0 })
 }
 
-/// Writes every level of every chart into the flat atlas: base colour (sRGB),
-/// metallic-roughness, tangent-space normals and emission (when any).
-pub fn flat_atlas(
+/// Writes every level of every cell into the atlas: base colour (sRGB),
+/// metallic-roughness, tangent-space normals and emission (when any). In a packed
+/// atlas the cells of a chart share their common rows and columns of texels (the same
+/// samples, and the same tangent frame there).
+pub fn atlas_images(
     exported: &MeshData,
     m: usize,
     table: &ChartTable,
-    layout: &FlatLayout,
+    atlas: &Atlas,
+    patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> Textures {
-    let (w, h) = (layout.width, layout.height);
+    let (w, h) = (atlas.width(), atlas.height());
     let blank = || RgbaImage::from_pixel(w, h, Rgba([0, 0, 0, 255]));
     let mut color = blank();
     let mut mr = blank();
     let mut normal = RgbaImage::from_pixel(w, h, Rgba([128, 128, 255, 255]));
     let mut emission = blank();
     let mut emits = false;
-    for (l, level) in levels.iter().enumerate().take(layout.levels()) {
+    for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;
         for c in 0..table.len() {
-            let [x0, y0] = layout.chart_origin(c, l);
+            let [x0, y0] = atlas.cell_origin(patches, c, l);
             let grid = level.grid(table, c);
             for j in 0..n {
                 for i in 0..n {
@@ -141,7 +187,7 @@ pub fn flat_atlas(
             }
         }
     }
-    if layout.gutter > 0 {
+    if let Atlas::Flat(layout @ FlatLayout { gutter: 1.., .. }) = atlas {
         let g = layout.gutter as i64;
         let level = &levels[0];
         let n = level.n as i64;
@@ -246,7 +292,8 @@ pub fn stacked_level(
 pub fn mesh_data(
     mesh: &QuadMesh,
     table: &ChartTable,
-    layout: &FlatLayout,
+    atlas: &Atlas,
+    patches: &Patches,
     m: usize,
     project: &(dyn Fn(DVec3) -> DVec3 + Sync),
 ) -> MeshData {
@@ -263,6 +310,7 @@ pub fn mesh_data(
         |c, s, t| project(bilinear(table.corners[c].map(|i| v[i as usize]), s, t)).to_array(),
     );
     let n = m + 1;
+    let tangents = corner_tangents(mesh, patches);
     let mut out = MeshData::default();
     for (c, q) in table.corners.iter().enumerate() {
         let base = out.positions.len() as u32;
@@ -271,12 +319,12 @@ pub fn mesh_data(
             for i in 0..n {
                 let (u, w) = (i as f64 / m as f64, j as f64 / m as f64);
                 let p = DVec3::from_array(grid[j * n + i]);
-                let (t, nrm, sign) = frame(mesh, *q, u, w);
+                let (t, nrm, sign) = frame(mesh, *q, tangents[c], u, w);
                 out.positions.push(p.as_vec3().to_array());
                 out.normals.push(nrm.as_vec3().to_array());
                 out.tangents
                     .push([t.x as f32, t.y as f32, t.z as f32, sign as f32]);
-                out.texcoords.push(layout.texcoord(c, u, w));
+                out.texcoords.push(atlas.texcoord(patches, c, u, w));
             }
         }
         for j in 0..m {
@@ -305,14 +353,15 @@ pub fn mesh_data(
 /// border texels are identical between charts, like the colours'.
 pub fn object_normals(
     table: &ChartTable,
-    layout: &FlatLayout,
+    atlas: &Atlas,
+    patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> RgbaImage {
-    let mut img = RgbaImage::from_pixel(layout.width, layout.height, Rgba([128, 128, 128, 255]));
-    for (l, level) in levels.iter().enumerate().take(layout.levels()) {
+    let mut img = RgbaImage::from_pixel(atlas.width(), atlas.height(), Rgba([128, 128, 128, 255]));
+    for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;
         for c in 0..table.len() {
-            let [x0, y0] = layout.chart_origin(c, l);
+            let [x0, y0] = atlas.cell_origin(patches, c, l);
             for (k, t) in level.grid(table, c).iter().enumerate() {
                 let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or_zero();
                 let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);

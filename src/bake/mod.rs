@@ -16,8 +16,13 @@ pub mod gpu;
 pub mod images;
 pub mod mesh;
 pub mod mips;
+pub mod packed;
+pub mod patches;
 pub mod pipeline;
 pub mod table;
+
+pub use packed::{PackedChart, PackedLayout};
+pub use patches::Patches;
 
 use serde::{Deserialize, Serialize};
 
@@ -172,5 +177,102 @@ impl FlatLayout {
             .map(|l| (self.size_at(l) as u64).pow(2) * charts as u64)
             .sum();
         used as f64 / (self.width as u64 * self.height as u64) as f64
+    }
+}
+
+/// The atlas's layout: flat (§3.3, one chart per quad, all the same size) or packed
+/// (§3.4, grown rectangular charts of their own sizes). Serialized into the glTF's
+/// `extras.sdfc_atlas` as the one or the other's fields (a flat layout's JSON is
+/// unchanged from before packed layouts existed).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Atlas {
+    Packed(PackedLayout),
+    Flat(FlatLayout),
+}
+
+impl From<FlatLayout> for Atlas {
+    fn from(l: FlatLayout) -> Atlas {
+        Atlas::Flat(l)
+    }
+}
+
+impl From<PackedLayout> for Atlas {
+    fn from(l: PackedLayout) -> Atlas {
+        Atlas::Packed(l)
+    }
+}
+
+impl Atlas {
+    pub fn width(&self) -> u32 {
+        match self {
+            Atlas::Flat(l) => l.width,
+            Atlas::Packed(l) => l.width,
+        }
+    }
+
+    pub fn height(&self) -> u32 {
+        match self {
+            Atlas::Flat(l) => l.height,
+            Atlas::Packed(l) => l.height,
+        }
+    }
+
+    pub fn levels(&self) -> usize {
+        match self {
+            Atlas::Flat(l) => l.levels(),
+            Atlas::Packed(l) => l.levels(),
+        }
+    }
+
+    /// A cell's (mesh quad's) level-0 samples a side: the flat layout's chart size.
+    pub fn cell_size(&self) -> u32 {
+        match self {
+            Atlas::Flat(l) => l.chart_size,
+            Atlas::Packed(l) => l.cell_size,
+        }
+    }
+
+    /// The top-left texel of cell `c`'s `n_l × n_l` samples at level `l`.
+    pub fn cell_origin(&self, patches: &Patches, c: usize, l: usize) -> [u32; 2] {
+        match self {
+            Atlas::Flat(layout) => layout.chart_origin(c, l),
+            Atlas::Packed(layout) => {
+                let [p, i, j] = patches.place[c];
+                layout.cell_origin(p as usize, i, j, l)
+            }
+        }
+    }
+
+    /// The level-0 atlas coordinate (glTF TEXCOORD_0) of cell `c`'s local (u, v).
+    pub fn texcoord(&self, patches: &Patches, c: usize, u: f64, v: f64) -> [f32; 2] {
+        match self {
+            Atlas::Flat(layout) => layout.texcoord(c, u, v),
+            Atlas::Packed(layout) => {
+                let [p, i, j] = patches.place[c];
+                let [a, b] = patches.dims[p as usize];
+                layout.texcoord(p as usize, (i as f64 + u) / a as f64, (j as f64 + v) / b as f64)
+            }
+        }
+    }
+
+    /// Chart `p`'s rectangle `[x, y, width, height]` at level `l`.
+    pub fn rect(&self, p: usize, l: usize) -> [u32; 4] {
+        match self {
+            Atlas::Flat(layout) => {
+                let [x, y] = layout.chart_origin(p, l);
+                let n = layout.size_at(l);
+                [x, y, n, n]
+            }
+            Atlas::Packed(layout) => layout.rect(p, l),
+        }
+    }
+
+    /// The texels that hold samples over the image's.
+    pub fn utilisation(&self, charts: usize) -> f64 {
+        match self {
+            Atlas::Flat(l) => l.utilisation(charts),
+            Atlas::Packed(l) => l.utilisation(),
+        }
     }
 }

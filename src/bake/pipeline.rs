@@ -5,7 +5,8 @@ use super::gpu::{BakePass, Shaded};
 use super::images;
 use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
 use super::mips::{self, Texel};
-use super::{FlatLayout, MeshData, Textures};
+use super::patches::{self, Patches};
+use super::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
 use crate::gpu::{Gpu, GpuError};
 use crate::ir::{Aabb, Op, Shape};
@@ -34,6 +35,21 @@ pub const DEFAULT_CHART_QUADS: usize = 1;
 pub const MAX_CHART_QUADS: usize = 16;
 /// The largest atlas side.
 pub const MAX_SIZE: u32 = 16384;
+/// The default longest side of a grown chart, in cells (`--max-chart`).
+pub const DEFAULT_MAX_CHART: usize = 16;
+/// The most cells along a grown chart's side.
+pub const MAX_MAX_CHART: usize = 256;
+
+/// How the atlas is laid out (§3, Table 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Style {
+    /// §3.3: one chart per cell, all the same size, levels in a mip-map pattern.
+    #[default]
+    Flat,
+    /// §3.4: conforming rectangles of cells grown over the mesh, each chart as many
+    /// texels as its cells, packed in shelves with a lookup table.
+    Packed,
+}
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -48,6 +64,9 @@ pub struct Options {
     /// A gutter of half a chart around each level-0 chart, filled from its neighbours
     /// (for engines that build their own mip chains; see [`FlatLayout::gutter`]).
     pub gutter: bool,
+    pub style: Style,
+    /// The longest side of a grown chart, in cells (packed only).
+    pub max_chart: usize,
 }
 
 impl Default for Options {
@@ -58,6 +77,8 @@ impl Default for Options {
             bounds: None,
             chart_quads: DEFAULT_CHART_QUADS,
             gutter: false,
+            style: Style::Flat,
+            max_chart: DEFAULT_MAX_CHART,
         }
     }
 }
@@ -111,7 +132,10 @@ pub struct Report {
     /// Mesh quads along a chart's side.
     pub chart_quads: usize,
     pub vertices: usize,
+    /// Cells: the chart grid's quads (each a chart in a flat atlas).
+    pub cells: usize,
     pub charts: usize,
+    /// A cell's level-0 samples a side.
     pub chart_size: u32,
     pub levels: usize,
     /// Used texels (every chart at every level) over the atlas's texels.
@@ -131,7 +155,9 @@ pub struct Report {
 pub struct Baked {
     pub quads: QuadMesh,
     pub table: ChartTable,
-    pub layout: FlatLayout,
+    /// The cells' charts (one per cell in a flat atlas).
+    pub patches: Patches,
+    pub atlas: Atlas,
     /// Every level's samples, level 0 first.
     pub levels: Vec<Samples<Texel<CHANNELS>>>,
     /// Level 0's projected sample points.
@@ -264,7 +290,7 @@ pub fn bake(
 
     // 1. Mesh.
     progress.stage("mesh", 1);
-    let quads = dual_contour(shape, &grid, 1e-5 * scale);
+    let mut quads = dual_contour(shape, &grid, 1e-5 * scale);
     progress.finish();
     if quads.quads.is_empty() {
         return Err(BakeError::Empty(grid.cell));
@@ -273,20 +299,30 @@ pub fn bake(
     lap(&mut report, "mesh");
 
     // 2. Charts and layout.
+    let patches = match options.style {
+        Style::Flat => Patches::singles(quads.quads.len()),
+        Style::Packed => patches::grow(&mut quads, options.max_chart),
+    };
+    // (After growing: the quads are turned to their charts' directions.)
     let table = ChartTable::new(&quads);
-    let layout = FlatLayout::fit_with(table.len(), options.size, options.gutter).ok_or_else(|| {
-        let (charts, size) = (table.len(), options.size);
+    let (charts, size) = (patches.len(), options.size);
+    let atlas: Atlas = match options.style {
+        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(Atlas::Flat),
+        Style::Packed => PackedLayout::fit(&patches.dims, size).map(Atlas::Packed),
+    }
+    .ok_or_else(|| {
         BakeError::Resource(format!(
-            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels each: use a coarser --grid or a larger --size"
+            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
         ))
     })?;
-    report.charts = table.len();
-    report.chart_size = layout.chart_size;
-    report.levels = layout.levels();
+    report.cells = table.len();
+    report.charts = charts;
+    report.chart_size = atlas.cell_size();
+    report.levels = atlas.levels();
     lap(&mut report, "charts");
 
     // 3. Texel points, each shared one once.
-    let n = layout.chart_size as usize;
+    let n = atlas.cell_size() as usize;
     let points = sample_points(&quads, &table, n);
     let flat: Vec<[f32; 4]> = points
         .corners
@@ -346,17 +382,18 @@ pub fn bake(
     progress.stage("images", 1);
     let tolerance = 1e-5 * scale;
     let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
-    let mesh = images::mesh_data(&quads, &table, &layout, m, &project);
-    let textures = images::flat_atlas(&mesh, m, &table, &layout, &levels);
+    let mesh = images::mesh_data(&quads, &table, &atlas, &patches, m, &project);
+    let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
     progress.finish();
     lap(&mut report, "images");
 
-    report.utilisation = layout.utilisation(table.len());
+    report.utilisation = atlas.utilisation(table.len());
     (report.density_spread, report.slivers) = density_spread(&quads, &table, n);
     Ok(Baked {
         quads,
         table,
-        layout,
+        patches,
+        atlas,
         levels,
         points: projected,
         mesh,

@@ -6,8 +6,12 @@
 //! a neighbour `{chart, side, reversed}` shares the whole side, and `reversed` says
 //! that its side runs the other way, so texel k of one is texel n − 1 − k of the other.
 
+//!
+//! In a packed atlas a chart is a rectangle of cells, `[width, height]` texels per
+//! level; side `s`'s texels are those of [`super::charts::side_texel_rect`].
+
 use super::charts::ChartTable;
-use super::FlatLayout;
+use super::{Atlas, Patches};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -29,37 +33,48 @@ pub struct ChartEntry {
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChartsFile {
-    pub layout: FlatLayout,
+    pub layout: Atlas,
+    /// The number of levels.
+    pub levels: usize,
     pub charts: Vec<ChartEntry>,
 }
 
 impl ChartsFile {
-    pub fn new(table: &ChartTable, layout: &FlatLayout) -> ChartsFile {
-        let charts = (0..table.len())
-            .map(|c| ChartEntry {
-                corners: table.corners[c],
-                rects: (0..layout.levels())
-                    .map(|l| {
-                        let [x, y] = layout.chart_origin(c, l);
-                        let n = layout.size_at(l);
-                        [x, y, n, n]
-                    })
-                    .collect(),
-                neighbours: std::array::from_fn(|s| {
-                    table
-                        .neighbours(c, s)
+    /// The chart table of `atlas`: its charts are `patches` (every cell its own chart in
+    /// a flat atlas) over the cells of `table`. A packed chart's neighbours come from
+    /// [`Patches::across`]; a side it cannot pair whole (never, for charts from
+    /// [`super::patches::grow`]) is listed with no neighbour.
+    pub fn new(table: &ChartTable, atlas: &Atlas, patches: &Patches) -> ChartsFile {
+        let charts = (0..patches.len())
+            .map(|p| ChartEntry {
+                corners: patches.corners(&table.corners, p),
+                rects: (0..atlas.levels()).map(|l| atlas.rect(p, l)).collect(),
+                neighbours: std::array::from_fn(|s| match atlas {
+                    Atlas::Flat(_) => table
+                        .neighbours(p, s)
                         .into_iter()
                         .map(|(chart, side, reversed)| Neighbour {
                             chart,
                             side,
                             reversed,
                         })
-                        .collect()
+                        .collect(),
+                    Atlas::Packed(_) => patches
+                        .across(table, p, s)
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(|(chart, side, reversed)| Neighbour {
+                            chart,
+                            side,
+                            reversed,
+                        })
+                        .collect(),
                 }),
             })
             .collect();
         ChartsFile {
-            layout: layout.clone(),
+            layout: atlas.clone(),
+            levels: atlas.levels(),
             charts,
         }
     }

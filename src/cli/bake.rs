@@ -86,12 +86,33 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         }
         _ => return Err("--bounds takes two points: MIN MAX, each x,y,z".into()),
     };
+    let style = match args.layout {
+        super::Layout::Flat => pipeline::Style::Flat,
+        super::Layout::Packed => pipeline::Style::Packed,
+    };
+    if style == pipeline::Style::Packed {
+        if args.gutter {
+            return Err("--gutter pads the flat layout's charts; the packed layout has none (its charts are fewer and larger, so a generic mip chain crosses fewer borders)".into());
+        }
+        if args.ktx2.is_some() {
+            return Err("--ktx2 writes the flat layout's chart grid at every level (the stacked style); the packed layout's charts differ in size, so bake with --layout flat for it".into());
+        }
+    }
+    if !(1..=pipeline::MAX_MAX_CHART).contains(&args.max_chart) {
+        return Err(format!(
+            "--max-chart {} is not between 1 and {}",
+            args.max_chart,
+            pipeline::MAX_MAX_CHART
+        ));
+    }
     Ok(Options {
         size: args.size,
         resolution,
         bounds,
         chart_quads: args.chart_quads,
         gutter: args.gutter,
+        style,
+        max_chart: args.max_chart,
     })
 }
 
@@ -141,26 +162,31 @@ fn writable(path: &std::path::Path) -> Result<(), String> {
 fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
     let mut out = vec![(
         args.output.clone(),
-        export::glb(&baked.mesh, &baked.textures, &baked.layout, name)?,
+        export::glb(&baked.mesh, &baked.textures, &baked.atlas, name)?,
     )];
-    if let Some(path) = &args.ktx2 {
+    if let (Some(path), sdfc::bake::Atlas::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
             .levels
             .iter()
             .enumerate()
-            .map(|(l, s)| sdfc::bake::images::stacked_level(&baked.table, &baked.layout, s, l))
+            .map(|(l, s)| sdfc::bake::images::stacked_level(&baked.table, layout, s, l))
             .collect();
         out.push((path.clone(), export::ktx2(&levels, true)?));
     }
     if let Some(path) = &args.object_normals {
-        let img = sdfc::bake::images::object_normals(&baked.table, &baked.layout, &baked.levels);
+        let img = sdfc::bake::images::object_normals(
+            &baked.table,
+            &baked.atlas,
+            &baked.patches,
+            &baked.levels,
+        );
         let mut png = Vec::new();
         img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
             .map_err(|e| e.to_string())?;
         out.push((path.clone(), png));
     }
     if let Some(path) = &args.charts {
-        let file = ChartsFile::new(&baked.table, &baked.layout);
+        let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
         let json = serde_json::to_vec_pretty(&file).map_err(|e| e.to_string())?;
         out.push((path.clone(), json));
     }
@@ -253,11 +279,11 @@ pub fn run(args: BakeArgs) -> ExitCode {
 /// The quality report: charts, utilisation, texel-density spread, time per stage.
 pub fn print_report(baked: &Baked, gpu: &Gpu) {
     let r = &baked.report;
-    let l = &baked.layout;
+    let l = &baked.atlas;
     eprintln!("adapter:        {}", gpu.describe());
     eprintln!(
-        "mesh:           {} charts (chart grid {}×{}×{}), {} triangles ({}×{} quads per chart)",
-        r.charts,
+        "mesh:           {} cells (chart grid {}×{}×{}), {} triangles ({}×{} quads per cell)",
+        r.cells,
         r.grid[0],
         r.grid[1],
         r.grid[2],
@@ -265,10 +291,22 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         r.chart_quads,
         r.chart_quads
     );
-    eprintln!(
-        "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²)",
-        l.width, l.height, r.charts, r.chart_size, r.levels
-    );
+    match l {
+        sdfc::bake::Atlas::Flat(f) => eprintln!(
+            "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²)",
+            f.width, f.height, r.charts, r.chart_size, r.levels
+        ),
+        sdfc::bake::Atlas::Packed(p) => eprintln!(
+            "atlas:          {}×{} packed, {} charts of 1 to {} cells ({:.1} cells on average), {}² texels a cell, {} levels (down to 2² a cell)",
+            p.width,
+            p.height,
+            r.charts,
+            baked.patches.dims.iter().map(|d| d[0] * d[1]).max().unwrap_or(0),
+            r.cells as f64 / r.charts.max(1) as f64,
+            r.chart_size,
+            r.levels
+        ),
+    }
     eprintln!(
         "utilisation:    {:.1} % of the atlas's texels",
         r.utilisation * 100.0
@@ -348,9 +386,9 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         .unwrap_or(("none", 0.0));
     println!(
         "bake: {total:.3} s for a {}×{} atlas with {} levels; the slowest stage, {name}, is {:.0} % of it ({:.1} µs per texel sample)",
-        baked.layout.width,
-        baked.layout.height,
-        baked.layout.levels(),
+        baked.atlas.width(),
+        baked.atlas.height(),
+        baked.atlas.levels(),
         100.0 * slowest / total.max(1e-9),
         1e6 * slowest / r.samples.max(1) as f64
     );

@@ -220,6 +220,10 @@ pub enum Layout {
     /// Every chart at the same resolution, all levels in one image in a mip-map
     /// pattern (the paper's §3.3).
     Flat,
+    /// Charts grown over the mesh into conforming rectangles of quads, each with as
+    /// many texels as its quads, packed in shelves with a lookup table (the paper's
+    /// §3.4): uniform texel density and fewer chart borders.
+    Packed,
 }
 
 #[derive(clap::Args)]
@@ -254,6 +258,9 @@ pub struct BakeArgs {
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]
     pub layout: Layout,
+    /// Packed layout: the longest side of a grown chart, in chart-grid quads.
+    #[arg(long, value_name = "CELLS", default_value = "16")]
+    pub max_chart: usize,
     /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds).
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true)]
     pub bounds: Vec<[f64; 3]>,

@@ -92,8 +92,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
             gpu.describe(),
             load_time.as_secs_f64() * 1e3,
             mesh.indices.len() / 3,
-            layout.width,
-            layout.height
+            layout.width(),
+            layout.height()
         )
     });
     write_frame(&args, &frame, header)

@@ -1,16 +1,34 @@
-//! The mesh renderer's module: `shaders/mesh.wgsl.in` with a flat layout's constants
-//! (atlas size, chart size, grid, level origins) baked in, after the render library
+//! The mesh renderer's module: `shaders/mesh.wgsl.in` with the layout's constants
+//! (atlas size, chart or cell size, the flat layout's grid and level origins, or the
+//! packed layout's switch: its table travels per vertex) baked in, after the render library
 //! (`shaders/render.wgsl`: `Globals`, `shade`, `tonemap`). Validated by naga like every
 //! module sdfc emits ([`mesh_module`]).
 
 use super::emit::lit;
 use super::targets::{validate, NagaError, Validated};
 use super::{template, RENDER_LIBRARY};
-use crate::bake::FlatLayout;
+use crate::bake::{Atlas, FlatLayout};
 
 /// The WGSL of the mesh module for `layout` (not yet validated).
-pub fn mesh_wgsl(layout: &FlatLayout) -> Result<String, template::Mismatch> {
+pub fn mesh_wgsl(atlas: &Atlas) -> Result<String, template::Mismatch> {
     let f = |x: u32| lit(x as f64);
+    // A packed atlas fills the flat layout's constants with a one-cell grid (unused).
+    let packed_as_flat;
+    let (layout, packed) = match atlas {
+        Atlas::Flat(l) => (l, false),
+        Atlas::Packed(p) => {
+            packed_as_flat = FlatLayout {
+                width: p.width,
+                height: p.height,
+                chart_size: p.cell_size,
+                columns: 1,
+                rows: 1,
+                level_origins: vec![[0, 0]; p.levels()],
+                gutter: 0,
+            };
+            (&packed_as_flat, true)
+        }
+    };
     let origins: Vec<String> = layout
         .level_origins
         .iter()
@@ -24,6 +42,7 @@ pub fn mesh_wgsl(layout: &FlatLayout) -> Result<String, template::Mismatch> {
         ("columns", f(layout.columns)),
         ("rows", f(layout.rows)),
         ("levels", layout.levels().to_string()),
+        ("packed", packed.to_string()),
         ("level_origins", origins.join(", ")),
     ];
     let body = template::fill(template::MESH, &values)?;
@@ -53,7 +72,7 @@ impl std::fmt::Display for MeshIce {
 
 /// The mesh module for `layout`, validated by naga. The layout must be well formed
 /// (`crate::gpu::MeshRenderer::new` checks it): at least one level.
-pub fn mesh_module(layout: &FlatLayout) -> Result<(String, Validated), MeshIce> {
+pub fn mesh_module(layout: &Atlas) -> Result<(String, Validated), MeshIce> {
     let wgsl = mesh_wgsl(layout).map_err(|e| MeshIce {
         message: e.to_string(),
         wgsl: String::new(),

@@ -16,7 +16,7 @@
 
 use super::render::{self, Frame, Timings, ViewMode};
 use super::{Gpu, GpuError};
-use crate::bake::{FlatLayout, MeshData, Textures};
+use crate::bake::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::mesh::{mesh_module, MeshIce};
 use crate::ir::Aabb;
 use crate::view::View;
@@ -63,7 +63,7 @@ impl From<GpuError> for MeshError {
 /// One vertex as the pipeline reads it: position, normal, tangent, texcoord.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Vertex([f32; 12]);
+struct Vertex([f32; 16]);
 
 /// A baked mesh on the GPU with its pipeline, ready for any number of frames.
 pub struct MeshRenderer {
@@ -150,10 +150,74 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
     Ok(())
 }
 
+/// Each vertex's chart in a packed atlas (its block's origin and cells, the shader's
+/// `chart` attribute): the chart whose level-0 rectangle holds its TEXCOORD_0, found
+/// through a grid of 64-texel tiles. An error when a vertex is on no chart, or a
+/// triangle's vertices are on different charts.
+fn packed_charts(mesh: &MeshData, layout: &PackedLayout) -> Result<Vec<[f32; 4]>, String> {
+    const TILE: u32 = 64;
+    let (w, h) = (layout.width, layout.height);
+    let (tw, th) = (w.div_ceil(TILE) as usize, h.div_ceil(TILE) as usize);
+    let mut tiles: Vec<Vec<u32>> = vec![Vec::new(); tw * th];
+    for p in 0..layout.charts.len() {
+        let [x, y, cw, ch] = layout.rect(p, 0);
+        for ty in y / TILE..=(y + ch - 1) / TILE {
+            for tx in x / TILE..=(x + cw - 1) / TILE {
+                tiles[ty as usize * tw + tx as usize].push(p as u32);
+            }
+        }
+    }
+    // A texture coordinate lies on its chart's texel centres, within rounding.
+    let slack = 1e-2;
+    let mut out = Vec::with_capacity(mesh.texcoords.len());
+    let mut which = Vec::with_capacity(mesh.texcoords.len());
+    for (i, tc) in mesh.texcoords.iter().enumerate() {
+        let (tx, ty) = (tc[0] as f64 * w as f64, tc[1] as f64 * h as f64);
+        let tile = if tx.is_finite() && ty.is_finite() && tx >= 0.0 && ty >= 0.0 {
+            let (a, b) = ((tx as u32 / TILE) as usize, (ty as u32 / TILE) as usize);
+            (a < tw && b < th).then(|| &tiles[b * tw + a])
+        } else {
+            None
+        };
+        let found = tile.into_iter().flatten().copied().find(|&p| {
+            let [x, y, cw, ch] = layout.rect(p as usize, 0).map(f64::from);
+            tx >= x + 0.5 - slack
+                && tx <= x + cw - 0.5 + slack
+                && ty >= y + 0.5 - slack
+                && ty <= y + ch - 0.5 + slack
+        });
+        let Some(p) = found else {
+            return Err(format!(
+                "vertex {i}'s texture coordinate ({}, {}) is on no chart of the packed atlas",
+                tc[0], tc[1]
+            ));
+        };
+        let chart = &layout.charts[p as usize];
+        which.push(p);
+        out.push([
+            chart.origin[0] as f32,
+            chart.origin[1] as f32,
+            chart.cells[0] as f32,
+            chart.cells[1] as f32,
+        ]);
+    }
+    if let Some(t) = mesh.indices.chunks(3).position(|t| {
+        let k = t.iter().map(|&v| which[v as usize]);
+        k.clone().min() != k.max()
+    }) {
+        return Err(format!("triangle {t} spans two charts of the packed atlas"));
+    }
+    Ok(out)
+}
+
 /// Checks that the attributes, indices and images of a mesh agree with each other and
 /// with the layout.
-fn check_input(mesh: &MeshData, textures: &Textures, layout: &FlatLayout) -> Result<(), String> {
-    check_layout(layout)?;
+fn check_input(mesh: &MeshData, textures: &Textures, atlas: &Atlas) -> Result<(), String> {
+    match atlas {
+        Atlas::Flat(layout) => check_layout(layout)?,
+        Atlas::Packed(layout) => layout.check()?,
+    }
+    let layout = atlas;
     let n = mesh.positions.len();
     let lens = [
         ("normals", mesh.normals.len()),
@@ -174,7 +238,7 @@ fn check_input(mesh: &MeshData, textures: &Textures, layout: &FlatLayout) -> Res
     if let Some(i) = mesh.indices.iter().find(|&&i| i as usize >= n) {
         return Err(format!("index {i} past the {n} vertices"));
     }
-    let size = (layout.width, layout.height);
+    let size = (layout.width(), layout.height());
     let images = [
         ("base colour", Some(&textures.base_color)),
         ("metallic-roughness", Some(&textures.metallic_roughness)),
@@ -202,16 +266,21 @@ impl MeshRenderer {
         gpu: &Gpu,
         mesh: &MeshData,
         textures: &Textures,
-        layout: &FlatLayout,
+        layout: &Atlas,
     ) -> Result<MeshRenderer, MeshError> {
         check_input(mesh, textures, layout).map_err(MeshError::Input)?;
         let side = gpu.device.limits().max_texture_dimension_2d;
-        if layout.width > side || layout.height > side {
+        if layout.width() > side || layout.height() > side {
             return Err(MeshError::Gpu(GpuError::Resource(format!(
                 "the atlas is {}×{}; this GPU's limit is {side} texels a side",
-                layout.width, layout.height
+                layout.width(),
+                layout.height()
             ))));
         }
+        let charts = match layout {
+            Atlas::Flat(_) => Vec::new(),
+            Atlas::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
+        };
         let (wgsl, _) = mesh_module(layout).map_err(MeshError::Internal)?;
         let formats = render::formats(gpu);
         let d = &gpu.device;
@@ -224,8 +293,10 @@ impl MeshRenderer {
                     mesh.tangents[i],
                     mesh.texcoords[i],
                 );
+                let k = charts.get(i).copied().unwrap_or([0.0; 4]);
                 Vertex([
                     p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], c[0], c[1],
+                    k[0], k[1], k[2], k[3],
                 ])
             })
             .collect();
@@ -251,7 +322,7 @@ impl MeshRenderer {
             });
             // wgpu rejects empty buffers with a binding; a zero-length draw reads nothing.
             let vertex_bytes: &[u8] = if vertices.is_empty() {
-                &[0; 48]
+                &[0; 64]
             } else {
                 bytemuck::cast_slice(&vertices)
             };
@@ -270,9 +341,9 @@ impl MeshRenderer {
                 contents: index_bytes,
                 usage: wgpu::BufferUsages::INDEX,
             });
-            let pipeline = pipeline(d, &wgsl, &formats);
+            let shadow_pipeline = pipeline(d, &wgsl, None);
+            let pipeline = pipeline(d, &wgsl, Some(&formats));
             let layout = pipeline.get_bind_group_layout(0);
-            let shadow_pipeline = shadow_pipeline(d, &wgsl);
             let shadow_layout = shadow_pipeline.get_bind_group_layout(0);
             let shadow_view = d
                 .create_texture(&wgpu::TextureDescriptor {
@@ -553,49 +624,6 @@ fn light_uniform(bounds: &Aabb, towards_sun: DVec3) -> [f32; 20] {
     out
 }
 
-/// The shadow map's pipeline: vs_shadow into a depth target, no fragment stage.
-fn shadow_pipeline(d: &wgpu::Device, wgsl: &str) -> wgpu::RenderPipeline {
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("mesh shadow"),
-        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-    });
-    let attributes = wgpu::vertex_attr_array![
-        0 => Float32x3,
-        1 => Float32x3,
-        2 => Float32x4,
-        3 => Float32x2,
-    ];
-    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("mesh shadow"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_shadow"),
-            compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<Vertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &attributes,
-            })],
-        },
-        primitive: wgpu::PrimitiveState {
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState::default(),
-        fragment: None,
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
 /// `tonemap` of shaders/render.wgsl, for the background (the clear colour is linear;
 /// the sRGB target encodes it as it encodes the shader's output).
 fn tonemap(c: DVec3) -> [f64; 3] {
@@ -627,18 +655,22 @@ fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool) -> wgpu::Textur
     )
 }
 
-/// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA.
+/// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA;
+/// vs_main and fs_main into `formats`, or with no formats the shadow map's pipeline:
+/// vs_shadow into the depth target alone.
 fn pipeline(
     d: &wgpu::Device,
     wgsl: &str,
-    formats: &[wgpu::TextureFormat; 4],
+    formats: Option<&[wgpu::TextureFormat; 4]>,
 ) -> wgpu::RenderPipeline {
+    let label = Some(if formats.is_some() { "mesh" } else { "mesh shadow" });
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("mesh"),
+        label,
         source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     });
     let targets: Vec<Option<wgpu::ColorTargetState>> = formats
-        .iter()
+        .into_iter()
+        .flatten()
         .map(|f| {
             Some(wgpu::ColorTargetState {
                 format: *f,
@@ -652,13 +684,14 @@ fn pipeline(
         1 => Float32x3,
         2 => Float32x4,
         3 => Float32x2,
+        4 => Float32x4,
     ];
     d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("mesh"),
+        label,
         layout: None,
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some("vs_main"),
+            entry_point: Some(if formats.is_some() { "vs_main" } else { "vs_shadow" }),
             compilation_options: Default::default(),
             buffers: &[Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -678,7 +711,7 @@ fn pipeline(
             bias: Default::default(),
         }),
         multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
+        fragment: formats.map(|_| wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),

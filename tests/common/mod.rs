@@ -126,18 +126,25 @@ pub fn assert_borders_identical(
         let r = file.charts[c].rects[l];
         *img.get_pixel(r[0] + i as u32, r[1] + j as u32)
     };
+    use sdfc::bake::charts::side_texel_rect;
+    // A side's length in texels: sides 0 and 2 run along the width.
+    let along = |r: [u32; 4], s: usize| if s % 2 == 0 { r[2] } else { r[3] } as usize;
     for (c, chart) in file.charts.iter().enumerate() {
-        for l in 0..file.layout.level_origins.len() {
-            let n = file.charts[c].rects[l][2] as usize;
+        for l in 0..file.levels {
+            let r = chart.rects[l];
+            let (w, h) = (r[2] as usize, r[3] as usize);
             for s in 0..4 {
                 for nb in &chart.neighbours[s] {
+                    let n = along(r, s);
+                    let r2 = file.charts[nb.chart as usize].rects[l];
+                    assert_eq!(n, along(r2, nb.side as usize), "{what}: level {l}, chart {c} side {s} and chart {} side {} differ in length", nb.chart, nb.side);
                     for k in 0..n {
                         let kk = if nb.reversed { n - 1 - k } else { k };
-                        let a = texel(c, l, sdfc::bake::charts::side_texel(n, s, k, 0));
+                        let a = texel(c, l, side_texel_rect(w, h, s, k, 0));
                         let b = texel(
                             nb.chart as usize,
                             l,
-                            sdfc::bake::charts::side_texel(n, nb.side as usize, kk, 0),
+                            side_texel_rect(r2[2] as usize, r2[3] as usize, nb.side as usize, kk, 0),
                         );
                         assert_eq!(a, b, "{what}: level {l}, chart {c} side {s} texel {k} against chart {} side {}", nb.chart, nb.side);
                         sides += 1;
@@ -149,10 +156,10 @@ pub fn assert_borders_identical(
     // Corners: every chart around a mesh vertex has the same corner texel.
     let mut first: std::collections::HashMap<(u32, usize), image::Rgba<u8>> = Default::default();
     for (c, chart) in file.charts.iter().enumerate() {
-        for l in 0..file.layout.level_origins.len() {
-            let n = chart.rects[l][2] as usize;
+        for l in 0..file.levels {
+            let r = chart.rects[l];
             for q in 0..4 {
-                let t = texel(c, l, sdfc::bake::charts::side_texel(n, q, 0, 0));
+                let t = texel(c, l, side_texel_rect(r[2] as usize, r[3] as usize, q, 0, 0));
                 let seen = *first.entry((chart.corners[q], l)).or_insert(t);
                 assert_eq!(seen, t, "{what}: level {l}, corner {q} of chart {c}");
                 corners += 1;

@@ -21,8 +21,9 @@
 //!   emissiveFactor [1, 1, 1];
 //! - one sampler for every texture: LINEAR magnification and minification, no mipmap
 //!   filter (the atlas holds its own levels side by side in the image, selected by the
-//!   renderer, see [`FlatLayout`]), CLAMP_TO_EDGE in both directions;
-//! - the layout of the atlas, `serde_json` of [`FlatLayout`], in the root's
+//!   renderer, see [`Atlas`]), CLAMP_TO_EDGE in both directions;
+//! - the layout of the atlas, `serde_json` of [`Atlas`] (a flat or a packed layout,
+//!   whose table gives each chart's place), in the root's
 //!   `extras.sdfc_atlas`, where glTF readers that do not know it ignore it.
 //!
 //! Images whose alpha is 255 everywhere are stored as RGB PNGs; [`read_glb`] returns
@@ -30,7 +31,7 @@
 //!
 //! [`read_glb`] reads such files (and any glTF shaped like them) with explicit bounds
 //! checks throughout: for any input bytes it returns an error message or data that
-//! passes [`check_mesh`], [`check_textures`] and [`check_layout`], never panics, and
+//! passes [`check_mesh`], [`check_textures`] and [`check_atlas`], never panics, and
 //! never allocates much more than the input's size before a check except to decode
 //! PNGs, whose decoder refuses images larger than the layout says (and than
 //! [`MAX_IMAGE_SIZE`] a side) before allocating.
@@ -48,8 +49,8 @@ use gltf_json::{Accessor, Asset, Buffer, Image, Index, Material, Mesh, Node, Roo
 use gltf_json::{Texture, Value};
 use image::{ExtendedColorType, ImageEncoder, ImageFormat, RgbaImage};
 
-use super::{check_layout, check_mesh, check_textures};
-use crate::bake::{FlatLayout, MeshData, Textures};
+use super::{check_atlas, check_mesh, check_textures};
+use crate::bake::{Atlas, MeshData, Textures};
 
 /// The key of the atlas layout in the root's `extras`.
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
@@ -67,11 +68,11 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 pub fn glb(
     mesh: &MeshData,
     textures: &Textures,
-    layout: &FlatLayout,
+    layout: &Atlas,
     name: &str,
 ) -> Result<Vec<u8>, String> {
     check_mesh(mesh)?;
-    check_layout(layout)?;
+    check_atlas(layout)?;
     check_textures(textures, layout)?;
 
     let mut doc = Builder::default();
@@ -339,11 +340,11 @@ fn encode_png(image: &RgbaImage) -> image::ImageResult<Vec<u8>> {
 /// primitive, TRIANGLES, with POSITION, NORMAL, TANGENT and TEXCOORD_0 as f32 and
 /// unsigned indices, its material's PNG textures in the GLB's buffer, and the atlas
 /// layout in `extras.sdfc_atlas`). Any other input is an error, never a panic.
-pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, FlatLayout), String> {
+pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), String> {
     let (json, bin) = split_glb(bytes)?;
     let root = Root::from_slice(json).map_err(|e| format!("the glTF's JSON: {e}"))?;
     let layout = read_layout(&root)?;
-    check_layout(&layout)?;
+    check_atlas(&layout)?;
     let bin = match root.buffers.first() {
         Some(buffer) if buffer.uri.is_none() => usize::try_from(buffer.byte_length.0)
             .ok()
@@ -452,7 +453,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], &[u8]), String> {
 }
 
 /// The atlas layout from the root's `extras.sdfc_atlas`.
-fn read_layout(root: &Root) -> Result<FlatLayout, String> {
+fn read_layout(root: &Root) -> Result<Atlas, String> {
     let missing =
         || format!("the glTF has no atlas layout (extras.{LAYOUT_KEY}): not from sdfc bake");
     let extras = root.extras.as_ref().ok_or_else(missing)?;
@@ -562,7 +563,7 @@ impl Reader<'_> {
 
     /// The image of texture `index`, a PNG in a buffer view, as RGBA.
     /// Images larger than `layout` says are refused before they are decoded.
-    fn image(&self, index: Index<Texture>, layout: &FlatLayout) -> Result<RgbaImage, String> {
+    fn image(&self, index: Index<Texture>, layout: &Atlas) -> Result<RgbaImage, String> {
         let texture = self
             .root
             .get(index)
@@ -578,8 +579,8 @@ impl Reader<'_> {
         let mut reader = image::ImageReader::with_format(Cursor::new(png), ImageFormat::Png);
         let mut limits = image::Limits::default();
         let (w, h) = (
-            layout.width.min(MAX_IMAGE_SIZE),
-            layout.height.min(MAX_IMAGE_SIZE),
+            layout.width().min(MAX_IMAGE_SIZE),
+            layout.height().min(MAX_IMAGE_SIZE),
         );
         limits.max_image_width = Some(w);
         limits.max_image_height = Some(h);

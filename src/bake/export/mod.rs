@@ -17,7 +17,7 @@ pub mod ktx2;
 pub use self::gltf::{glb, read_glb};
 pub use self::ktx2::ktx2;
 
-use super::{FlatLayout, MeshData, Textures};
+use super::{Atlas, FlatLayout, MeshData, Textures};
 
 /// Checks that `mesh` is a non-empty triangle mesh: the four attributes have one value
 /// per vertex, every value is finite, and the indices are whole triangles of existing
@@ -104,8 +104,16 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks that an atlas layout is usable ([`check_layout`], [`super::PackedLayout::check`]).
+pub fn check_atlas(atlas: &Atlas) -> Result<(), String> {
+    match atlas {
+        Atlas::Flat(l) => check_layout(l),
+        Atlas::Packed(l) => l.check(),
+    }
+}
+
 /// Checks that every texture is the atlas's size.
-pub fn check_textures(textures: &Textures, layout: &FlatLayout) -> Result<(), String> {
+pub fn check_textures(textures: &Textures, layout: &Atlas) -> Result<(), String> {
     let images = [
         ("base colour", Some(&textures.base_color)),
         ("metallic-roughness", Some(&textures.metallic_roughness)),
@@ -114,13 +122,13 @@ pub fn check_textures(textures: &Textures, layout: &FlatLayout) -> Result<(), St
     ];
     for (what, image) in images {
         if let Some(image) = image {
-            if image.dimensions() != (layout.width, layout.height) {
+            if image.dimensions() != (layout.width(), layout.height()) {
                 return Err(format!(
                     "the {what} texture is {}×{}, the atlas {}×{}",
                     image.width(),
                     image.height(),
-                    layout.width,
-                    layout.height
+                    layout.width(),
+                    layout.height()
                 ));
             }
         }

@@ -95,15 +95,25 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         assert_eq!(file.layout, layout, "{stem}");
         let cells = match &layout {
             sdfc::bake::Atlas::Flat(_) => file.charts.len(),
-            sdfc::bake::Atlas::Packed(p) => {
-                p.charts.iter().map(|c| (c.cells[0] * c.cells[1]) as usize).sum()
-            }
+            sdfc::bake::Atlas::Packed(p) => p
+                .charts
+                .iter()
+                .map(|c| (c.cells[0] * c.cells[1]) as usize)
+                .sum(),
         };
-        assert_eq!(cells * 6, mesh.indices.len(), "{stem}: two triangles per cell");
+        assert_eq!(
+            cells * 6,
+            mesh.indices.len(),
+            "{stem}: two triangles per cell"
+        );
         if packed {
             assert!(matches!(layout, sdfc::bake::Atlas::Packed(_)), "{stem}");
             // (At this coarse grid a few charts grow: tests/bake_packed.rs measures more.)
-            assert!(file.charts.len() < cells, "{stem}: {} charts of {cells} cells", file.charts.len());
+            assert!(
+                file.charts.len() < cells,
+                "{stem}: {} charts of {cells} cells",
+                file.charts.len()
+            );
         }
         let (sides, _) = assert_borders_identical(&textures.base_color, &file, &stem);
         assert_borders_identical(&textures.metallic_roughness, &file, &stem);
@@ -139,7 +149,11 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         if !packed {
             let bytes = std::fs::read(&ktx2).unwrap();
             let reader = ktx2::Reader::new(&bytes[..]).expect("a KTX2 file");
-            assert_eq!(reader.header().level_count as usize, layout.levels(), "{stem}");
+            assert_eq!(
+                reader.header().level_count as usize,
+                layout.levels(),
+                "{stem}"
+            );
         }
     }
 }
@@ -191,9 +205,21 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             5,
             "do not fit",
         ),
-        (vec![&sphere, "--layout", "packed", "--gutter"], 2, "--gutter"),
-        (vec![&sphere, "--layout", "packed", "--ktx2", "x.ktx2"], 2, "--ktx2"),
-        (vec![&sphere, "--layout", "packed", "--max-chart", "0"], 2, "--max-chart"),
+        (
+            vec![&sphere, "--layout", "packed", "--gutter"],
+            2,
+            "--gutter",
+        ),
+        (
+            vec![&sphere, "--layout", "packed", "--ktx2", "x.ktx2"],
+            2,
+            "--ktx2",
+        ),
+        (
+            vec![&sphere, "--layout", "packed", "--max-chart", "0"],
+            2,
+            "--max-chart",
+        ),
     ];
     for (args, status, message) in cases {
         let mut all = vec!["bake"];

@@ -88,7 +88,13 @@ fn glb_round_trip() {
     let (mesh, layout) = quad_and_cube();
     for emissive in [true, false] {
         let textures = textures(&layout, emissive);
-        let bytes = glb(&mesh, &textures, &Atlas::from(layout.clone()), "quad and cube").unwrap();
+        let bytes = glb(
+            &mesh,
+            &textures,
+            &Atlas::from(layout.clone()),
+            "quad and cube",
+        )
+        .unwrap();
         assert_eq!(&bytes[..4], b"glTF");
         assert_eq!(bytes.len() % 4, 0);
         let (mesh2, textures2, layout2) = read_glb(&bytes).unwrap();
@@ -101,7 +107,13 @@ fn glb_round_trip() {
 #[test]
 fn glb_document_structure() {
     let (mesh, layout) = quad_and_cube();
-    let bytes = glb(&mesh, &textures(&layout, true), &Atlas::from(layout.clone()), "q").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures(&layout, true),
+        &Atlas::from(layout.clone()),
+        "q",
+    )
+    .unwrap();
     let (doc, _) = split(&bytes);
     assert_eq!(doc["asset"]["version"], "2.0");
     assert_eq!(
@@ -130,7 +142,13 @@ fn glb_document_structure() {
         assert_eq!(image["mimeType"], "image/png");
     }
 
-    let plain = glb(&mesh, &textures(&layout, false), &Atlas::from(layout.clone()), "q").unwrap();
+    let plain = glb(
+        &mesh,
+        &textures(&layout, false),
+        &Atlas::from(layout.clone()),
+        "q",
+    )
+    .unwrap();
     let (doc, _) = split(&plain);
     assert!(doc["materials"][0].get("emissiveTexture").is_none());
     assert_eq!(
@@ -184,7 +202,10 @@ fn glb_refuses_bad_input() {
     let (mesh, layout) = quad_and_cube();
     let tex = textures(&layout, true);
     let refused = |mesh: &MeshData, tex: &Textures, layout: &FlatLayout| {
-        assert!(glb(mesh, tex, &Atlas::from(layout.clone()), "x").is_err(), "bad input accepted");
+        assert!(
+            glb(mesh, tex, &Atlas::from(layout.clone()), "x").is_err(),
+            "bad input accepted"
+        );
     };
     let mut m = mesh.clone();
     m.normals.pop();
@@ -248,7 +269,13 @@ fn read_checked(bytes: &[u8]) -> Result<(), String> {
 #[test]
 fn read_glb_rejects_garbage_and_truncations() {
     let (mesh, layout) = quad_and_cube();
-    let bytes = glb(&mesh, &textures(&layout, true), &Atlas::from(layout.clone()), "q").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures(&layout, true),
+        &Atlas::from(layout.clone()),
+        "q",
+    )
+    .unwrap();
     for garbage in [
         &b""[..],
         b"glTF",
@@ -271,7 +298,13 @@ fn read_glb_rejects_garbage_and_truncations() {
 #[test]
 fn read_glb_survives_flipped_bytes() {
     let (mesh, layout) = quad_and_cube();
-    let bytes = glb(&mesh, &textures(&layout, true), &Atlas::from(layout.clone()), "q").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures(&layout, true),
+        &Atlas::from(layout.clone()),
+        "q",
+    )
+    .unwrap();
     let json_end = 20 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
     // Every byte of the header and the JSON, every 7th of the buffer (mostly PNG data,
     // whose checksums catch most changes).
@@ -291,7 +324,13 @@ fn read_glb_survives_flipped_bytes() {
 #[test]
 fn read_glb_rejects_inconsistent_documents() {
     let (mesh, layout) = quad_and_cube();
-    let bytes = glb(&mesh, &textures(&layout, false), &Atlas::from(layout.clone()), "q").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures(&layout, false),
+        &Atlas::from(layout.clone()),
+        "q",
+    )
+    .unwrap();
     let (doc, bin) = split(&bytes);
     read_checked(&join(&doc, &bin)).unwrap();
     let edits: &[(&str, Value)] = &[

@@ -175,7 +175,14 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
     let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Color);
     assert!(p >= 35.0, "robot colour view PSNR {p:.2} dB");
     // The packed layout: grown charts (the boxes' faces), the same cell resolution.
-    let p = compare_style("robot.sdf", 1024, 48, (240, 320), ViewMode::Color, Style::Packed);
+    let p = compare_style(
+        "robot.sdf",
+        1024,
+        48,
+        (240, 320),
+        ViewMode::Color,
+        Style::Packed,
+    );
     assert!(p >= 35.0, "robot colour view PSNR {p:.2} dB, packed");
     // The robot's bricks, unlit.
     let p = compare("robot.sdf", 1024, 48, 240, 320, ViewMode::Albedo);

@@ -61,21 +61,45 @@ fn grown_charts_conform_and_keep_borders_identical_at_every_level() {
     layout.check().unwrap();
     baked.patches.check_conforming(&baked.table).unwrap();
     let (charts, cells) = (baked.patches.len(), baked.table.len());
-    eprintln!("{charts} charts over {cells} cells, {}×{} atlas, {:.1} % used", layout.width, layout.height, 100.0 * baked.atlas.utilisation(cells));
+    eprintln!(
+        "{charts} charts over {cells} cells, {}×{} atlas, {:.1} % used",
+        layout.width,
+        layout.height,
+        100.0 * baked.atlas.utilisation(cells)
+    );
     assert!(charts * 2 < cells, "{charts} charts over {cells} cells");
     assert!(baked.patches.dims.iter().all(|d| d[0] <= 6 && d[1] <= 6));
-    assert!(baked.patches.dims.iter().any(|d| d[0] * d[1] >= 12), "no chart grew");
+    assert!(
+        baked.patches.dims.iter().any(|d| d[0] * d[1] >= 12),
+        "no chart grew"
+    );
 
     let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
     assert_eq!(file.levels, layout.levels());
     // Closed mesh: a chart across every side (more than one only at the odd
     // non-manifold edge dual contouring makes where the sphere meets the box).
-    assert!(file.charts.iter().all(|c| c.neighbours.iter().all(|n| !n.is_empty())));
-    let (sides, corners) = assert_borders_identical(&baked.textures.base_color, &file, "packed colour");
-    assert_borders_identical(&baked.textures.metallic_roughness, &file, "packed metallic-roughness");
-    let normals = sdfc::bake::images::object_normals(&baked.table, &baked.atlas, &baked.patches, &baked.levels);
+    assert!(file
+        .charts
+        .iter()
+        .all(|c| c.neighbours.iter().all(|n| !n.is_empty())));
+    let (sides, corners) =
+        assert_borders_identical(&baked.textures.base_color, &file, "packed colour");
+    assert_borders_identical(
+        &baked.textures.metallic_roughness,
+        &file,
+        "packed metallic-roughness",
+    );
+    let normals = sdfc::bake::images::object_normals(
+        &baked.table,
+        &baked.atlas,
+        &baked.patches,
+        &baked.levels,
+    );
     assert_borders_identical(&normals, &file, "packed object normals");
-    assert!(sides > 500 && corners > 100, "{sides} side texels, {corners} corners");
+    assert!(
+        sides > 500 && corners > 100,
+        "{sides} side texels, {corners} corners"
+    );
 
     // Inside a grown chart the cells' shared rows are the same samples too: each cell's
     // n_l × n_l block in the image is its own grid of the level, for every cell.
@@ -87,9 +111,16 @@ fn grown_charts_conform_and_keep_borders_identical_at_every_level() {
             for j in 0..n {
                 for i in 0..n {
                     let t = grid[j * n + i];
-                    let px = baked.textures.base_color.get_pixel(x0 + i as u32, y0 + j as u32);
+                    let px = baked
+                        .textures
+                        .base_color
+                        .get_pixel(x0 + i as u32, y0 + j as u32);
                     let want = [t[0], t[1], t[2]].map(sdfc::bake::images::srgb8);
-                    assert_eq!([px[0], px[1], px[2]], want, "level {l} cell {c} texel ({i}, {j})");
+                    assert_eq!(
+                        [px[0], px[1], px[2]],
+                        want,
+                        "level {l} cell {c} texel ({i}, {j})"
+                    );
                 }
             }
         }
@@ -141,7 +172,10 @@ fn the_packed_atlas_renders_as_the_flat_one_does() {
                 .render(&gpu, &v, mode)
                 .unwrap()
         };
-        let (a, b) = (draw(&packed, ViewMode::Albedo), draw(&flat, ViewMode::Albedo));
+        let (a, b) = (
+            draw(&packed, ViewMode::Albedo),
+            draw(&flat, ViewMode::Albedo),
+        );
         let p = psnr(&a.color, &b.color);
         eprintln!("packed against flat, albedo, {distance}× the distance: PSNR {p:.1} dB");
         assert!(p >= 40.0, "albedo at {distance}×: PSNR {p:.1} dB");

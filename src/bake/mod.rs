@@ -251,7 +251,11 @@ impl Atlas {
             Atlas::Packed(layout) => {
                 let [p, i, j] = patches.place[c];
                 let [a, b] = patches.dims[p as usize];
-                layout.texcoord(p as usize, (i as f64 + u) / a as f64, (j as f64 + v) / b as f64)
+                layout.texcoord(
+                    p as usize,
+                    (i as f64 + u) / a as f64,
+                    (j as f64 + v) / b as f64,
+                )
             }
         }
     }

@@ -120,7 +120,13 @@ impl PackedLayout {
         let levels = n.ilog2() as usize;
         let blocks: Vec<[u32; 2]> = dims.iter().map(|&d| block(d, n, levels).0).collect();
         let mut order: Vec<usize> = (0..dims.len()).collect();
-        order.sort_by_key(|&p| (std::cmp::Reverse(blocks[p][1]), std::cmp::Reverse(blocks[p][0]), p));
+        order.sort_by_key(|&p| {
+            (
+                std::cmp::Reverse(blocks[p][1]),
+                std::cmp::Reverse(blocks[p][0]),
+                p,
+            )
+        });
         let mut charts = vec![
             PackedChart {
                 origin: [0, 0],
@@ -190,7 +196,10 @@ impl PackedLayout {
             let ([w, h], _) = block(chart.cells, n, self.levels());
             let [x, y] = chart.origin.map(u64::from);
             if x + w as u64 > self.width as u64 || y + h as u64 > self.height as u64 {
-                return Err(format!("packed chart {p} lies outside the {}×{} atlas", self.width, self.height));
+                return Err(format!(
+                    "packed chart {p} lies outside the {}×{} atlas",
+                    self.width, self.height
+                ));
             }
             rects.push((x, y, x + w as u64, y + h as u64, p));
         }

@@ -117,7 +117,9 @@ impl Patches {
             match &found {
                 None => found = Some(here),
                 Some(seen) if *seen != here => {
-                    return Err(format!("side {s} of chart {p} meets different charts along it"))
+                    return Err(format!(
+                        "side {s} of chart {p} meets different charts along it"
+                    ))
                 }
                 Some(_) => {}
             }
@@ -166,7 +168,12 @@ impl Patches {
                 corners(a).contains(&v) && corners(b).contains(&v)
             } else {
                 let side_of = |p: u32| {
-                    (0..4).any(|s| boundary(p as usize, s).into_iter().collect::<BTreeSet<u32>>() == verts)
+                    (0..4).any(|s| {
+                        boundary(p as usize, s)
+                            .into_iter()
+                            .collect::<BTreeSet<u32>>()
+                            == verts
+                    })
                 };
                 side_of(a) && side_of(b)
             };
@@ -277,7 +284,10 @@ fn place_region(
                 continue;
             }
             let edge = &t.edges[e as usize];
-            let Some(&(c2, s2)) = edge.sides.iter().find(|&&(c2, s2)| (c2 as usize, s2) != (c, s))
+            let Some(&(c2, s2)) = edge
+                .sides
+                .iter()
+                .find(|&&(c2, s2)| (c2 as usize, s2) != (c, s))
             else {
                 continue;
             };
@@ -354,7 +364,9 @@ pub fn grow(mesh: &mut QuadMesh, max_side: usize) -> Patches {
                 .iter()
                 .filter(|&&e| table.edges[e as usize].sides.len() == 1)
                 .count();
-            let manifold = at[v].iter().all(|&e| table.edges[e as usize].sides.len() <= 2);
+            let manifold = at[v]
+                .iter()
+                .all(|&e| table.edges[e as usize].sides.len() <= 2);
             let regular = match open {
                 0 => quads == 4 && at[v].len() == 4,
                 2 => (quads == 2 && at[v].len() == 3) || (quads == 1 && at[v].len() == 2),
@@ -508,7 +520,8 @@ mod tests {
         // Every rotated quad has its corner 0 at its (i, j) corner and u along +x or
         // the chart's own u (the chart may be placed turned as a whole).
         let v = &m.vertices;
-        let du = v[m.quads[p.cells[0][0] as usize][1] as usize] - v[m.quads[p.cells[0][0] as usize][0] as usize];
+        let du = v[m.quads[p.cells[0][0] as usize][1] as usize]
+            - v[m.quads[p.cells[0][0] as usize][0] as usize];
         for &c in &p.cells[0] {
             let q = m.quads[c as usize];
             assert_eq!(v[q[1] as usize] - v[q[0] as usize], du);
@@ -535,7 +548,11 @@ mod tests {
                     j as f64 / m as f64 * std::f64::consts::TAU,
                 );
                 vertices.push(if torus {
-                    DVec3::new((r + t * b.cos()) * a.cos(), (r + t * b.cos()) * a.sin(), t * b.sin())
+                    DVec3::new(
+                        (r + t * b.cos()) * a.cos(),
+                        (r + t * b.cos()) * a.sin(),
+                        t * b.sin(),
+                    )
                 } else {
                     DVec3::new(a.cos(), a.sin(), j as f64)
                 });
@@ -568,11 +585,14 @@ mod tests {
             for c in 0..p.len() {
                 for s in 0..4 {
                     let across = p.across(&table, c, s).unwrap();
-                    assert_eq!(across.is_empty(), !torus && [0, 2].contains(&s) && {
-                        // Only a tube's two rims are mesh boundaries.
-                        let cells = p.side_cells(c, s);
-                        table.neighbours(cells[0] as usize, s).is_empty()
-                    });
+                    assert_eq!(
+                        across.is_empty(),
+                        !torus && [0, 2].contains(&s) && {
+                            // Only a tube's two rims are mesh boundaries.
+                            let cells = p.side_cells(c, s);
+                            table.neighbours(cells[0] as usize, s).is_empty()
+                        }
+                    );
                 }
             }
         }

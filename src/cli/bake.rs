@@ -332,6 +332,10 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
 pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
     let options = Options {
         size: args.atlas_size,
+        style: match args.bake_layout {
+            super::Layout::Flat => pipeline::Style::Flat,
+            super::Layout::Packed => pipeline::Style::Packed,
+        },
         ..Options::default()
     };
     let base = super::base_dir(scene);

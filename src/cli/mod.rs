@@ -157,6 +157,9 @@ pub struct BenchArgs {
     /// The atlas side for --bake.
     #[arg(long, default_value = "2048")]
     pub atlas_size: u32,
+    /// The atlas layout for --bake.
+    #[arg(long = "bake-layout", value_enum, default_value = "flat")]
+    pub bake_layout: Layout,
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
     pub edits: u32,

@@ -295,8 +295,8 @@ impl MeshRenderer {
                 );
                 let k = charts.get(i).copied().unwrap_or([0.0; 4]);
                 Vertex([
-                    p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], c[0], c[1],
-                    k[0], k[1], k[2], k[3],
+                    p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], c[0], c[1], k[0],
+                    k[1], k[2], k[3],
                 ])
             })
             .collect();
@@ -663,7 +663,11 @@ fn pipeline(
     wgsl: &str,
     formats: Option<&[wgpu::TextureFormat; 4]>,
 ) -> wgpu::RenderPipeline {
-    let label = Some(if formats.is_some() { "mesh" } else { "mesh shadow" });
+    let label = Some(if formats.is_some() {
+        "mesh"
+    } else {
+        "mesh shadow"
+    });
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label,
         source: wgpu::ShaderSource::Wgsl(wgsl.into()),
@@ -691,7 +695,11 @@ fn pipeline(
         layout: None,
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some(if formats.is_some() { "vs_main" } else { "vs_shadow" }),
+            entry_point: Some(if formats.is_some() {
+                "vs_main"
+            } else {
+                "vs_shadow"
+            }),
             compilation_options: Default::default(),
             buffers: &[Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<Vertex>() as u64,

@@ -144,7 +144,13 @@ pub fn assert_borders_identical(
                         let b = texel(
                             nb.chart as usize,
                             l,
-                            side_texel_rect(r2[2] as usize, r2[3] as usize, nb.side as usize, kk, 0),
+                            side_texel_rect(
+                                r2[2] as usize,
+                                r2[3] as usize,
+                                nb.side as usize,
+                                kk,
+                                0,
+                            ),
                         );
                         assert_eq!(a, b, "{what}: level {l}, chart {c} side {s} texel {k} against chart {} side {}", nb.chart, nb.side);
                         sides += 1;

@@ -28,6 +28,7 @@ fn main() -> ExitCode {
         Command::Bake(args) => cli::bake::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Fmt(args) => cli::fmt::run(args),
+        Command::Seeds(args) => cli::seeds::run(args),
         Command::Lsp => match sdfc::lsp::run_stdio() {
             Ok(sdfc::lsp::Ended::Clean) => ExitCode::SUCCESS,
             // `exit` without `shutdown`: 1, as the specification asks.

@@ -260,3 +260,56 @@ fn solve_qef(points: &[DVec3], normals: &[DVec3], mass: DVec3, _cell: f64) -> DV
         mass
     }
 }
+
+/// For `sdfc seeds` ([`crate::uv::seeds`]): Samples of the surface: the centre of every quad of a dual-contouring mesh,
+/// projected onto the surface, weighted by the quad's area, with the quads across its
+/// sides as neighbours. (Quad centres rather than the mesh's vertices: dual contouring
+/// puts vertices exactly on sharp edges, where no walk ends well, and a row of them
+/// along every crease would weigh as a strip of surface.)
+pub fn surface_samples(
+    shape: &Shape,
+    grid: usize,
+) -> Result<Vec<crate::uv::seeds::SurfaceSample>, String> {
+    use crate::ir::eval;
+    let bounds = shape.root_node().bounds;
+    if !bounds.is_finite() {
+        return Err("the atlas's shape has no finite bounds to sample".into());
+    }
+    let scale = crate::uv::atlas::scale(shape);
+    let mesh = dual_contour(shape, &Grid::over(bounds, grid), 1e-6 * scale);
+    if mesh.quads.is_empty() {
+        return Err(format!(
+            "the atlas's shape has no surface a grid of {grid} cells finds"
+        ));
+    }
+    use rayon::prelude::*;
+    let samples = (0..mesh.quads.len())
+        .into_par_iter()
+        .map(|c| {
+            let p = mesh.quads[c].map(|i| mesh.vertices[i as usize]);
+            let area = 0.5
+                * ((p[1] - p[0]).cross(p[2] - p[0]).length()
+                    + (p[2] - p[0]).cross(p[3] - p[0]).length());
+            let centre = (p[0] + p[1] + p[2] + p[3]) / 4.0;
+            let on = eval::project(shape, centre, 1e-6 * scale).unwrap_or(centre);
+            let n = eval::gradient(shape, on).normalize_or_zero();
+            // The normals a third of a cell off in four tangent directions.
+            let (e1, e2, _) = crate::uv::atlas::frame(n, None);
+            let r = mesh.cell / 3.0;
+            let smooth = [e1, -e1, e2, -e2]
+                .iter()
+                .map(|&d| {
+                    let q = eval::project(shape, on + d * r, 1e-6 * scale).unwrap_or(on);
+                    n.dot(eval::gradient(shape, q).normalize_or_zero())
+                })
+                .fold(1.0, f64::min);
+            crate::uv::seeds::SurfaceSample {
+                p: on,
+                n,
+                area,
+                smooth,
+            }
+        })
+        .collect();
+    Ok(samples)
+}

@@ -9,6 +9,7 @@ pub mod fmt;
 pub mod latency;
 pub mod render;
 pub mod render_mesh;
+pub mod seeds;
 pub mod sweep;
 
 /// The exit statuses, one meaning each (the README's table).
@@ -131,6 +132,14 @@ pub enum Command {
     /// Exit status: 0 on success, 1 when a file has syntax errors or (with --check)
     /// would change, 2 on I/O problems.
     Fmt(fmt::FmtArgs),
+    /// Place an atlas's seeds and merges automatically: farthest-point sampling until
+    /// Alg. 2 succeeds on the target share of the surface, then a merge forest of the
+    /// neighbouring seeds whose walks reach each other (no cycles, so no obstruction).
+    ///
+    /// Prints the `seed` and `merge` statements, or with --write replaces the atlas's
+    /// own in the file (formatted, written atomically). Exit status: 0 on success, 1
+    /// when the scene has errors, 2 on usage or I/O problems.
+    Seeds(seeds::SeedsArgs),
 }
 
 #[derive(clap::Args)]

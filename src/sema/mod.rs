@@ -15,9 +15,9 @@ pub mod settings;
 pub mod size;
 pub mod types;
 
-pub use check::check;
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
+pub use check::{check, MAX_SEEDS};
 pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 

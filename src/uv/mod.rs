@@ -10,6 +10,7 @@ pub mod diagnose;
 pub mod grid;
 pub mod logmap;
 pub mod merge;
+pub mod seeds;
 
 pub use atlas::{Atlas, Sample, Search};
 pub use logmap::{LogMap, Params, Seed, Status};

@@ -1,0 +1,210 @@
+//! `sdfc seeds`: automatic seeds and merges for an atlas ([`sdfc::uv::seeds`]), printed
+//! as scene text or written into the scene file.
+
+use super::{exit, read_source};
+use glam::DVec3;
+use sdfc::bake::mesh::surface_samples;
+use sdfc::uv::seeds::{place, PlaceOptions, Placement};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct SeedsArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The atlas to fill (needed when the scene has more than one).
+    #[arg(long)]
+    pub atlas: Option<String>,
+    /// The share of the surface (by area) that must end with status `ok`.
+    #[arg(long, default_value = "0.995")]
+    pub target_coverage: f64,
+    /// The most seeds to place.
+    #[arg(long, default_value = "128")]
+    pub max_seeds: usize,
+    /// Surface samples: a dual-contouring grid of this many cells along the longest side.
+    #[arg(long, default_value = "40")]
+    pub grid: usize,
+    /// Replace the atlas's seeds and merges in the file (atomically; the file is
+    /// formatted) instead of printing them.
+    #[arg(long)]
+    pub write: bool,
+}
+
+fn num(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+fn vec3(p: DVec3) -> String {
+    format!("[{}, {}, {}]", num(p.x), num(p.y), num(p.z))
+}
+
+/// The placement as atlas statements, four spaces in.
+pub fn statements(placement: &Placement) -> String {
+    let mut out = String::new();
+    for (k, (p, t)) in placement.seeds.iter().enumerate() {
+        match t {
+            Some(t) => out.push_str(&format!(
+                "    seed s{k} = {} tangent {};\n",
+                vec3(*p),
+                vec3(*t)
+            )),
+            None => out.push_str(&format!("    seed s{k} = {};\n", vec3(*p))),
+        }
+    }
+    for (a, b) in &placement.merges {
+        out.push_str(&format!("    merge s{a} s{b};\n"));
+    }
+    out
+}
+
+/// `source` with the atlas item spanning `start..end` holding `statements` instead of
+/// its seeds and merges (other settings and comments on their own lines stay).
+fn rewrite(source: &str, start: usize, end: usize, statements: &str) -> Option<String> {
+    let block = &source[start..end];
+    let open = block.find('{')?;
+    let close = block.rfind('}')?;
+    let inner = &block[open + 1..close];
+    let mut kept = String::new();
+    for line in inner.split_inclusive('\n') {
+        let t = line.trim_start();
+        if t.starts_with("seed ") || t.starts_with("merge ") {
+            continue;
+        }
+        kept.push_str(line);
+    }
+    let kept = kept.trim_end();
+    let mut body = String::from(kept);
+    body.push('\n');
+    body.push_str(statements);
+    Some(format!(
+        "{}{{{}}}{}",
+        &source[..start + open],
+        body,
+        &source[start + close + 1..]
+    ))
+}
+
+pub fn run(args: SeedsArgs) -> ExitCode {
+    let usage = |m: String| {
+        eprintln!("error: {m}");
+        ExitCode::from(exit::USAGE)
+    };
+    if !(args.target_coverage > 0.0 && args.target_coverage <= 1.0) {
+        return usage(format!(
+            "--target-coverage {} is not in (0, 1]",
+            args.target_coverage
+        ));
+    }
+    if !(1..=sdfc::sema::MAX_SEEDS).contains(&args.max_seeds) {
+        return usage(format!(
+            "--max-seeds {} is not between 1 and {}",
+            args.max_seeds,
+            sdfc::sema::MAX_SEEDS
+        ));
+    }
+    if !(4..=256).contains(&args.grid) {
+        return usage(format!("--grid {} is not between 4 and 256", args.grid));
+    }
+    let name = args.scene.display().to_string();
+    let source = match read_source(&args.scene) {
+        Ok(s) if s.decoding.is_empty() => s.text,
+        Ok(_) => return usage(format!("{name} is not UTF-8 text")),
+        Err(e) => return usage(format!("cannot read {name}: {e}")),
+    };
+    let base = super::base_dir(&args.scene);
+    let analysis = sdfc::driver::check(&source, Some(&base));
+    // An atlas with no seed yet is an error for `check`, and what this command is for.
+    let errors: Vec<_> = analysis
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error() && d.code != sdfc::codes::E_NO_SEEDS)
+        .cloned()
+        .collect();
+    if !errors.is_empty() {
+        eprint!(
+            "{}",
+            sdfc::diagnostic::render(&name, &source, &errors, false)
+        );
+        return ExitCode::from(exit::SCENE);
+    }
+    let atlases = &analysis.program.atlases;
+    let def = match (&args.atlas, atlases.len()) {
+        (Some(a), _) => match atlases.iter().find(|d| &d.name == a) {
+            Some(d) => d,
+            None => return usage(format!("{name} has no atlas `{a}`")),
+        },
+        (None, 1) => &atlases[0],
+        (None, 0) => return usage(format!("{name} has no atlas")),
+        (None, _) => return usage(format!("{name} has several atlases: name one with --atlas")),
+    };
+    let Some(shape) = sdfc::ir::lower_shape(&def.shape) else {
+        return ExitCode::from(exit::SCENE);
+    };
+    let started = Instant::now();
+    let samples = match surface_samples(&shape, args.grid) {
+        Ok(s) => s,
+        Err(e) => return usage(e),
+    };
+    let placement = place(
+        def,
+        &shape,
+        &samples,
+        PlaceOptions {
+            target: args.target_coverage,
+            max_seeds: args.max_seeds,
+            spacing: None,
+        },
+    );
+    let took = started.elapsed();
+    eprintln!(
+        "atlas `{}`: {} seeds, {} merges, coverage {:.2} % of the surface by area ({} samples, {} failing), in {:.2} s",
+        def.name,
+        placement.seeds.len(),
+        placement.merges.len(),
+        100.0 * placement.coverage,
+        samples.len(),
+        placement.failing.len(),
+        took.as_secs_f64()
+    );
+    if placement.coverage < args.target_coverage {
+        let mut by: std::collections::BTreeMap<String, usize> = Default::default();
+        for (_, s) in &placement.failing {
+            *by.entry(format!("{s:?}")).or_default() += 1;
+        }
+        eprintln!(
+            "warning: the target coverage {:.2} % is not reached; failing samples by status: {by:?} (thin regions or islands too small for a seed's walk; try --grid or the atlas's steps)",
+            100.0 * args.target_coverage
+        );
+    }
+    let text = statements(&placement);
+    if !args.write {
+        print!("{text}");
+        return ExitCode::SUCCESS;
+    }
+    let (start, end) = (def.span.start as usize, def.span.end as usize);
+    let Some(edited) = rewrite(&source, start, end, &text) else {
+        return usage(format!("cannot find the body of atlas `{}`", def.name));
+    };
+    let formatted = sdfc::ide::format::format(&edited).unwrap_or(edited);
+    let check = sdfc::driver::check(&formatted, Some(&base));
+    if check.diagnostics.iter().any(|d| d.is_error()) {
+        eprint!(
+            "{}",
+            sdfc::diagnostic::render(&name, &formatted, &check.diagnostics, false)
+        );
+        eprintln!("error: the placed seeds do not check; {name} was not changed");
+        return ExitCode::from(exit::SCENE);
+    }
+    if let Err(e) = sdfc::fsutil::write_output(&args.scene, formatted.as_bytes()) {
+        return usage(format!("cannot write {name}: {e}"));
+    }
+    eprintln!("wrote {name}");
+    ExitCode::SUCCESS
+}

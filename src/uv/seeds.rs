@@ -1,0 +1,338 @@
+//! Automatic seed placement and merge graphs (the paper's §7 future work): seeds and
+//! merges for an atlas, chosen so that Alg. 2 succeeds at a target share of the surface.
+//!
+//! The input is a dense, area-weighted sample of the surface (the caller meshes it:
+//! `sdfc seeds` uses the bake's dual contouring), with each sample's neighbours.
+//!
+//! **Placement: farthest-point sampling by coverage.** A sample is *covered* when some
+//! seed's walk (Alg. 1, with the atlas's own N, tolerances and D) reaches it with status
+//! `ok` within the spacing (D/2 by default, so that neighbouring seeds can reach each
+//! other to merge). Each round adds one seed at the uncovered sample farthest
+//! (Euclidean) from every seed so far, among the samples where the surface is smooth
+//! (a seed on a crease has no well-defined frame and its walks fail on both sides; on an
+//! island with no smooth sample, the smoothest), then walks from the new seed to every
+//! sample within D. Farthest-point sampling spreads the
+//! seeds evenly, and because a walk stops at a sharp feature (the ε2 test), the
+//! samples behind one stay uncovered until a seed lands among them: every island the
+//! sharp features cut out gets its own seed, largest gaps first. A variational
+//! (Lloyd-like) relaxation would need the walk distances from every sample to every
+//! candidate, which costs far more walks for a modest saving in seeds.
+//!
+//! **Merges: a spanning forest of the seeds' neighbourhood graph.** Two seeds are
+//! neighbours when some sample has both among its two geodesic-nearest covering seeds
+//! (their regions touch); the pair is a candidate when each seed's walk reaches the
+//! other. Candidates join in order of length (Kruskal), so the graph has no cycle and
+//! hence no obstruction (holonomy or offset residual); each merge is kept only if the
+//! atlas still prepares without a diagnostic. Each merge group has one fixed tangent
+//! (its first seed's, the world x axis projected), and the optimal-frame solve (Eq. 45)
+//! turns the others.
+//!
+//! **Coverage** at the end is Alg. 2 itself (`Atlas::sample`) at every sample,
+//! weighted by area: what the renderer will do.
+//!
+//! Everything is deterministic: samples are visited in order and ties go to the lower
+//! index.
+
+use super::atlas::Atlas;
+use super::logmap::Status;
+use crate::ir::Shape;
+use crate::sema::{AtlasDef, MergeDef, SeedDef};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// A surface sample: position, unit normal, area weight, and how smooth the surface
+/// is around it: the smallest cosine between its normal and the normals a short way
+/// off in the tangent plane (1 on a flat face, low near a crease).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceSample {
+    pub p: DVec3,
+    pub n: DVec3,
+    pub area: f64,
+    pub smooth: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaceOptions {
+    /// The share of the surface (by area) that must end with status `ok`.
+    pub target: f64,
+    pub max_seeds: usize,
+    /// A sample counts as covered while placing when a seed's walk reaches it within
+    /// this distance (default D/2): neighbouring seeds are then within reach of each
+    /// other, so they can merge.
+    pub spacing: Option<f64>,
+}
+
+impl Default for PlaceOptions {
+    fn default() -> PlaceOptions {
+        PlaceOptions {
+            target: 0.995,
+            max_seeds: 256,
+            spacing: None,
+        }
+    }
+}
+
+/// The seeds and merges found, and how well they cover.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placement {
+    /// Seed positions (on the surface) and, for the first seed of each merge group and
+    /// every unmerged seed, a tangent.
+    pub seeds: Vec<(DVec3, Option<DVec3>)>,
+    /// Merged pairs (seed indices).
+    pub merges: Vec<(usize, usize)>,
+    /// Area share with status `ok` under Alg. 2 at the end.
+    pub coverage: f64,
+    /// The samples still failing, with their status.
+    pub failing: Vec<(DVec3, Status)>,
+    /// Samples eligible as seeds (their normal agrees with their neighbours').
+    pub eligible: usize,
+}
+
+/// The cosine of the largest angle between a seed candidate's normal and its
+/// neighbours' (20°): sharper samples lie on creases.
+const SMOOTH_COS: f64 = 0.94;
+
+/// An atlas definition like `def` with these seeds and merges (for preparing).
+pub fn with_seeds(
+    def: &AtlasDef,
+    seeds: &[(DVec3, Option<DVec3>)],
+    merges: &[(usize, usize)],
+) -> AtlasDef {
+    let mut out = def.clone();
+    out.seeds = seeds
+        .iter()
+        .enumerate()
+        .map(|(k, (p, t))| SeedDef {
+            name: format!("s{k}"),
+            def: def.def,
+            span: def.span,
+            position: p.to_array(),
+            position_span: def.span,
+            tangent: t.map(|t| t.to_array()),
+            tangent_span: t.map(|_| def.span),
+        })
+        .collect();
+    out.merges = merges
+        .iter()
+        .map(|&(a, b)| MergeDef {
+            a,
+            b,
+            span: def.span,
+        })
+        .collect();
+    out
+}
+
+/// The world x axis in the tangent plane (z where x is nearly normal).
+fn tangent(n: DVec3) -> DVec3 {
+    super::atlas::frame(n, None).0
+}
+
+/// Places seeds and merges on `shape` for the atlas `def` (its parameters; its own
+/// seeds and merges are ignored): see the module docs.
+pub fn place(
+    def: &AtlasDef,
+    shape: &Shape,
+    samples: &[SurfaceSample],
+    options: PlaceOptions,
+) -> Placement {
+    let total: f64 = samples.iter().map(|s| s.area).sum::<f64>().max(1e-300);
+    let eligible: Vec<bool> = samples.iter().map(|s| s.smooth >= SMOOTH_COS).collect();
+    let reach = def.params.max_distance;
+    let spacing = options.spacing.unwrap_or(0.5 * reach).min(reach);
+    let mut seeds: Vec<(DVec3, Option<DVec3>)> = Vec::new();
+    // Per sample: the two nearest seeds whose walks reach it, (distance, seed).
+    let mut best: Vec<[(f64, usize); 2]> = vec![[(f64::INFINITY, usize::MAX); 2]; samples.len()];
+    // Seeds to place until coverage is reached, with the final Alg. 2 check between
+    // rounds (it can differ from the walks' union where a nearer seed's walk fails).
+    let mut covered_by_alg2: Option<Vec<bool>> = None;
+    loop {
+        fn covered(
+            k: usize,
+            best: &[[(f64, usize); 2]],
+            alg2: &Option<Vec<bool>>,
+            spacing: f64,
+        ) -> bool {
+            best[k][0].0 <= spacing && alg2.as_ref().is_none_or(|c| c[k])
+        }
+        let share = |best: &[[(f64, usize); 2]], alg2: &Option<Vec<bool>>| {
+            (0..samples.len())
+                .filter(|&k| covered(k, best, alg2, spacing))
+                .map(|k| samples[k].area)
+                .sum::<f64>()
+                / total
+        };
+        while seeds.len() < options.max_seeds && share(&best, &covered_by_alg2) < options.target {
+            // The uncovered eligible sample farthest from every seed.
+            let next = (0..samples.len())
+                .filter(|&k| !covered(k, &best, &covered_by_alg2, spacing))
+                .map(|k| {
+                    let d = seeds
+                        .iter()
+                        .map(|(p, _)| (samples[k].p - *p).length())
+                        .fold(f64::INFINITY, f64::min);
+                    // Smooth samples first; on an island with none, the smoothest.
+                    (
+                        eligible[k],
+                        if eligible[k] { d } else { samples[k].smooth },
+                        k,
+                    )
+                })
+                .max_by(|a, b| {
+                    (a.0.cmp(&b.0))
+                        .then(a.1.total_cmp(&b.1))
+                        .then(b.2.cmp(&a.2))
+                })
+                .map(|(_, d, k)| (d, k));
+            let Some((_, k)) = next else { break };
+            let s = &samples[k];
+            seeds.push((s.p, Some(tangent(s.n))));
+            let i = seeds.len() - 1;
+            let Ok(atlas) = Atlas::prepare(&with_seeds(def, &seeds, &[]), shape) else {
+                // Projection failed (cannot happen for a surface sample): drop it.
+                seeds.pop();
+                covered_by_alg2 = None;
+                break;
+            };
+            let p = atlas.seeds[i].seed.p;
+            let walks: Vec<(usize, f64)> = (0..samples.len())
+                .into_par_iter()
+                .filter(|&j| (samples[j].p - p).length() < reach)
+                .filter_map(|j| {
+                    let m = atlas.walk(samples[j].p, i, reach);
+                    (m.status == Status::Ok).then_some((j, m.distance))
+                })
+                .collect();
+            for (j, d) in walks {
+                // (Optimistic until the next Alg. 2 check.)
+                if let Some(c) = covered_by_alg2.as_mut() {
+                    c[j] = true;
+                }
+                let b = &mut best[j];
+                if d < b[0].0 {
+                    b[1] = b[0];
+                    b[0] = (d, i);
+                } else if d < b[1].0 {
+                    b[1] = (d, i);
+                }
+            }
+            // The new seed's own sample is covered by construction (a walk of length 0).
+            if best[k][0].0 > 0.0 {
+                best[k][1] = best[k][0];
+                best[k][0] = (0.0, i);
+            }
+            if let Some(c) = covered_by_alg2.as_mut() {
+                c[k] = true;
+            }
+        }
+        // Merges, then Alg. 2 over every sample.
+        let (placed, merges) = merge_forest(def, shape, &seeds, &best);
+        let atlas = Atlas::prepare(&with_seeds(def, &placed, &merges), shape).ok();
+        let statuses: Vec<Status> = match &atlas {
+            Some(a) => samples.par_iter().map(|s| a.sample(s.p).status).collect(),
+            None => vec![Status::TooFar; samples.len()],
+        };
+        let ok: Vec<bool> = statuses.iter().map(|s| *s == Status::Ok).collect();
+        let coverage = (0..samples.len())
+            .filter(|&k| ok[k])
+            .map(|k| samples[k].area)
+            .sum::<f64>()
+            / total;
+        let more = coverage < options.target
+            && seeds.len() < options.max_seeds
+            && covered_by_alg2.as_ref() != Some(&ok)
+            && (0..samples.len()).any(|k| eligible[k] && !ok[k]);
+        if !more {
+            return Placement {
+                seeds: placed,
+                merges,
+                coverage,
+                failing: (0..samples.len())
+                    .filter(|&k| !ok[k])
+                    .map(|k| (samples[k].p, statuses[k]))
+                    .collect(),
+                eligible: eligible.iter().filter(|&&e| e).count(),
+            };
+        }
+        covered_by_alg2 = Some(ok);
+    }
+}
+
+/// The merge forest over the placed seeds (see the module docs), with tangents kept on
+/// the first seed of each group only.
+fn merge_forest(
+    def: &AtlasDef,
+    shape: &Shape,
+    seeds: &[(DVec3, Option<DVec3>)],
+    best: &[[(f64, usize); 2]],
+) -> (Vec<(DVec3, Option<DVec3>)>, Vec<(usize, usize)>) {
+    let n = seeds.len();
+    let mut pairs: Vec<(usize, usize)> = best
+        .iter()
+        .filter(|b| b[0].1 != usize::MAX && b[1].1 != usize::MAX)
+        .map(|b| (b[0].1.min(b[1].1), b[0].1.max(b[1].1)))
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    let Ok(atlas) = Atlas::prepare(&with_seeds(def, seeds, &[]), shape) else {
+        return (seeds.to_vec(), Vec::new());
+    };
+    let reach = def.params.max_distance;
+    // Both walks must succeed; the length is their mean.
+    let mut candidates: Vec<(f64, usize, usize)> = pairs
+        .par_iter()
+        .filter_map(|&(a, b)| {
+            let (pa, pb) = (atlas.seeds[a].seed.p, atlas.seeds[b].seed.p);
+            let ab = atlas.walk(pb, a, reach);
+            let ba = atlas.walk(pa, b, reach);
+            (ab.status == Status::Ok && ba.status == Status::Ok).then_some((
+                0.5 * (ab.distance + ba.distance),
+                a,
+                b,
+            ))
+        })
+        .collect();
+    candidates.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+
+    // Kruskal, keeping a merge only if the atlas stays free of diagnostics.
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut merges: Vec<(usize, usize)> = Vec::new();
+    // One fixed tangent per group: on its root seed.
+    let with_tangents = |parent: &mut Vec<usize>| -> Vec<(DVec3, Option<DVec3>)> {
+        let mut placed = seeds.to_vec();
+        for (k, s) in placed.iter_mut().enumerate() {
+            if root(parent, k) != k {
+                s.1 = None;
+            }
+        }
+        placed
+    };
+    for (_, a, b) in candidates {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra == rb {
+            continue;
+        }
+        let mut trial_parent = parent.clone();
+        trial_parent[ra.max(rb)] = ra.min(rb);
+        merges.push((a, b));
+        let placed = with_tangents(&mut trial_parent);
+        let trial = with_seeds(def, &placed, &merges);
+        let clean = Atlas::prepare(&trial, shape)
+            .map(|atlas| super::diagnose::diagnostics(&trial, &atlas).is_empty())
+            .unwrap_or(false);
+        if clean {
+            parent = trial_parent;
+        } else {
+            merges.pop();
+        }
+    }
+    let placed = with_tangents(&mut parent);
+    (placed, merges)
+}

@@ -1,0 +1,122 @@
+//! Automatic seeds (`sdfc seeds`, `uv::seeds`): coverage under Alg. 2 on the example
+//! shapes with their hand-placed seeds ignored, a seed on every face of a box,
+//! determinism, and the `--write` round trip (the file checks clean and is formatted).
+
+mod common;
+
+use common::sdfc;
+
+/// Runs `sdfc seeds` on a copy of `example` with `--write`; returns the coverage it
+/// reports and the written text.
+fn write_seeds(dir: &std::path::Path, example: &str) -> (f64, String) {
+    let path = dir.join(example);
+    std::fs::copy(format!("examples/{example}"), &path).unwrap();
+    let (code, _, err) = sdfc(&["seeds", path.to_str().unwrap(), "--write"]);
+    assert_eq!(code, 0, "{example}: {err}");
+    let coverage: f64 = err
+        .split("coverage ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{example}: no coverage in {err}"));
+    (coverage / 100.0, std::fs::read_to_string(&path).unwrap())
+}
+
+#[test]
+fn examples_get_seeds_that_cover_them_and_check_clean() {
+    let dir = tempfile::tempdir().unwrap();
+    // (Textures resolve against the scene's folder.)
+    std::fs::create_dir_all(dir.path().join("textures")).unwrap();
+    for entry in std::fs::read_dir("examples/textures").unwrap() {
+        let p = entry.unwrap().path();
+        std::fs::copy(&p, dir.path().join("textures").join(p.file_name().unwrap())).unwrap();
+    }
+    for example in [
+        "sphere.sdf",
+        "capsule.sdf",
+        "plate_hole.sdf",
+        "robot.sdf",
+        "blob.sdf",
+    ] {
+        let original = std::fs::read_to_string(format!("examples/{example}")).unwrap();
+        let (coverage, text) = write_seeds(dir.path(), example);
+        assert!(coverage >= 0.995, "{example}: coverage {coverage}");
+        // The hand-placed seeds are gone, the automatic ones in.
+        assert!(text.contains("seed s0 = "), "{example}");
+        assert_ne!(text, original);
+        // The comments outside the seed lines stay.
+        let comments = |t: &str| {
+            t.lines()
+                .filter(|l| l.trim_start().starts_with("//"))
+                .count()
+        };
+        assert_eq!(comments(&text), comments(&original), "{example}");
+        let path = dir.path().join(example);
+        let (code, _, err) = sdfc(&["check", path.to_str().unwrap()]);
+        assert_eq!(code, 0, "{example}: {err}");
+        assert!(err.contains("0 errors, 0 warnings"), "{example}: {err}");
+        let (code, out, err) = sdfc(&["fmt", "--check", path.to_str().unwrap()]);
+        assert_eq!(code, 0, "{example}: {out}{err}");
+    }
+}
+
+/// An atlas with no seed yet (an error for `check`) is what `sdfc seeds` is for.
+#[test]
+fn an_atlas_without_seeds_gets_some() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("new.sdf");
+    std::fs::write(
+        &path,
+        "let b = sphere(1);\n\natlas skin on b {\n    steps = 16;\n}\n\nrender b;\n",
+    )
+    .unwrap();
+    let (code, out, err) = sdfc(&["seeds", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("    seed s0 = ["), "{out}");
+    let (code, _, err) = sdfc(&["seeds", path.to_str().unwrap(), "--write"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = sdfc(&["check", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = sdfc(&["seeds", path.to_str().unwrap(), "--atlas", "nope"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no atlas `nope`"), "{err}");
+}
+
+#[test]
+fn every_face_of_a_box_gets_a_seed_and_placement_is_deterministic() {
+    let source = "let b = box([1, 0.6, 0.8]);\natlas skin on b { steps = 16; seed x = [0, 0, 1]; }\nrender b;\n";
+    let analysis = sdfc::driver::check(source, None);
+    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
+    let def = &analysis.program.atlases[0];
+    let shape = sdfc::ir::lower_shape(&def.shape).unwrap();
+    let place = || {
+        let samples = sdfc_samples(&shape);
+        sdfc::uv::seeds::place(def, &shape, &samples, Default::default())
+    };
+    let placed = place();
+    assert!(placed.coverage >= 0.995, "coverage {}", placed.coverage);
+    for axis in [glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z] {
+        for sign in [1.0, -1.0] {
+            let n = axis * sign;
+            let on_face = placed.seeds.iter().any(|(p, _)| {
+                let g = sdfc::ir::eval::gradient(&shape, *p).normalize();
+                g.dot(n) > 0.99
+            });
+            assert!(on_face, "no seed on the face facing {n}");
+        }
+    }
+    // Sharp edges split the box into six islands: merges stay inside faces.
+    let normal = |k: usize| sdfc::ir::eval::gradient(&shape, placed.seeds[k].0).normalize();
+    for &(a, b) in &placed.merges {
+        assert!(
+            normal(a).dot(normal(b)) > 0.99,
+            "merge {a}–{b} across an edge"
+        );
+    }
+    assert_eq!(place(), placed, "not deterministic");
+}
+
+/// Surface samples as `sdfc seeds` makes them: quad centres of a dual-contouring mesh.
+fn sdfc_samples(shape: &sdfc::ir::Shape) -> Vec<sdfc::uv::seeds::SurfaceSample> {
+    sdfc::bake::mesh::surface_samples(shape, 40).unwrap()
+}

@@ -9,6 +9,7 @@
 
 pub mod builtins;
 mod check;
+mod displace;
 mod expr;
 pub mod fold;
 pub mod settings;
@@ -16,6 +17,8 @@ pub mod size;
 pub mod types;
 
 pub use check::check;
+/// The span of the `displace` call inside a shape value, if any.
+pub use displace::displaced;
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
 pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};

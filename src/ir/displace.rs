@@ -285,10 +285,11 @@ fn add(a: &B, b: &B, sign: f64) -> B {
 
 fn mul(a: &B, b: &B) -> B {
     let mut out = zip(a, b, mul1);
-    // A constant float factor scales the whole vector's slope.
+    // A constant factor (a float, or a vector per component) scales the whole vector's
+    // slope by at most its largest component.
     for (x, y) in [(a, b), (b, a)] {
-        if x.c.len() == 1 && x.c[0].2 == 0.0 {
-            let k = x.c[0].0.abs().max(x.c[0].1.abs());
+        if x.c.iter().all(|c| c.2 == 0.0) {
+            let k = x.c.iter().map(|c| c.0.abs().max(c.1.abs())).fold(0.0, f64::max);
             out.joint = out.joint.min(m(k, y.widen(out.c.len()).joint));
         }
     }

@@ -175,6 +175,22 @@ impl Height {
     }
 }
 
+/// Whether a height samples a texture.
+pub fn samples_texture(v: &Value) -> bool {
+    let Value::Field(e, _) = v else { return false };
+    match &**e {
+        FieldExpr::Call {
+            builtin: BuiltinId::Sample,
+            ..
+        } => true,
+        FieldExpr::Atlas { .. } | FieldExpr::Input(_) => false,
+        FieldExpr::Unary { operand, .. } => samples_texture(operand),
+        FieldExpr::Binary { lhs, rhs, .. } => samples_texture(lhs) || samples_texture(rhs),
+        FieldExpr::Swizzle { base, .. } => samples_texture(base),
+        FieldExpr::Vector(a) | FieldExpr::Call { args: a, .. } => a.iter().any(samples_texture),
+    }
+}
+
 /// The one atlas a height reads, if any.
 fn atlas_of(v: &Value) -> Option<AtlasId> {
     let Value::Field(e, _) = v else { return None };

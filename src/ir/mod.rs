@@ -211,6 +211,16 @@ impl Shape {
         out
     }
 
+    /// The largest step of a displacement read from 8-bit texels: its range / 255
+    /// (textures are sampled as 8-bit data); 0 without such a displacement.
+    pub fn height_quantum(&self) -> f64 {
+        self.heights()
+            .iter()
+            .filter(|h| displace::samples_texture(&h.value))
+            .map(|h| (h.hi - h.lo) / 255.0)
+            .fold(0.0, f64::max)
+    }
+
     /// Gives every displacement's CPU evaluator its atlas and textures.
     pub fn bind_heights(&self, atlases: &[Option<crate::uv::Atlas>], textures: &material::Textures) {
         for n in &self.nodes {

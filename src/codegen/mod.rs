@@ -230,7 +230,7 @@ pub fn generate(
         heights: Vec::new(),
     };
     g.scene_constants(target);
-    g.shapes(scene);
+    g.shapes(scene, target);
     g.render_target(scene, target, options);
     let plain = options.plain;
     let mut uses = Uses::default();
@@ -292,9 +292,13 @@ impl Generator<'_> {
         );
     }
 
-    /// `map_NAME` and `sdf_NAME` for every named shape.
-    fn shapes(&mut self, scene: &Scene) {
-        for named in &scene.shapes {
+    /// `map_NAME` and `sdf_NAME` for every named shape, except those with a
+    /// displacement the render target lacks: their heights' textures would be bindings
+    /// the entry points never use (and so absent from pipelines' derived layouts).
+    /// Such a shape gets its function when it is the target (`--shape NAME`).
+    fn shapes(&mut self, scene: &Scene, target: &ir::Shape) {
+        let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
+        for named in scene.shapes.iter().filter(|n| emits(n, &rendered)) {
             let start = self.out.len();
             let h = map_fn(&mut self.out, &format!("map_{}", named.name), &named.shape);
             self.add_heights(h);
@@ -507,6 +511,7 @@ impl Generator<'_> {
         table: Vec<Binding>,
         textures: Vec<TextureUse>,
     ) -> Module {
+        let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
         let mut header = String::new();
         let _ = writeln!(
             header,
@@ -537,7 +542,12 @@ impl Generator<'_> {
             bindings: table,
             globals_layout: GLOBALS_LAYOUT.to_vec(),
             lipschitz: target.lipschitz(),
-            shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
+            shapes: scene
+                .shapes
+                .iter()
+                .filter(|n| emits(n, &rendered))
+                .map(|s| s.name.clone())
+                .collect(),
             textures,
         };
         Module {
@@ -547,6 +557,11 @@ impl Generator<'_> {
             source_map,
         }
     }
+}
+
+/// Whether a named shape gets its `sdf_NAME`: its displacements are all the target's.
+fn emits(named: &ir::NamedShape, rendered: &[usize]) -> bool {
+    named.shape.heights().iter().all(|h| rendered.contains(&h.id))
 }
 
 /// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights it calls.

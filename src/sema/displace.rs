@@ -231,3 +231,18 @@ impl Checker<'_> {
         }
     }
 }
+
+/// The shape with every displacement replaced by its base: the plain textured scene a
+/// displacement's cost is measured against (`sdfc bench`).
+pub fn undisplaced(v: &Value) -> Value {
+    let Value::Shape(n) = v else { return v.clone() };
+    if n.builtin == BuiltinId::Displace {
+        return undisplaced(&n.args[0]);
+    }
+    if displaced(v).is_none() {
+        return v.clone();
+    }
+    let mut node = (**n).clone();
+    node.args = n.args.iter().map(undisplaced).collect();
+    Value::Shape(std::sync::Arc::new(node))
+}

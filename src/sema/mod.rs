@@ -18,7 +18,7 @@ pub mod types;
 
 pub use check::check;
 /// The span of the `displace` call inside a shape value, if any.
-pub use displace::displaced;
+pub use displace::{displaced, undisplaced};
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
 pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};

@@ -186,7 +186,10 @@ pub fn check_with(source: &str, access: &Access) -> Analysis {
 /// Lowers the scene with the textures its displacements read (decoded only when it has
 /// displacements), gives their CPU evaluators the prepared atlases, and reports heights
 /// whose range or slope has no bound.
-fn lower_displaced(program: &Program, atlases: &[Option<crate::uv::Atlas>]) -> (Scene, Vec<Diagnostic>) {
+fn lower_displaced(
+    program: &Program,
+    atlases: &[Option<crate::uv::Atlas>],
+) -> (Scene, Vec<Diagnostic>) {
     let displaced = program
         .defs
         .iter()

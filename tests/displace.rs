@@ -30,7 +30,13 @@ fn texture_dir(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> tempfi
 fn random_points(n: usize, half: f64, seed: u64) -> Vec<DVec3> {
     let mut r = Rng(seed);
     (0..n)
-        .map(|_| DVec3::new(r.range(-half, half), r.range(-half, half), r.range(-half, half)))
+        .map(|_| {
+            DVec3::new(
+                r.range(-half, half),
+                r.range(-half, half),
+                r.range(-half, half),
+            )
+        })
         .collect()
 }
 
@@ -71,7 +77,10 @@ fn constant_height_on_a_sphere_is_the_bigger_sphere() {
             inside_band += 1;
         }
     }
-    assert!(checked_points > 2000 && inside_band > 300, "{inside_band} points in the band");
+    assert!(
+        checked_points > 2000 && inside_band > 300,
+        "{inside_band} points in the band"
+    );
 }
 
 /// Bilinear sampling with repeat of a grey image at uv (texel centres at half-integers),
@@ -100,7 +109,9 @@ fn height_map_on_a_plane_is_the_graph_of_the_height() {
         (v * 255.0).round() as u8
     };
     let dir = texture_dir("bumps.png", 16, 16, f);
-    let img = image::open(dir.path().join("bumps.png")).unwrap().to_luma8();
+    let img = image::open(dir.path().join("bumps.png"))
+        .unwrap()
+        .to_luma8();
     let a = checked(
         "let ground = plane(normal: [0, 0, 1]);\nlet bumps = image(\"bumps.png\");\natlas flat on ground {\n    steps = 8;\n    max_distance = 4;\n    seed o = [0, 0, 0] tangent [1, 0, 0];\n}\nrender ground.displace(bumps.sample(flat.uv * 0.25).r, scale: 0.2);\n",
         Some(dir.path()),
@@ -184,7 +195,10 @@ fn sphere_tracing_with_the_bound_never_steps_through() {
     }
     eprintln!("bound {bound:.3}: {hits} hits, {through} through; L = 1: {through_unit} through");
     assert!(hits > 200, "only {hits} rays hit");
-    assert_eq!(through, 0, "{through} rays stepped through the displaced surface");
+    assert_eq!(
+        through, 0,
+        "{through} rays stepped through the displaced surface"
+    );
     assert!(
         through_unit > 0,
         "the check cannot fail here: no ray steps through even with L = 1"
@@ -266,7 +280,10 @@ fn fit_height_encodes_the_blob_as_a_displaced_sphere() {
         sum += e;
         n += 1;
     }
-    eprintln!("fit-height: {n} directions, mean |Δr| {:.2e}, worst {worst:.2e}", sum / n as f64);
+    eprintln!(
+        "fit-height: {n} directions, mean |Δr| {:.2e}, worst {worst:.2e}",
+        sum / n as f64
+    );
     // The range of the map is about 0.25: 8-bit texels (the renderer's texture format)
     // quantize it by 1e-3 (measured mean 4.0e-4). The worst error is at the nose's tip
     // (radius 0.11), which 128² texels over the 5.2-wide uv square (0.04 a texel)

@@ -75,7 +75,10 @@ fn displaced_sphere_gpu_agrees_with_the_cpu_reference() {
         .map(|(p, g)| (eval::distance(s, *p) - g[0] as f64).abs())
         .fold(0.0, f64::max);
     eprintln!("distance: worst |GPU − CPU| = {worst:.2e} (scale {scale:.2})");
-    assert!(worst <= 1e-3 * scale, "worst distance difference {worst:.2e}");
+    assert!(
+        worst <= 1e-3 * scale,
+        "worst distance difference {worst:.2e}"
+    );
 
     // The base's uv at the projections of displaced surface points.
     assert!(s.nodes.iter().any(|n| matches!(n.op, Op::Displace { .. })));
@@ -113,7 +116,11 @@ fn displaced_sphere_gpu_agrees_with_the_cpu_reference() {
         }
     }
     eprintln!("colour: worst |GPU − CPU| = {:.2}/255", worst_c * 255.0);
-    assert!(worst_c <= 2.0 / 255.0, "worst colour difference {:.2}/255", worst_c * 255.0);
+    assert!(
+        worst_c <= 2.0 / 255.0,
+        "worst colour difference {:.2}/255",
+        worst_c * 255.0
+    );
 }
 
 #[test]
@@ -130,7 +137,9 @@ fn displaced_sphere_renders_without_holes() {
         &m,
         &view,
         ViewMode::Color,
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").as_path(),
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples")
+            .as_path(),
     )
     .unwrap();
     let (mut covered, mut holes, mut agree) = (0, 0, 0);
@@ -158,5 +167,8 @@ fn displaced_sphere_renders_without_holes() {
     eprintln!("{covered} covered pixels: {holes} holes, {agree} at the CPU's depth");
     assert!(covered > 400, "only {covered} pixels covered");
     assert!(holes as f64 <= 0.01 * covered as f64, "{holes} holes");
-    assert!(agree as f64 >= 0.97 * covered as f64, "{agree} of {covered} depths agree");
+    assert!(
+        agree as f64 >= 0.97 * covered as f64,
+        "{agree} of {covered} depths agree"
+    );
 }

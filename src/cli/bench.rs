@@ -52,7 +52,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
-    let undisplaced = match target.filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some()) {
+    let undisplaced = match target
+        .filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some())
+    {
         Some(t) => {
             let mut scene = analysis.scene.clone().unwrap_or_default();
             scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));

@@ -25,11 +25,19 @@ pub fn run(args: FitHeightArgs) -> ExitCode {
     };
     let atlas = match sdfc::driver::pick_atlas(&analysis.program, args.atlas.as_deref()) {
         Ok(Some(a)) => a,
-        Ok(None) => return fail("the scene has no atlas to give the height map its uv", exit::USAGE),
+        Ok(None) => {
+            return fail(
+                "the scene has no atlas to give the height map its uv",
+                exit::USAGE,
+            )
+        }
         Err(e) => return fail(e, exit::USAGE),
     };
     let Some(prepared) = analysis.atlas(&atlas.name) else {
-        return fail(format!("atlas `{}` could not be prepared", atlas.name), exit::SCENE);
+        return fail(
+            format!("atlas `{}` could not be prepared", atlas.name),
+            exit::SCENE,
+        );
     };
     // The atlas must be on the base: its uv are what `displace` reads there.
     if sdfc::ir::lower_shape(&atlas.shape).as_ref() != Some(base) {
@@ -42,15 +50,24 @@ pub fn run(args: FitHeightArgs) -> ExitCode {
         );
     }
     if !(2..=8192).contains(&args.size) {
-        return fail(format!("--size {} must be between 2 and 8192", args.size), exit::USAGE);
+        return fail(
+            format!("--size {} must be between 2 and 8192", args.size),
+            exit::USAGE,
+        );
     }
-    let samples = args.samples.unwrap_or(args.size as usize * args.size as usize * 6);
+    let samples = args
+        .samples
+        .unwrap_or(args.size as usize * args.size as usize * 6);
     let uv = match &args.uv_rect {
-        Some(r) if r.len() == 4 && r[2] > r[0] && r[3] > r[1] => Some((
-            glam::DVec2::new(r[0], r[1]),
-            glam::DVec2::new(r[2], r[3]),
-        )),
-        Some(_) => return fail("--uv-rect takes U0 V0 U1 V1 with U1 > U0 and V1 > V0", exit::USAGE),
+        Some(r) if r.len() == 4 && r[2] > r[0] && r[3] > r[1] => {
+            Some((glam::DVec2::new(r[0], r[1]), glam::DVec2::new(r[2], r[3])))
+        }
+        Some(_) => {
+            return fail(
+                "--uv-rect takes U0 V0 U1 V1 with U1 > U0 and V1 > V0",
+                exit::USAGE,
+            )
+        }
         None => None,
     };
     let map = match fit(base, target, prepared, args.size, samples, uv) {
@@ -68,10 +85,17 @@ pub fn run(args: FitHeightArgs) -> ExitCode {
         return fail(format!("cannot encode the height map: {e}"), exit::USAGE);
     }
     if let Err(e) = write_output(&args.output, bytes.get_ref()) {
-        return fail(format!("cannot write {}: {e}", args.output.display()), exit::USAGE);
+        return fail(
+            format!("cannot write {}: {e}", args.output.display()),
+            exit::USAGE,
+        );
     }
     let (u0, u1) = (map.uv_min, map.uv_max);
-    let file = args.output.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+    let file = args
+        .output
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
     println!(
         "wrote {} ({}x{} texels, 16-bit grey) from {} base samples: height = {offset:.6} + {range:.6} * texel",
         args.output.display(),

@@ -288,12 +288,18 @@ impl Writer {
                 }
                 let b = self.fresh("b");
                 self.line(&format!("let {b} = {helper}({p});"));
-                self.line(&format!("var {d} = vec2<f32>({b}.x - {}, {b}.y);", lit(height.hi)));
+                self.line(&format!(
+                    "var {d} = vec2<f32>({b}.x - {}, {b}.y);",
+                    lit(height.hi)
+                ));
                 self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
                 self.indent += 1;
                 self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
                 self.indent -= 1;
-                self.line(&format!("}} else if ({b}.x <= {}) {{", lit(height.band_width())));
+                self.line(&format!(
+                    "}} else if ({b}.x <= {}) {{",
+                    lit(height.band_width())
+                ));
                 self.indent += 1;
                 let h = lit(height.grad_step);
                 let g = self.fresh("g");

@@ -561,7 +561,11 @@ impl Generator<'_> {
 
 /// Whether a named shape gets its `sdf_NAME`: its displacements are all the target's.
 fn emits(named: &ir::NamedShape, rendered: &[usize]) -> bool {
-    named.shape.heights().iter().all(|h| rendered.contains(&h.id))
+    named
+        .shape
+        .heights()
+        .iter()
+        .all(|h| rendered.contains(&h.id))
 }
 
 /// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights it calls.

@@ -22,7 +22,14 @@ pub fn eval_points_textured(
     textures: &Textures,
     points: &[DVec3],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    run(gpu, &module.wgsl, Some((module, textures)), "cs_points", points, 1)
+    run(
+        gpu,
+        &module.wgsl,
+        Some((module, textures)),
+        "cs_points",
+        points,
+        1,
+    )
 }
 
 /// An atlas evaluated on the GPU (`cs_atlas`).
@@ -79,13 +86,19 @@ fn upload_all(gpu: &Gpu, module: &Module, textures: &Textures) -> Result<Images,
                 GpuError::Texture(format!("no decoded image for texture \"{}\"", t.path))
             })?;
             let image = upload(gpu, chain, &t.path, t.srgb)?;
-            Ok((image.create_view(&Default::default()), sampler(gpu, &t.wrap)))
+            Ok((
+                image.create_view(&Default::default()),
+                sampler(gpu, &t.wrap),
+            ))
         })
         .collect()
 }
 
 /// The render group's texture and sampler entries of a module's binding table.
-fn texture_layout_entries(module: &Module, visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
+fn texture_layout_entries(
+    module: &Module,
+    visibility: wgpu::ShaderStages,
+) -> Vec<wgpu::BindGroupLayoutEntry> {
     module
         .manifest
         .bindings

@@ -305,7 +305,10 @@ fn mul(a: &B, b: &B) -> B {
     // slope by at most its largest component.
     for (x, y) in [(a, b), (b, a)] {
         if x.c.iter().all(|c| c.2 == 0.0) {
-            let k = x.c.iter().map(|c| c.0.abs().max(c.1.abs())).fold(0.0, f64::max);
+            let k =
+                x.c.iter()
+                    .map(|c| c.0.abs().max(c.1.abs()))
+                    .fold(0.0, f64::max);
             out.joint = out.joint.min(m(k, y.widen(out.c.len()).joint));
         }
     }
@@ -430,7 +433,8 @@ fn bound_inner(v: &Value, textures: &Textures) -> Result<B, String> {
                 BinaryOp::Sub => add(&a, &b, -1.0),
                 BinaryOp::Mul => mul(&a, &b),
                 BinaryOp::Div => {
-                    let inv = B::from_comps(b.c.iter().map(|&x| recip(x)).collect::<Result<_, _>>()?);
+                    let inv =
+                        B::from_comps(b.c.iter().map(|&x| recip(x)).collect::<Result<_, _>>()?);
                     mul(&a, &inv)
                 }
                 _ => return Err(format!("`{}` jumps", op.symbol())),
@@ -530,7 +534,9 @@ fn call(builtin: BuiltinId, args: &[Value], textures: &Textures) -> Result<B, St
         }
         Bi::Dot => {
             let p = zip(&a[0], &a[1], mul1);
-            let c = p.c.iter().fold((0.0, 0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1, s.2 + x.2));
+            let c =
+                p.c.iter()
+                    .fold((0.0, 0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1, s.2 + x.2));
             B::from_comps(vec![c])
         }
         Bi::Checker | Bi::Grid | Bi::Floor | Bi::Ceil | Bi::Fract | Bi::Sign | Bi::Step => {

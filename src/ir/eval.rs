@@ -217,7 +217,8 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
                 let g = |o: DVec3| {
                     eval_node(shape, *child, p + o).0 - eval_node(shape, *child, p - o).0
                 };
-                let grad = DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
+                let grad =
+                    DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
                 let q = p - grad * (f / grad.length_squared().max(1e-300));
                 (q, grad.normalize_or_zero())
             });

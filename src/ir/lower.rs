@@ -424,7 +424,8 @@ impl Lowerer<'_> {
                 } else {
                     4.0
                 };
-                let height = Height::new(a[1].clone(), scale, band, bound, n.span.start, 1e-3 * size);
+                let height =
+                    Height::new(a[1].clone(), scale, band, bound, n.span.start, 1e-3 * size);
                 let bounds = b.expand(height.epsilon());
                 let lipschitz = height.lipschitz(l);
                 self.push(

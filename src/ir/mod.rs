@@ -222,7 +222,11 @@ impl Shape {
     }
 
     /// Gives every displacement's CPU evaluator its atlas and textures.
-    pub fn bind_heights(&self, atlases: &[Option<crate::uv::Atlas>], textures: &material::Textures) {
+    pub fn bind_heights(
+        &self,
+        atlases: &[Option<crate::uv::Atlas>],
+        textures: &material::Textures,
+    ) {
         for n in &self.nodes {
             if let Op::Displace { height, .. } = &n.op {
                 height.bind(atlases, textures);

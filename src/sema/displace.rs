@@ -49,9 +49,7 @@ fn unbounded(v: &Value) -> Option<String> {
             AtlasAttr::Status | AtlasAttr::Seed => Some(String::from(
                 "an atlas's `status` and `seed` jump from one value to the next",
             )),
-            AtlasAttr::Transport => Some(String::from(
-                "an atlas's `transport` has no slope bound",
-            )),
+            AtlasAttr::Transport => Some(String::from("an atlas's `transport` has no slope bound")),
         },
         FieldExpr::Unary { op, operand } => match op {
             UnaryOp::Neg => unbounded(operand),
@@ -87,9 +85,9 @@ fn unbounded(v: &Value) -> Option<String> {
                 | B::Dot
                 | B::Radians
                 | B::Degrees => args.iter().find_map(unbounded),
-                B::Smoothstep if args[..2].iter().any(|a| a.ty().is_field()) => Some(
-                    String::from("`smoothstep` with edges that are surface fields has no slope bound"),
-                ),
+                B::Smoothstep if args[..2].iter().any(|a| a.ty().is_field()) => Some(String::from(
+                    "`smoothstep` with edges that are surface fields has no slope bound",
+                )),
                 B::Smoothstep => unbounded(&args[2]),
                 B::Checker | B::Grid | B::Floor | B::Ceil | B::Fract | B::Sign | B::Step => {
                     Some(format!("`{}` jumps", builtin.name()))
@@ -183,8 +181,7 @@ impl Checker<'_> {
                     .with_help("read one atlas in a height"),
                 );
                 ok = false;
-            } else if !same_shape(&def.shape, shape) && !def.shape.is_error() && !shape.is_error()
-            {
+            } else if !same_shape(&def.shape, shape) && !def.shape.is_error() && !shape.is_error() {
                 self.error(
                     Diagnostic::error(
                         codes::E_DISPLACE_ATLAS,

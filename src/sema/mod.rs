@@ -17,10 +17,10 @@ pub mod size;
 pub mod types;
 
 pub use check::check;
-/// The span of the `displace` call inside a shape value, if any.
-pub use displace::{displaced, undisplaced};
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
+/// The span of the `displace` call inside a shape value, if any.
+pub use displace::{displaced, undisplaced};
 pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 

@@ -30,7 +30,11 @@ pub struct HeightMap {
 impl HeightMap {
     pub fn range(&self) -> (f64, f64) {
         let lo = self.values.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = self.values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let hi = self
+            .values
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
         (lo, hi)
     }
 
@@ -101,7 +105,10 @@ pub fn fit(
     let b = base.framing_bounds();
     let scale = (b.max - b.min).max_element().max(1e-3);
     let reach = 2.0 * scale;
-    let (lo, hi) = (b.min - DVec3::splat(0.1 * scale), b.max + DVec3::splat(0.1 * scale));
+    let (lo, hi) = (
+        b.min - DVec3::splat(0.1 * scale),
+        b.max + DVec3::splat(0.1 * scale),
+    );
     // A deterministic low-discrepancy cloud (R3 sequence) in the bounds.
     let g = 1.220_744_084_605_759_5_f64;
     let alpha = DVec3::new(1.0 / g, 1.0 / (g * g), 1.0 / (g * g * g));

@@ -166,7 +166,12 @@ pub fn check_with(source: &str, access: &Access) -> Analysis {
         diagnostic::sort(&mut analysis.diagnostics);
     }
     if !analysis.has_errors() {
-        let scene = ir::lower(&analysis.program);
+        let (scene, problems) = lower_displaced(&analysis.program, &analysis.atlases);
+        if !problems.is_empty() {
+            analysis.diagnostics.extend(problems);
+            diagnostic::sort(&mut analysis.diagnostics);
+            return analysis;
+        }
         let overflows = derived_overflows(&analysis.program, &scene);
         if overflows.is_empty() {
             analysis.scene = Some(scene);
@@ -176,6 +181,57 @@ pub fn check_with(source: &str, access: &Access) -> Analysis {
         }
     }
     analysis
+}
+
+/// Lowers the scene with the textures its displacements read (decoded only when it has
+/// displacements), gives their CPU evaluators the prepared atlases, and reports heights
+/// whose range or slope has no bound.
+fn lower_displaced(
+    program: &Program,
+    atlases: &[Option<crate::uv::Atlas>],
+) -> (Scene, Vec<Diagnostic>) {
+    let displaced = program
+        .defs
+        .iter()
+        .map(|d| &d.value)
+        .chain(program.render.as_ref().map(|r| &r.target))
+        .any(|v| sema::displaced(v).is_some());
+    if !displaced {
+        return (ir::lower(program), Vec::new());
+    }
+    let textures = match ir::material::Textures::load(program) {
+        Ok(t) => t,
+        Err(why) => {
+            let span = program.textures.first().map(|t| t.span).unwrap_or_default();
+            let d = Diagnostic::error(
+                crate::codes::E_IMAGE_FORMAT,
+                why,
+                span,
+                "a displacement reads this texture",
+            );
+            return (Scene::default(), vec![d]);
+        }
+    };
+    let (scene, errors) = ir::lower_with(program, &textures);
+    for s in scene.shapes.iter().map(|s| &s.shape).chain(&scene.render) {
+        s.bind_heights(atlases, &textures);
+    }
+    let diags = errors
+        .into_iter()
+        .map(|(span, why)| {
+            Diagnostic::error(
+                crate::codes::E_DISPLACE_HEIGHT,
+                "the height of this displacement has no bound",
+                span,
+                why,
+            )
+            .with_note(
+                "Eq. 58 needs the largest displacement and the sphere tracer a bound of the \
+                 height's slope; both come from the height's expression and its textures' texels",
+            )
+        })
+        .collect();
+    (scene, diags)
 }
 
 /// Errors for shapes whose derived constants do not fit single precision

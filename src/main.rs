@@ -27,6 +27,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render::run(args),
         Command::Bake(args) => cli::bake::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::FitHeight(args) => cli::fit_height::run(args),
         Command::Fmt(args) => cli::fmt::run(args),
         Command::Seeds(args) => cli::seeds::run(args),
         Command::Lsp => match sdfc::lsp::run_stdio() {

@@ -169,7 +169,10 @@ impl View {
             background: DVec3::from_array(settings.background),
             ambient: settings.ambient,
             far,
-            epsilon: 1e-4,
+            // A displacement read from 8-bit texels is a staircase of steps of its range
+            // / 255; a hit tolerance below half a step would let a ray oscillate across
+            // a step's riser without converging.
+            epsilon: (0.6 * shape.height_quantum()).max(1e-4),
             max_steps: 256,
             scale,
             atlas_aov: false,

@@ -49,6 +49,29 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
+    // A displaced render target: the same scene with every displacement replaced by its
+    // base (the plain textured render), to measure what displacement costs.
+    let target = analysis.program.render.as_ref().map(|r| &r.target);
+    let undisplaced = match target
+        .filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some())
+    {
+        Some(t) => {
+            let mut scene = analysis.scene.clone().unwrap_or_default();
+            scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));
+            let options = Options {
+                walk: WalkForm::Loop,
+                ..base.clone()
+            };
+            match sdfc::codegen::generate(&analysis.program, &scene, &analysis.atlases, &options) {
+                Ok(m) => Some(m),
+                Err(d) => {
+                    eprintln!("error: cannot compile the undisplaced scene: {d:?}");
+                    return ExitCode::from(super::exit::ICE);
+                }
+            }
+        }
+        None => None,
+    };
     let unrolled = unrolled.module;
     let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
@@ -71,11 +94,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
         let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
         Ok((renderer.pipeline_time, median(frames)))
     };
-    let rows = [
+    let mut rows = vec![
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
         ("shaded, loop walk", &rolled, ViewMode::Color),
     ];
+    if let Some(m) = &undisplaced {
+        rows.push(("textured, undisplaced, loop walk", m, ViewMode::Color));
+    }
     let mut results = Vec::new();
     for (name, module, mode) in rows {
         match measure(module, mode) {
@@ -123,5 +149,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         "ratio unrolled ÷ loop, pipeline:     {:.2}",
         ms(unrolled_r.0) / ms(loop_r.0)
     );
+    if let Some((_, undisplaced)) = results.get(3) {
+        println!(
+            "ratio displaced ÷ undisplaced, loop: {:.2}",
+            ms(loop_r.1) / ms(undisplaced.1)
+        );
+    }
     ExitCode::SUCCESS
 }

@@ -129,7 +129,7 @@ fn eval(args: &EvalArgs) -> Result<(), Failed> {
             let code = exit::gpu(&e);
             fail(e, code)
         })?;
-        gpu_distances(&gpu, &module.wgsl, &points, &mut results)?;
+        gpu_distances(&gpu, &module, &analysis.program, &points, &mut results)?;
         if let Some(a) = atlas {
             gpu_atlas_lines(
                 &gpu,
@@ -188,11 +188,19 @@ fn compile(
 /// Replaces the CPU distances and gradients with the GPU's.
 fn gpu_distances(
     gpu: &sdfc::gpu::Gpu,
-    wgsl: &str,
+    module: &sdfc::codegen::Module,
+    program: &sdfc::sema::Program,
     points: &[DVec3],
     results: &mut [eval::Query],
 ) -> Result<(), Failed> {
-    let values = sdfc::gpu::eval_points(gpu, wgsl, points).map_err(|e| {
+    let values = if module.manifest.textures.is_empty() {
+        sdfc::gpu::eval_points(gpu, &module.wgsl, points)
+    } else {
+        // A displacement's height samples textures in the field itself.
+        let textures = sdfc::ir::material::Textures::load(program).map_err(|e| fail(e, 2))?;
+        sdfc::gpu::eval_points_textured(gpu, module, &textures, points)
+    }
+    .map_err(|e| {
         let code = exit::gpu(&e);
         fail(e, code)
     })?;

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod check;
 pub mod compile;
 pub mod eval;
+pub mod fit_height;
 pub mod fmt;
 pub mod latency;
 pub mod render;
@@ -118,6 +119,16 @@ pub enum Command {
     /// an internal compiler error, 4 when no GPU adapter can be used, 5 when the atlas
     /// is over a limit.
     Bake(BakeArgs),
+    /// Encode a target shape as a displacement of a base shape (§5.3): rays from the
+    /// base along its normals to the target, each ray's signed length stored at the uv
+    /// of Alg. 1 (the atlas on the base), resampled into a 16-bit grey PNG height map.
+    ///
+    /// Prints the encoding (height = offset + range · texel, texel in [0, 1]) and the
+    /// `displace` call that reproduces the target, with the uv rectangle the map spans.
+    /// Exit status: 0 on success, 1 when the scene has errors or the atlas covers too
+    /// little of the base, 2 on usage or I/O problems (unknown shapes or atlas, an atlas
+    /// not on the base, an unwritable output).
+    FitHeight(FitHeightArgs),
     /// Measure frame times on the GPU and print ratios from one run: the shaded scene
     /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
     Bench(BenchArgs),
@@ -140,6 +151,33 @@ pub enum Command {
     /// own in the file (formatted, written atomically). Exit status: 0 on success, 1
     /// when the scene has errors, 2 on usage or I/O problems.
     Seeds(seeds::SeedsArgs),
+}
+
+#[derive(clap::Args)]
+pub struct FitHeightArgs {
+    /// The scene file: it defines the base and target shapes and an atlas on the base.
+    pub scene: PathBuf,
+    /// The shape to encode (a `let` of the scene).
+    #[arg(long)]
+    pub target: String,
+    /// The simple shape it is encoded over (a `let` of the scene).
+    #[arg(long)]
+    pub base: String,
+    /// The atlas on the base (default: the only one).
+    #[arg(long)]
+    pub atlas: Option<String>,
+    /// The height map to write (16-bit grey PNG, atomically).
+    #[arg(short, long, default_value = "height.png")]
+    pub output: PathBuf,
+    /// Texels per side.
+    #[arg(long, default_value_t = 256)]
+    pub size: u32,
+    /// Base samples (default: 6 per texel).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// The uv rectangle the map spans, U0 V0 U1 V1 (default: the samples' extent).
+    #[arg(long, num_args = 4, value_names = ["U0", "V0", "U1", "V1"], allow_negative_numbers = true)]
+    pub uv_rect: Option<Vec<f64>>,
 }
 
 #[derive(clap::Args)]

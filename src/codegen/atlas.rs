@@ -83,6 +83,7 @@ pub fn emit(
         ("field_helpers", w.helpers),
         ("field_result", field),
         ("h_gradient", lit(p.h_gradient)),
+        ("onto_tolerance", lit(atlas.onto_tolerance())),
         ("reproject", p.reproject.to_string()),
         ("heuristic_tolerance", lit(p.heuristic_tolerance)),
         ("h_curvature", lit(p.h_curvature)),

@@ -64,6 +64,8 @@ pub struct Writer {
     emitted: std::collections::HashSet<NodeId>,
     /// The node whose helper function this writer is writing (not a helper again).
     own: Option<NodeId>,
+    /// The displacements' heights the code calls (`height_ID`), once each.
+    pub heights: Vec<std::sync::Arc<crate::ir::Height>>,
 }
 
 impl Writer {
@@ -78,6 +80,7 @@ impl Writer {
             done: std::collections::HashMap::new(),
             emitted: std::collections::HashSet::new(),
             own: None,
+            heights: Vec::new(),
         }
     }
 
@@ -106,6 +109,7 @@ impl Writer {
                 w.own = Some(id);
                 let dc = w.shape(shape, id, "p");
                 self.helpers.push_str(&w.helpers);
+                self.take_heights(&mut w);
                 let _ = writeln!(
                     self.helpers,
                     "fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
@@ -231,6 +235,7 @@ impl Writer {
                     let mut inner_w = Writer::new(&helper);
                     let dc = inner_w.shape(shape, *child, "p");
                     self.helpers.push_str(&inner_w.helpers);
+                    self.take_heights(&mut inner_w);
                     let _ = writeln!(
                         self.helpers,
                         "fn {helper}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
@@ -266,6 +271,53 @@ impl Writer {
                     lit(thickness * 0.5)
                 ));
             }
+            Op::Displace { height, child } => {
+                // Eq. 58: the child in a helper (evaluated 7 times inside the band for Π_f).
+                let helper = self.fresh(&format!("{}_h", self.prefix));
+                let mut inner_w = Writer::new(&helper);
+                let dc = inner_w.shape(shape, *child, "p");
+                self.helpers.push_str(&inner_w.helpers);
+                self.take_heights(&mut inner_w);
+                let _ = writeln!(
+                    self.helpers,
+                    "fn {helper}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                    inner_w.out
+                );
+                if !self.heights.iter().any(|h| h.id == height.id) {
+                    self.heights.push(height.clone());
+                }
+                let b = self.fresh("b");
+                self.line(&format!("let {b} = {helper}({p});"));
+                self.line(&format!(
+                    "var {d} = vec2<f32>({b}.x - {}, {b}.y);",
+                    lit(height.hi)
+                ));
+                self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
+                self.indent += 1;
+                self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
+                self.indent -= 1;
+                self.line(&format!(
+                    "}} else if ({b}.x <= {}) {{",
+                    lit(height.band_width())
+                ));
+                self.indent += 1;
+                let h = lit(height.grad_step);
+                let g = self.fresh("g");
+                self.line(&format!(
+                    "let {g} = vec3<f32>({helper}({p} + vec3<f32>({h}, 0.0, 0.0)).x - {helper}({p} - vec3<f32>({h}, 0.0, 0.0)).x, {helper}({p} + vec3<f32>(0.0, {h}, 0.0)).x - {helper}({p} - vec3<f32>(0.0, {h}, 0.0)).x, {helper}({p} + vec3<f32>(0.0, 0.0, {h})).x - {helper}({p} - vec3<f32>(0.0, 0.0, {h})).x) / (2.0 * {h});"
+                ));
+                // Π_f (Eq. 57).
+                let q = self.fresh("q");
+                self.line(&format!(
+                    "let {q} = {p} - {g} * ({b}.x / max(dot({g}, {g}), 1e-20));"
+                ));
+                self.line(&format!(
+                    "{d}.x = {b}.x - height_{}({q}, normalize({g}));",
+                    height.id
+                ));
+                self.indent -= 1;
+                self.line("}");
+            }
             Op::Paint { material, child } => {
                 let dc = self.shape(shape, *child, p);
                 self.line(&format!(
@@ -275,6 +327,14 @@ impl Writer {
             }
         }
         d
+    }
+
+    fn take_heights(&mut self, w: &mut Writer) {
+        for h in std::mem::take(&mut w.heights) {
+            if !self.heights.iter().any(|x| x.id == h.id) {
+                self.heights.push(h);
+            }
+        }
     }
 
     /// Binds a transformed point and evaluates a child there.
@@ -591,6 +651,7 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
         | B::RotateZ
         | B::Scale
         | B::Paint
+        | B::Displace
         | B::Twist
         | B::Bend
         | B::Repeat

@@ -227,17 +227,21 @@ pub fn generate(
         program,
         out: String::new(),
         source_map: Vec::new(),
+        heights: Vec::new(),
     };
     g.scene_constants(target);
-    g.shapes(scene);
+    g.shapes(scene, target);
     g.render_target(scene, target, options);
     let plain = options.plain;
-    if !plain {
+    let mut uses = Uses::default();
+    g.heights(&mut uses)?;
+    // Displacements read atlases in the field itself, so even the plain baseline has them.
+    if !plain || !g.heights.is_empty() {
         g.atlases(atlases, options)
             .map_err(|e| internal(e.to_string()))?;
     }
     g.atlas_choice(options, plain)?;
-    let textures = g.materials(if plain { &[] } else { &program.materials })?;
+    let textures = g.materials(if plain { &[] } else { &program.materials }, uses)?;
     let table = bindings::table(&textures);
     let entry = template::fill(
         template::ENTRY,
@@ -253,6 +257,8 @@ struct Generator<'a> {
     program: &'a Program,
     out: String,
     source_map: Vec<SourceRegion>,
+    /// The displacements' heights the shapes call, once each.
+    heights: Vec<std::sync::Arc<ir::Height>>,
 }
 
 impl Generator<'_> {
@@ -286,11 +292,16 @@ impl Generator<'_> {
         );
     }
 
-    /// `map_NAME` and `sdf_NAME` for every named shape.
-    fn shapes(&mut self, scene: &Scene) {
-        for named in &scene.shapes {
+    /// `map_NAME` and `sdf_NAME` for every named shape, except those with a
+    /// displacement the render target lacks: their heights' textures would be bindings
+    /// the entry points never use (and so absent from pipelines' derived layouts).
+    /// Such a shape gets its function when it is the target (`--shape NAME`).
+    fn shapes(&mut self, scene: &Scene, target: &ir::Shape) {
+        let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
+        for named in scene.shapes.iter().filter(|n| emits(n, &rendered)) {
             let start = self.out.len();
-            map_fn(&mut self.out, &format!("map_{}", named.name), &named.shape);
+            let h = map_fn(&mut self.out, &format!("map_{}", named.name), &named.shape);
+            self.add_heights(h);
             let _ = writeln!(
                 self.out,
                 "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
@@ -304,7 +315,8 @@ impl Generator<'_> {
     /// `scene_map`: the render target.
     fn render_target(&mut self, scene: &Scene, target: &ir::Shape, options: &Options) {
         let start = self.out.len();
-        map_fn(&mut self.out, "scene_map", target);
+        let h = map_fn(&mut self.out, "scene_map", target);
+        self.add_heights(h);
         let span = match (options.shape.as_deref(), &self.program.render) {
             (Some(n), _) => self.let_span(n),
             (None, Some(r)) => Some(r.target_span),
@@ -356,14 +368,64 @@ impl Generator<'_> {
         Ok(())
     }
 
+    fn add_heights(&mut self, heights: Vec<std::sync::Arc<ir::Height>>) {
+        for h in heights {
+            if !self.heights.iter().any(|x| x.id == h.id) {
+                self.heights.push(h);
+            }
+        }
+    }
+
+    /// `height_ID(p, n) -> f32` for every displacement: scale times its height at
+    /// surface point `p` (normal `n`), textures read in level 0 as data (linear).
+    fn heights(&mut self, uses: &mut Uses) -> Result<(), Vec<Diagnostic>> {
+        let mut problems = Vec::new();
+        for h in self.heights.clone() {
+            uses.start_function();
+            uses.srgb = false;
+            let e = match field(&h.value, uses) {
+                Ok(e) => e,
+                Err(e) => {
+                    problems.push(Diagnostic::error(
+                        codes::E_CODEGEN,
+                        format!("cannot generate a displacement's height: {}", e.0),
+                        Span::new(h.id, h.id),
+                        "in this displacement",
+                    ));
+                    continue;
+                }
+            };
+            let samples: String = uses
+                .atlases
+                .iter()
+                .map(|&k| format!("    let atlas_sample_{0} = atlas_{0}(p);\n", k.index()))
+                .collect();
+            let lets: String = uses.lets.iter().map(|l| format!("    {l}\n")).collect();
+            let _ = writeln!(
+                self.out,
+                "// A displacement's height (level-0 texels: a zero footprint).\nfn height_{}(p: vec3<f32>, n: vec3<f32>) -> f32 {{\n    let footprint = 0.0;\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n{samples}{lets}    return {} * f32({e});\n}}\n",
+                h.id,
+                lit(h.scale)
+            );
+        }
+        if problems.is_empty() {
+            Ok(())
+        } else {
+            Err(problems)
+        }
+    }
+
     /// `scene_material`: id 0 is the default; id i + 1 is `materials[i]`. Returns the
-    /// textures the materials sample.
-    fn materials(&mut self, materials: &[MaterialDef]) -> Result<Vec<TextureUse>, Vec<Diagnostic>> {
+    /// textures the materials and heights sample (`uses` holds the heights').
+    fn materials(
+        &mut self,
+        materials: &[MaterialDef],
+        mut uses: Uses,
+    ) -> Result<Vec<TextureUse>, Vec<Diagnostic>> {
         let _ = writeln!(
             self.out,
             "// `footprint` is the pixel's size on the surface; tangent_u and tangent_v span the tangent plane.\nfn scene_material(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {{\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n    switch id {{"
         );
-        let mut uses = Uses::default();
         let mut problems = Vec::new();
         for (i, m) in materials.iter().enumerate() {
             let start = self.out.len();
@@ -427,7 +489,7 @@ impl Generator<'_> {
             .iter()
             .map(|&k| {
                 format!(
-                    "            let atlas_sample_{0} = atlas_{0}(p);\n",
+                    "            let atlas_sample_{0} = atlas_{0}(atlas_{0}_onto(p));\n",
                     k.index()
                 )
             })
@@ -449,6 +511,7 @@ impl Generator<'_> {
         table: Vec<Binding>,
         textures: Vec<TextureUse>,
     ) -> Module {
+        let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
         let mut header = String::new();
         let _ = writeln!(
             header,
@@ -479,7 +542,12 @@ impl Generator<'_> {
             bindings: table,
             globals_layout: GLOBALS_LAYOUT.to_vec(),
             lipschitz: target.lipschitz(),
-            shapes: scene.shapes.iter().map(|s| s.name.clone()).collect(),
+            shapes: scene
+                .shapes
+                .iter()
+                .filter(|n| emits(n, &rendered))
+                .map(|s| s.name.clone())
+                .collect(),
             textures,
         };
         Module {
@@ -491,7 +559,17 @@ impl Generator<'_> {
     }
 }
 
-fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
+/// Whether a named shape gets its `sdf_NAME`: its displacements are all the target's.
+fn emits(named: &ir::NamedShape, rendered: &[usize]) -> bool {
+    named
+        .shape
+        .heights()
+        .iter()
+        .all(|h| rendered.contains(&h.id))
+}
+
+/// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights it calls.
+fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) -> Vec<std::sync::Arc<ir::Height>> {
     let mut w = Writer::new(name);
     let d = w.shape(shape, shape.root(), "p");
     let _ = writeln!(
@@ -499,4 +577,5 @@ fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) {
         "{}fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {d};\n}}\n",
         w.helpers, w.out
     );
+    w.heights
 }

@@ -11,7 +11,25 @@ use glam::DVec3;
 /// Distance and gradient at each point, from the generated compute shader:
 /// `(distance, gradient.x, gradient.y, gradient.z)` per point.
 pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 4]>, GpuError> {
-    run(gpu, wgsl, "cs_points", points, 1)
+    run(gpu, wgsl, None, "cs_points", points, 1)
+}
+
+/// [`eval_points`] for a module whose field samples textures (a displacement's height):
+/// its textures (`Textures::load` of the program) are bound as `fs_main` binds them.
+pub fn eval_points_textured(
+    gpu: &Gpu,
+    module: &Module,
+    textures: &Textures,
+    points: &[DVec3],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    run(
+        gpu,
+        &module.wgsl,
+        Some((module, textures)),
+        "cs_points",
+        points,
+        1,
+    )
 }
 
 /// An atlas evaluated on the GPU (`cs_atlas`).
@@ -30,7 +48,7 @@ pub struct AtlasValue {
 
 /// The scene's atlas (the module's `scene_atlas`) at each point.
 pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasValue>, GpuError> {
-    let raw = run(gpu, wgsl, "cs_atlas", points, 3)?;
+    let raw = run(gpu, wgsl, None, "cs_atlas", points, 3)?;
     Ok(raw
         .chunks(3)
         .map(|c| AtlasValue {
@@ -55,9 +73,84 @@ struct Queries {
     readback: wgpu::Buffer,
 }
 
+/// The textures and samplers of a module's render group, uploaded.
+type Images = Vec<(wgpu::TextureView, wgpu::Sampler)>;
+
+fn upload_all(gpu: &Gpu, module: &Module, textures: &Textures) -> Result<Images, GpuError> {
+    module
+        .manifest
+        .textures
+        .iter()
+        .map(|t| {
+            let chain = textures.get(&t.path).ok_or_else(|| {
+                GpuError::Texture(format!("no decoded image for texture \"{}\"", t.path))
+            })?;
+            let image = upload(gpu, chain, &t.path, t.srgb)?;
+            Ok((
+                image.create_view(&Default::default()),
+                sampler(gpu, &t.wrap),
+            ))
+        })
+        .collect()
+}
+
+/// The render group's texture and sampler entries of a module's binding table.
+fn texture_layout_entries(
+    module: &Module,
+    visibility: wgpu::ShaderStages,
+) -> Vec<wgpu::BindGroupLayoutEntry> {
+    module
+        .manifest
+        .bindings
+        .iter()
+        .filter(|b| b.group == RENDER_GROUP)
+        .filter_map(|b| {
+            let ty = match b.resource {
+                Resource::Texture(_) => wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                Resource::Sampler(_) => {
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering)
+                }
+                _ => return None,
+            };
+            Some(wgpu::BindGroupLayoutEntry {
+                binding: b.binding,
+                visibility,
+                ty,
+                count: None,
+            })
+        })
+        .collect()
+}
+
+/// The render group's texture and sampler bindings of a module, to `images`.
+fn texture_group_entries<'a>(module: &Module, images: &'a Images) -> Vec<wgpu::BindGroupEntry<'a>> {
+    module
+        .manifest
+        .bindings
+        .iter()
+        .filter(|b| b.group == RENDER_GROUP)
+        .filter_map(|b| {
+            let resource = match b.resource {
+                Resource::Texture(i) => wgpu::BindingResource::TextureView(&images.get(i)?.0),
+                Resource::Sampler(i) => wgpu::BindingResource::Sampler(&images.get(i)?.1),
+                _ => return None,
+            };
+            Some(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource,
+            })
+        })
+        .collect()
+}
+
 fn create_queries(
     d: &wgpu::Device,
     wgsl: &str,
+    textured: Option<(&Module, &Images)>,
     entry_name: &str,
     data: &[[f32; 4]],
     size: u64,
@@ -83,9 +176,12 @@ fn create_queries(
         has_dynamic_offset: false,
         min_binding_size: None,
     };
+    let group0_entries = textured
+        .map(|(m, _)| texture_layout_entries(m, wgpu::ShaderStages::COMPUTE))
+        .unwrap_or_default();
     let empty = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("empty"),
-        entries: &[],
+        label: Some("textures"),
+        entries: &group0_entries,
     });
     let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("queries"),
@@ -130,10 +226,13 @@ fn create_queries(
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
+    let group0_entries = textured
+        .map(|(m, images)| texture_group_entries(m, images))
+        .unwrap_or_default();
     let group0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("empty"),
+        label: Some("textures"),
         layout: &empty,
-        entries: &[],
+        entries: &group0_entries,
     });
     let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("queries"),
@@ -167,6 +266,7 @@ fn create_queries(
 fn run(
     gpu: &Gpu,
     wgsl: &str,
+    textured: Option<(&Module, &Textures)>,
     entry_name: &str,
     points: &[DVec3],
     per_point: usize,
@@ -175,7 +275,12 @@ fn run(
         .iter()
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
-    run_raw(gpu, wgsl, entry_name, &data, per_point)
+    let images = match textured {
+        Some((m, t)) => Some((m, upload_all(gpu, m, t)?)),
+        None => None,
+    };
+    let textured = images.as_ref().map(|(m, i)| (*m, i));
+    run_raw(gpu, wgsl, textured, entry_name, &data, per_point)
 }
 
 /// The most points one dispatch takes (a dispatch has at most 65,535 workgroups of 64).
@@ -184,6 +289,7 @@ pub const MAX_POINTS_PER_DISPATCH: usize = 1 << 20;
 fn run_raw(
     gpu: &Gpu,
     wgsl: &str,
+    textured: Option<(&Module, &Images)>,
     entry_name: &str,
     data: &[[f32; 4]],
     per_point: usize,
@@ -193,7 +299,7 @@ fn run_raw(
     }
     let d = &gpu.device;
     let size = (data.len() * 16 * per_point) as u64;
-    let q = gpu.scoped(|| create_queries(d, wgsl, entry_name, data, size))?;
+    let q = gpu.scoped(|| create_queries(d, wgsl, textured, entry_name, data, size))?;
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("queries"),

@@ -7,7 +7,9 @@ mod mesh;
 mod render;
 pub mod texture;
 
-pub use compute::{eval_atlas, eval_materials, eval_points, AtlasValue, MaterialSample};
+pub use compute::{
+    eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
+};
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
 pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};
 

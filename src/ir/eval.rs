@@ -209,6 +209,21 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
             (d.abs() - thickness * 0.5, m)
         }
         Op::Paint { material, child } => (eval_node(shape, *child, p).0, *material),
+        Op::Displace { height, child } => {
+            let (f, m) = eval_node(shape, *child, p);
+            let d = height.field(f, || {
+                // Π_f (Eq. 57) with the gradient by central differences.
+                let h = GRADIENT_STEP;
+                let g = |o: DVec3| {
+                    eval_node(shape, *child, p + o).0 - eval_node(shape, *child, p - o).0
+                };
+                let grad =
+                    DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
+                let q = p - grad * (f / grad.length_squared().max(1e-300));
+                (q, grad.normalize_or_zero())
+            });
+            (d, m)
+        }
     }
 }
 

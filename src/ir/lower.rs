@@ -1,11 +1,23 @@
 //! Lowering: folded shape values of the checked program → IR nodes with bounds
 //! and Lipschitz constants.
 
+use super::material::Textures;
 use super::*;
 use crate::sema::{DefKind, Program, Ty, Value};
+use crate::span::Span;
 
 /// Lowers every named shape and the render target of a checked, error-free program.
+/// Displacements whose heights read textures need [`lower_with`] (here those shapes
+/// are left out).
 pub fn lower(program: &Program) -> Scene {
+    lower_with(program, &Textures::default()).0
+}
+
+/// [`lower`] with the decoded textures that displacement heights read (their texels
+/// bound the heights' range and slope). Also returns, for each displacement whose
+/// height has no bound, its call's span and why; those shapes are left out.
+pub fn lower_with(program: &Program, textures: &Textures) -> (Scene, Vec<(Span, String)>) {
+    let mut errors = Vec::new();
     let shapes = program
         .defs
         .iter()
@@ -13,20 +25,35 @@ pub fn lower(program: &Program) -> Scene {
         .filter_map(|d| {
             Some(NamedShape {
                 name: d.name.clone(),
-                shape: lower_shape(&d.value)?,
+                shape: lower_shape_with(&d.value, textures, &mut errors)?,
             })
         })
         .collect();
-    let render = program.render.as_ref().and_then(|r| lower_shape(&r.target));
-    Scene { shapes, render }
+    let render = program
+        .render
+        .as_ref()
+        .and_then(|r| lower_shape_with(&r.target, textures, &mut errors));
+    errors.sort_by_key(|e: &(Span, String)| (e.0.start, e.0.end));
+    errors.dedup();
+    (Scene { shapes, render }, errors)
 }
 
 /// Lowers one shape value; `None` for values that are not (error-free) shapes.
 pub fn lower_shape(value: &Value) -> Option<Shape> {
+    lower_shape_with(value, &Textures::default(), &mut Vec::new())
+}
+
+fn lower_shape_with(
+    value: &Value,
+    textures: &Textures,
+    errors: &mut Vec<(Span, String)>,
+) -> Option<Shape> {
     let mut shape = Shape::default();
     Lowerer {
         out: &mut shape,
         shared: std::collections::HashMap::new(),
+        textures,
+        errors,
     }
     .node(value)?;
     Some(shape)
@@ -37,6 +64,8 @@ struct Lowerer<'a> {
     /// The node of each shape value already lowered: a `let` used twice is one node with
     /// two parents (the IR is a DAG, its size linear in the checked program).
     shared: std::collections::HashMap<*const crate::sema::Node, NodeId>,
+    textures: &'a Textures,
+    errors: &'a mut Vec<(Span, String)>,
 }
 
 fn f(v: &Value) -> Option<f64> {
@@ -377,6 +406,35 @@ impl Lowerer<'_> {
                     },
                     b,
                     l,
+                )
+            }
+            B::Displace => {
+                let child = self.node(&a[0])?;
+                let (scale, band) = (f(&a[2])?, f(&a[3])?);
+                let bound = match displace::analyze(&a[1], self.textures) {
+                    Ok(b) => b,
+                    Err(why) => {
+                        self.errors.push((n.span, why));
+                        return None;
+                    }
+                };
+                let (b, l) = self.info(child);
+                let size = if b.is_finite() {
+                    (b.max - b.min).max_element().max(1e-3)
+                } else {
+                    4.0
+                };
+                let height =
+                    Height::new(a[1].clone(), scale, band, bound, n.span.start, 1e-3 * size);
+                let bounds = b.expand(height.epsilon());
+                let lipschitz = height.lipschitz(l);
+                self.push(
+                    Op::Displace {
+                        height: std::sync::Arc::new(height),
+                        child,
+                    },
+                    bounds,
+                    lipschitz,
                 )
             }
             // Not shapes: they never appear as a shape node.

@@ -227,7 +227,7 @@ impl<'a> MaterialEval<'a> {
     /// The generated `atlas_K(p)` on the CPU: Alg. 2 of the prepared atlas.
     pub fn atlas_values(&self, atlas: AtlasId, p: DVec3) -> AtlasValues {
         match self.atlases.get(atlas.index()) {
-            Some(Some(a)) => AtlasValues::from_sample(&a.sample(p)),
+            Some(Some(a)) => AtlasValues::from_sample(&a.sample(a.onto(p))),
             _ => AtlasValues::FAILED,
         }
     }
@@ -336,4 +336,34 @@ impl<'a> MaterialEval<'a> {
             other => Err(format!("a {} cannot be used per point", other.ty())),
         }
     }
+}
+
+/// A float surface field at surface point `p` with unit normal `n`, its textures read
+/// in level 0 (a zero footprint: `textureSampleGrad` with zero derivatives) and as data
+/// (linear): the generated `height_K(p, n)` of a displacement, on the CPU. `atlas` gives
+/// the atlas attributes (called at most once per atlas); `atlas_count` is the program's
+/// number of atlases.
+pub fn eval_scalar(
+    value: &Value,
+    p: DVec3,
+    n: DVec3,
+    textures: &Textures,
+    atlas_count: usize,
+    atlas: &mut dyn FnMut(AtlasId) -> AtlasValues,
+) -> f64 {
+    let (tangent_u, tangent_v) = tangents(n);
+    let mut cx = Cx {
+        textures,
+        atlas,
+        samples: vec![None; atlas_count],
+        p,
+        n,
+        footprint: 0.0,
+        tangent_u,
+        tangent_v,
+        offset: None,
+        srgb: false,
+        margin: f64::INFINITY,
+    };
+    cx.value(value).x()
 }

@@ -8,11 +8,13 @@
 //! oversteps the surface. The WGSL generator and the CPU reference
 //! ([`eval`]) both walk this IR.
 
+pub mod displace;
 pub mod eval;
 mod lower;
 pub mod material;
 
-pub use lower::{lower, lower_shape};
+pub use displace::Height;
+pub use lower::{lower, lower_shape, lower_with};
 
 use glam::{DMat3, DVec3};
 
@@ -165,6 +167,12 @@ pub enum Op {
         material: u32,
         child: NodeId,
     },
+    /// The child displaced along its normal by a height field (Eq. 56-58; see
+    /// [`displace`]).
+    Displace {
+        height: std::sync::Arc<Height>,
+        child: NodeId,
+    },
 }
 
 impl Op {
@@ -183,12 +191,49 @@ impl Op {
             | Op::Elongate { child, .. }
             | Op::Round { child, .. }
             | Op::Shell { child, .. }
-            | Op::Paint { child, .. } => vec![*child],
+            | Op::Paint { child, .. }
+            | Op::Displace { child, .. } => vec![*child],
         }
     }
 }
 
 impl Shape {
+    /// Every displacement's height, once each (by call site).
+    pub fn heights(&self) -> Vec<std::sync::Arc<Height>> {
+        let mut out: Vec<std::sync::Arc<Height>> = Vec::new();
+        for n in &self.nodes {
+            if let Op::Displace { height, .. } = &n.op {
+                if !out.iter().any(|h| h.id == height.id) {
+                    out.push(height.clone());
+                }
+            }
+        }
+        out
+    }
+
+    /// The largest step of a displacement read from 8-bit texels: its range / 255
+    /// (textures are sampled as 8-bit data); 0 without such a displacement.
+    pub fn height_quantum(&self) -> f64 {
+        self.heights()
+            .iter()
+            .filter(|h| displace::samples_texture(&h.value))
+            .map(|h| (h.hi - h.lo) / 255.0)
+            .fold(0.0, f64::max)
+    }
+
+    /// Gives every displacement's CPU evaluator its atlas and textures.
+    pub fn bind_heights(
+        &self,
+        atlases: &[Option<crate::uv::Atlas>],
+        textures: &material::Textures,
+    ) {
+        for n in &self.nodes {
+            if let Op::Displace { height, .. } = &n.op {
+                height.bind(atlases, textures);
+            }
+        }
+    }
+
     /// Whether a node has more than one parent (a `let` used twice).
     pub fn is_shared(&self, id: NodeId) -> bool {
         self.shared

@@ -337,6 +337,7 @@ builtins! {
     Round: "round", [S, Param { name: "radius", ty: Float, default: None, check: Check::NonNegative }], Shape, Warp, "Rounds the shape by offsetting its surface outwards by `radius`.";
     Shell: "shell", [S, pos("thickness", Float)], Shape, Warp, "Hollows the shape into a shell of `thickness` around its surface.";
     Paint: "paint", [S, p("material", Material)], Shape, Transform, "Gives the shape a material. Unions keep each operand's material.";
+    Displace: "displace", [S, p("height", Float), posd("scale", Float, F(1.0)), posd("band", Float, F(2.0))], Shape, Warp, "Displaces the surface along its normal by `scale * height` (§5.2.2, Eq. 56-58): `height` is a float surface field, usually a texture channel at an atlas's uv on this shape (`tex.sample(skin.uv).r`), read at the projection of each point onto the surface. Within `band` (τ > 1) times the largest displacement of the surface the field is f − scale·h; beyond it, the base field shifted by that largest displacement. Steps are divided by the bound √(L² + (1.5·scale·|∇h|)²).";
     // Textures and procedural patterns.
     Image: "image", [p("path", Str)], Texture, Texture, "Loads a PNG or JPEG image; the path is relative to the scene file.";
     Sample: "sample", [p("texture", Texture), p("uv", Vec2), Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec4, Texture, "Samples `texture` at `uv` (rgba, linear), with mip-mapping and the `wrap` mode `repeat`, `mirror` or `clamp`.";

@@ -538,7 +538,9 @@ impl Checker<'_> {
                 continue;
             }
             let ty = v.ty();
-            if ty.is_field() && !lifts {
+            // A displacement's height is the one surface field a shape takes.
+            let field_ok = lifts || (b.id == builtins::BuiltinId::Displace && p.name == "height");
+            if ty.is_field() && !field_ok {
                 self.error(
                     Diagnostic::error(
                         codes::E_NOT_CONSTANT,
@@ -608,6 +610,9 @@ impl Checker<'_> {
         let Some(n) = self.check_args(b, &bound) else {
             return Value::Error;
         };
+        if b.id == builtins::BuiltinId::Displace && !self.check_displace(&bound) {
+            return Value::Error;
+        }
         let args: Vec<Value> = bound.iter().map(|(v, _)| v.clone()).collect();
         if b.name == "image" {
             if let (Value::Str(path), pspan) = (&args[0], bound[0].1) {

@@ -222,6 +222,7 @@ pub fn math(builtin: BuiltinId, args: &[Value], n: usize) -> Value {
         | B::RotateZ
         | B::Scale
         | B::Paint
+        | B::Displace
         | B::Twist
         | B::Bend
         | B::Repeat

@@ -9,6 +9,7 @@
 
 pub mod builtins;
 mod check;
+mod displace;
 mod expr;
 pub mod fold;
 pub mod settings;
@@ -18,6 +19,8 @@ pub mod types;
 /// The closest name within a small edit distance, for "did you mean" help.
 pub use check::suggest as closest;
 pub use check::{check, MAX_SEEDS};
+/// The span of the `displace` call inside a shape value, if any.
+pub use displace::{displaced, undisplaced};
 pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
 pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
 

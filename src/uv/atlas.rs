@@ -362,6 +362,23 @@ impl Atlas {
         self.graph.neighbors[i].iter().any(|&(k, _)| k == j)
     }
 
+    /// Below this |f| a material's point is on the surface: 1e-3 of the scale.
+    pub fn onto_tolerance(&self) -> f64 {
+        1e-3 * scale(&self.shape)
+    }
+
+    /// A material's point onto the surface when it lies off it by more than
+    /// [`Atlas::onto_tolerance`] (one step of Eq. 57, the generated `atlas_K_onto`), as
+    /// on a displaced shape painted with its base's atlas.
+    pub fn onto(&self, x: DVec3) -> DVec3 {
+        let f = eval::distance(&self.shape, x);
+        if f.abs() <= self.onto_tolerance() {
+            return x;
+        }
+        let g = eval::gradient(&self.shape, x);
+        x - g * (f / g.length_squared().max(1e-300))
+    }
+
     /// The surface normal used at a point.
     pub fn normal(&self, x: DVec3) -> DVec3 {
         let f = |q: DVec3| eval::distance(&self.shape, q);

@@ -7,6 +7,7 @@
 
 pub mod atlas;
 pub mod diagnose;
+pub mod fit;
 pub mod grid;
 pub mod logmap;
 pub mod merge;

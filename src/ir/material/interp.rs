@@ -403,6 +403,7 @@ impl Cx<'_> {
             | B::RotateZ
             | B::Scale
             | B::Paint
+            | B::Displace
             | B::Twist
             | B::Bend
             | B::Repeat
@@ -521,6 +522,7 @@ pub(super) fn is_field_builtin(builtin: BuiltinId) -> bool {
         | B::RotateZ
         | B::Scale
         | B::Paint
+        | B::Displace
         | B::Twist
         | B::Bend
         | B::Repeat

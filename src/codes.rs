@@ -43,6 +43,7 @@ codes! {
     E_NOT_CONSTANT = "E0203": "a surface field where a constant is required";
     E_ATLAS_NOT_SHAPE = "E0204": "an atlas on something that is not a shape";
     E_RENDER_NOT_SHAPE = "E0205": "a render item whose target is not a shape";
+    E_NORMAL_MAP_ATLAS = "E0206": "a normal map whose uv does not come from exactly one atlas (its tangent frame is that atlas's)";
     E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
     E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
     E_NON_FINITE = "E0302": "a constant that is NaN, infinite, or beyond the single-precision (f32) range";

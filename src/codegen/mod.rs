@@ -178,6 +178,7 @@ enum MaterialField {
     Roughness,
     Metallic,
     Emission,
+    Normal,
 }
 
 impl MaterialField {
@@ -187,10 +188,11 @@ impl MaterialField {
             MaterialField::Roughness => "roughness",
             MaterialField::Metallic => "metallic",
             MaterialField::Emission => "emission",
+            MaterialField::Normal => "normal",
         }
     }
 
-    /// Colours are sampled as sRGB; data (roughness, metallic) as linear.
+    /// Colours are sampled as sRGB; data (roughness, metallic, normals) as linear.
     fn is_color(self) -> bool {
         matches!(self, MaterialField::Color | MaterialField::Emission)
     }
@@ -422,6 +424,7 @@ impl Generator<'_> {
         let r = attr(&m.roughness, MaterialField::Roughness);
         let mt = attr(&m.metallic, MaterialField::Metallic);
         let e = attr(&m.emission, MaterialField::Emission);
+        let normal = attr(&m.normal, MaterialField::Normal);
         let samples: String = uses
             .atlases
             .iter()
@@ -437,7 +440,7 @@ impl Generator<'_> {
             .iter()
             .map(|l| format!("            {l}\n"))
             .collect();
-        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e});\n")
+        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e}, sdfc_normalize_or({normal}, n));\n")
     }
 
     /// The header, the libraries and the scene's code, with the source map shifted to

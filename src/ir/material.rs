@@ -376,7 +376,10 @@ impl<'a> MaterialEval<'a> {
                     if *builtin == BuiltinId::SampleNormal && args[1].atlases().len() != 1 {
                         return Err(String::from("a normal map's uv must read one atlas"));
                     }
-                    args[1..wrap].iter().try_for_each(|a| self.validate(a))
+                    // The uv, and a normal map's strength (its other arguments are
+                    // constant strings).
+                    let fields = if *builtin == BuiltinId::Sample { 1..2 } else { 1..3 };
+                    args[fields].iter().try_for_each(|a| self.validate(a))
                 }
                 FieldExpr::Call { builtin, args } => {
                     if !is_field_builtin(*builtin) {

@@ -50,6 +50,22 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Err(code) => return code,
     };
     let unrolled = unrolled.module;
+    // The same scene with every material's `normal` back to the surface normal: the
+    // plain textured render that normal maps are measured against.
+    let flat = sdfc::sema::MaterialAttrs::default().normal;
+    let normal_maps = analysis.program.materials.iter().any(|m| m.attrs.normal != flat);
+    let unmapped = if normal_maps {
+        let mut without = analysis.clone();
+        for m in &mut without.program.materials {
+            m.attrs.normal = flat.clone();
+        }
+        match sdfc::driver::compile(&without, &base) {
+            Ok(c) => Some(c.module),
+            Err(e) => return compile::report(&name, &source, e),
+        }
+    } else {
+        None
+    };
     let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
@@ -71,11 +87,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
         let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
         Ok((renderer.pipeline_time, median(frames)))
     };
-    let rows = [
+    let mut rows = vec![
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
         ("shaded, loop walk", &rolled, ViewMode::Color),
     ];
+    if let Some(m) = &unmapped {
+        rows.push(("shaded, no normal maps, unrolled", m, ViewMode::Color));
+    }
     let mut results = Vec::new();
     for (name, module, mode) in rows {
         match measure(module, mode) {
@@ -123,5 +142,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         "ratio unrolled ÷ loop, pipeline:     {:.2}",
         ms(unrolled_r.0) / ms(loop_r.0)
     );
+    if let Some((_, without)) = results.get(3) {
+        println!(
+            "ratio normal maps ÷ none, unrolled:  {:.2}",
+            ms(unrolled_r.1) / ms(without.1)
+        );
+    }
     ExitCode::SUCCESS
 }

@@ -90,6 +90,37 @@ fn plane_constant_normal_map_gives_the_seed_frame_exactly() {
     eprintln!("plane: max |n − (a·e1 + b·e2 + c·n)| = {worst:.1e} ({in_band} of 200 points in blend bands)");
 }
 
+/// Data maps are linear wherever they are not colour, any material field may be a
+/// surface field, and a `normal` that is not a normal map is normalized (the surface
+/// normal where it vanishes).
+#[test]
+fn data_maps_are_linear_and_normals_may_be_any_field() {
+    let a = checked(
+        "let ball = sphere(1);\n\
+         let t = image(\"d.png\");\n\
+         material m {\n    color = t.sample(position.xy, \"clamp\").rgb;\n    roughness = t.sample(position.xy, \"clamp\").g;\n    metallic = t.sample(position.xy, \"clamp\").b;\n    emission = t.sample(position.xy, \"clamp\").rgb * 0.5;\n    normal = normal + [position.x, 0, 0];\n}\n\
+         material fixed { normal = [0, 3, 4]; }\n\
+         render ball.paint(m) | ball.paint(fixed).translate([3, 0, 0]);\n",
+    );
+    let m = MaterialEval::new(
+        &a.program,
+        &a.atlases,
+        Textures::from_images([(String::from("d.png"), constant([40, 128, 230]))]),
+    )
+    .unwrap();
+    let (p, n) = (DVec3::new(0.6, 0.0, 0.8), DVec3::new(0.6, 0.0, 0.8));
+    let v = m.eval(1, p, n, 1e-3);
+    let srgb = |c: f64| ((c / 255.0 + 0.055) / 1.055).powf(2.4);
+    assert!((v.roughness - 128.0 / 255.0).abs() < 1e-12 && (v.metallic - 230.0 / 255.0).abs() < 1e-12);
+    assert!((v.color - DVec3::new(srgb(40.0), srgb(128.0), srgb(230.0))).length() < 1e-12);
+    assert!((v.emission - v.color * 0.5).length() < 1e-12);
+    assert!((v.normal - (n + DVec3::new(0.6, 0.0, 0.0)).normalize()).length() < 1e-12);
+    // Where the field vanishes: the surface normal.
+    let (p, n) = (DVec3::new(-1.0, 0.0, 0.0), DVec3::X);
+    assert_eq!(m.eval(1, p, n, 1e-3).normal, n);
+    assert!((m.eval(2, p, n, 1e-3).normal - DVec3::new(0.0, 0.6, 0.8)).length() < 1e-12);
+}
+
 /// The rotation by `angle` about the unit `axis` (Rodrigues).
 fn rotation(axis: DVec3, angle: f64) -> DMat3 {
     DMat3::from_axis_angle(axis, angle)

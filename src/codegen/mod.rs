@@ -24,7 +24,7 @@ pub use targets::{compact, translate, validate, NagaError, Target, Validated};
 use crate::codes;
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ir::{self, Scene};
-use crate::sema::{MaterialAttrs, MaterialDef, Program, Ty, Value};
+use crate::sema::{FieldExpr, MaterialAttrs, MaterialDef, Program, SurfaceInput, Ty, Value};
 use crate::span::Span;
 use crate::uv::Atlas;
 use emit::{field, Unsupported, Uses, Writer};
@@ -424,7 +424,11 @@ impl Generator<'_> {
         let r = attr(&m.roughness, MaterialField::Roughness);
         let mt = attr(&m.metallic, MaterialField::Metallic);
         let e = attr(&m.emission, MaterialField::Emission);
-        let normal = attr(&m.normal, MaterialField::Normal);
+        // The surface normal is already unit; anything else is normalized.
+        let normal = match &m.normal {
+            Value::Field(e, _) if **e == FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
+            v => format!("sdfc_normalize_or({}, n)", attr(v, MaterialField::Normal)),
+        };
         let samples: String = uses
             .atlases
             .iter()
@@ -440,7 +444,7 @@ impl Generator<'_> {
             .iter()
             .map(|l| format!("            {l}\n"))
             .collect();
-        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e}, sdfc_normalize_or({normal}, n));\n")
+        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e}, {normal});\n")
     }
 
     /// The header, the libraries and the scene's code, with the source map shifted to

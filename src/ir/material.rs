@@ -327,7 +327,11 @@ impl<'a> MaterialEval<'a> {
             V::Num(c, _) => DVec3::new(c[0], c[1], c[2]),
             V::Bool(_) => DVec3::ZERO,
         };
-        let normal = sdfc_normalize_or(cx.value(&m.normal).vec3(), n);
+        // As the emitter: the surface normal as is, anything else normalized.
+        let normal = match &m.normal {
+            Value::Field(e, _) if **e == FieldExpr::Input(SurfaceInput::Normal) => n,
+            v => sdfc_normalize_or(cx.value(v).vec3(), n),
+        };
         Evaluated {
             value: MaterialValue {
                 color,

@@ -65,3 +65,33 @@ fn sdfc_grid(uv: vec2<f32>, n: f32, width: f32) -> f32 {
     let f = fract(uv * n + vec2<f32>(width * 0.5));
     return select(0.0, 1.0, f.x < width || f.y < width);
 }
+
+// v normalized, or fallback where v is (nearly) zero or not finite (src/ir/material.rs
+// has the same in f64).
+fn sdfc_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let l = length(v);
+    if (l > 1e-20 && l < 3.0e38) {
+        return v / l;
+    }
+    return fallback;
+}
+
+// A normal map (Eqs. 50 and 52). t and b: the atlas's blended transported seed frame,
+// re-orthonormalized about the unit normal n by the plane rotation nearest to it (for a
+// right-handed frame, b x n is t again; their mean is the polar factor's first column).
+// The texel's rgb decodes to a tangent-space normal (rgb * 2 - 1, green times `green`:
+// -1 for OpenGL-convention maps, as v runs down the image; 1 for DirectX ones), its
+// tangent part scaled by strength. The surface normal where the frame is degenerate
+// (a failed atlas sample).
+fn sdfc_normal_map(texel: vec4<f32>, t: vec3<f32>, b: vec3<f32>, n: vec3<f32>, strength: f32, green: f32) -> vec3<f32> {
+    let s = t + cross(b, n);
+    let sp = s - n * dot(n, s);
+    let len = length(sp);
+    if (!(len >= 1e-6)) {
+        return n;
+    }
+    let tt = sp / len;
+    let bb = cross(n, tt);
+    let c = texel.rgb * 2.0 - vec3<f32>(1.0);
+    return sdfc_normalize_or(tt * (c.x * strength) + bb * (c.y * green * strength) + n * c.z, n);
+}

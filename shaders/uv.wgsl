@@ -35,6 +35,10 @@ struct AtlasSample {
     seed: f32,
     // The nearest seed's normalized blend weight: 1 away from merged frontiers.
     weight: f32,
+    // The seeds' frames (e1, e2) carried to the point by the walks' parallel transport
+    // (Eq. 52), blended with the uv's weights; zero where the sample failed.
+    tangent: vec3<f32>,
+    bitangent: vec3<f32>,
 }
 
 // Notes, item 2: the step whose parabolic chord is s; stable as alpha -> 0.
@@ -84,7 +88,7 @@ fn uv_quaternion(m: mat3x3<f32>) -> vec4<f32> {
 
 // A failed sample with its status.
 fn uv_failed(status: u32, seed: f32) -> AtlasSample {
-    return AtlasSample(vec2<f32>(0.0), 3.0e38, f32(status), vec4<f32>(0.0, 0.0, 0.0, 1.0), seed, 0.0);
+    return AtlasSample(vec2<f32>(0.0), 3.0e38, f32(status), vec4<f32>(0.0, 0.0, 0.0, 1.0), seed, 0.0, vec3<f32>(0.0), vec3<f32>(0.0));
 }
 
 // Eq. 40 with omega(t) = 3t^2 - 2t^3, of the approximate distance to the frontier (Eq. 39):

@@ -46,6 +46,7 @@ codes! {
     E_DISPLACE_ATLAS = "E0206": "a displacement height read from an atlas on another shape";
     E_DISPLACE_HEIGHT = "E0207": "a displacement height whose slope cannot be bounded (a jump, or an input without a bound)";
     E_ATLAS_ON_DISPLACED = "E0208": "an atlas on a displaced shape (declare it on the base shape)";
+    E_NORMAL_MAP_ATLAS = "E0209": "a normal map whose uv does not come from exactly one atlas (its tangent frame is that atlas's)";
     E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
     E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
     E_NON_FINITE = "E0302": "a constant that is NaN, infinite, or beyond the single-precision (f32) range";

@@ -72,6 +72,43 @@ fn hovers() {
     assert_eq!(ide::hover(&doc, offset), None);
 }
 
+/// Hover documents the normal map and the material's `normal` from the tables.
+#[test]
+fn hover_on_normal_maps() {
+    let text = "let ball = sphere(1);\natlas skin on ball { seed front = [0, 0, 1]; }\nlet t = image(\"n.png\");\nmaterial m { normal = t.sample_normal(skin.uv, convention: \"dx\"); }\nrender ball.paint(m);\n";
+    let doc = Document::new(text.to_string(), None);
+    let at = |needle: &str| text.find(needle).unwrap() + 1;
+    let h = ide::hover(&doc, at("sample_normal")).expect("hover on sample_normal");
+    assert_eq!(&doc.text[h.span.range()], "sample_normal");
+    for part in [
+        "sample_normal(texture: texture, uv: vec2, strength: float = 1, convention: string = \"gl\", wrap: string = \"repeat\") -> vec3",
+        "parallel transport (Eq. 52)",
+        "\"dx\" (DirectX)",
+    ] {
+        assert!(h.markdown.contains(part), "{part} not in {}", h.markdown);
+    }
+    let h = ide::hover(&doc, at("normal =")).expect("hover on the normal setting");
+    assert_eq!(&doc.text[h.span.range()], "normal");
+    assert!(
+        h.markdown.starts_with("```sdf\nnormal: vec3\n```"),
+        "{}",
+        h.markdown
+    );
+    assert!(h.markdown.contains("shading normal"), "{}", h.markdown);
+    // Every block's settings have hover; the value after `=` is not the setting.
+    let h = ide::hover(&doc, at("front")).unwrap();
+    assert!(!h.markdown.contains("setting"), "{}", h.markdown);
+    let scene = "atlas a on sphere(1) { steps = 8; seed s = [0, 0, 1]; }\nrender sphere(1) { size = [64, 64]; }\n";
+    let doc = Document::new(scene.to_string(), None);
+    for (needle, expect) in [
+        ("steps", "steps: float = 20"),
+        ("size", "size: vec2 = [960, 540]"),
+    ] {
+        let h = ide::hover(&doc, scene.find(needle).unwrap() + 1).unwrap();
+        assert!(h.markdown.contains(expect), "{needle}: {}", h.markdown);
+    }
+}
+
 #[test]
 fn definition_and_references() {
     let (doc, offset) = at(&cursor("ball", 2));

@@ -63,6 +63,7 @@ fn ids_and_defaults_follow_the_generated_switch() {
         roughness: 0.5,
         metallic: 0.0,
         emission: DVec3::ZERO,
+        normal: n,
     };
     // 0, and ids beyond the materials, are the default material.
     assert_eq!(m.eval(0, p, n, 0.01), default);
@@ -280,6 +281,8 @@ fn gpu_atlases(gpu: &gpu::Gpu, a: &Analysis, points: &[DVec3]) -> Vec<Vec<AtlasV
                     status: g.status as f64,
                     transport: DVec4::from_array(g.transport.map(|x| x as f64)),
                     seed: g.seed as f64,
+                    tangent: DVec3::from_array(g.tangent.map(|x| x as f64)),
+                    bitangent: DVec3::from_array(g.bitangent.map(|x| x as f64)),
                 })
                 .collect()
         })

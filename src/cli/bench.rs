@@ -73,6 +73,31 @@ pub fn run(args: BenchArgs) -> ExitCode {
         None => None,
     };
     let unrolled = unrolled.module;
+    // The same scene with every material's `normal` back to the surface normal: the
+    // plain textured render that normal maps are measured against.
+    let flat = sdfc::sema::MaterialAttrs::default().normal;
+    let normal_maps = analysis
+        .program
+        .materials
+        .iter()
+        .any(|m| m.attrs.normal != flat);
+    let mut unmapped = Vec::new();
+    if normal_maps {
+        let mut without = analysis.clone();
+        for m in &mut without.program.materials {
+            m.attrs.normal = flat.clone();
+        }
+        for walk in [WalkForm::Unrolled, WalkForm::Loop] {
+            let options = Options {
+                walk,
+                ..base.clone()
+            };
+            match sdfc::driver::compile(&without, &options) {
+                Ok(c) => unmapped.push(c.module),
+                Err(e) => return compile::report(&name, &source, e),
+            }
+        }
+    }
     let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
@@ -88,27 +113,67 @@ pub fn run(args: BenchArgs) -> ExitCode {
     let dir = super::base_dir(&scene);
     let measure = |module: &sdfc::codegen::Module,
                    mode: ViewMode|
-     -> Result<(Duration, Duration), gpu::GpuError> {
+     -> Result<((Duration, Duration), gpu::Renderer), gpu::GpuError> {
         // One pipeline per module; a warm-up frame, then the measured ones.
         let renderer = gpu::Renderer::new(&gpu, module, &dir)?;
         let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
-        Ok((renderer.pipeline_time, median(frames)))
+        Ok(((renderer.pipeline_time, median(frames)), renderer))
+    };
+    // Two pipelines' frames alternated one by one, so that a load that drifts during
+    // the run (a shared machine, a software adapter) weighs on both alike: the
+    // ratio of their medians.
+    let paired = |a: &gpu::Renderer, b: &gpu::Renderer| -> Result<f64, gpu::GpuError> {
+        let (mut ta, mut tb) = (Vec::new(), Vec::new());
+        for _ in 0..args.frames.max(1) {
+            ta.extend(a.frames(&gpu, &view, ViewMode::Color, 0, 1)?.1);
+            tb.extend(b.frames(&gpu, &view, ViewMode::Color, 0, 1)?.1);
+        }
+        Ok(median(ta).as_secs_f64() / median(tb).as_secs_f64())
     };
     let mut rows = vec![
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
         ("shaded, loop walk", &rolled, ViewMode::Color),
     ];
+    let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
+        undisplaced_row = Some(rows.len());
         rows.push(("textured, undisplaced, loop walk", m, ViewMode::Color));
     }
+    let mut unmapped_rows = None;
+    if let [unrolled, rolled] = &unmapped[..] {
+        unmapped_rows = Some((rows.len(), rows.len() + 1));
+        rows.push((
+            "shaded, no normal maps, unrolled",
+            unrolled,
+            ViewMode::Color,
+        ));
+        rows.push(("shaded, no normal maps, loop", rolled, ViewMode::Color));
+    }
     let mut results = Vec::new();
+    let mut renderers = Vec::new();
     for (name, module, mode) in rows {
         match measure(module, mode) {
-            Ok(r) => results.push((name, r)),
+            Ok((r, renderer)) => {
+                results.push((name, r));
+                renderers.push(renderer);
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::from(super::exit::gpu(&e));
+            }
+        }
+    }
+    // Normal maps against none, unrolled then loop, with frames alternated.
+    let mut normal_map_ratios = Vec::new();
+    if let Some((no_unrolled, no_loop)) = unmapped_rows {
+        for (with, without) in [(1, no_unrolled), (2, no_loop)] {
+            match paired(&renderers[with], &renderers[without]) {
+                Ok(r) => normal_map_ratios.push(r),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(super::exit::gpu(&e));
+                }
             }
         }
     }
@@ -149,11 +214,17 @@ pub fn run(args: BenchArgs) -> ExitCode {
         "ratio unrolled ÷ loop, pipeline:     {:.2}",
         ms(unrolled_r.0) / ms(loop_r.0)
     );
-    if let Some((_, undisplaced)) = results.get(3) {
+    if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
         println!(
             "ratio displaced ÷ undisplaced, loop: {:.2}",
             ms(loop_r.1) / ms(undisplaced.1)
         );
+    }
+    if let [unrolled_ratio, loop_ratio] = normal_map_ratios[..] {
+        // From frames alternated with the same scene's without normal maps (not the
+        // rows above, which were measured one after the other).
+        println!("ratio normal maps ÷ none, unrolled:  {unrolled_ratio:.2} (frames alternated)");
+        println!("ratio normal maps ÷ none, loop:      {loop_ratio:.2} (frames alternated)");
     }
     ExitCode::SUCCESS
 }

@@ -130,7 +130,8 @@ pub enum Command {
     /// not on the base, an unwritable output).
     FitHeight(FitHeightArgs),
     /// Measure frame times on the GPU and print ratios from one run: the shaded scene
-    /// against a plain sphere trace of the same scene, and the unrolled walk against the loop.
+    /// against a plain sphere trace of the same scene, the unrolled walk against the loop,
+    /// and, when a material has a normal map, the scene against itself without them.
     Bench(BenchArgs),
     /// Run the language server on standard input and output (LSP, full-document sync):
     /// diagnostics, hover, go to definition, find references, document symbols,

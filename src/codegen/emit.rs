@@ -553,35 +553,29 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
             f(&args[1])?,
             f(&args[2])?
         ),
-        B::Sample => {
-            let (Value::Texture(node), Value::Str(wrap)) = (&args[0], &args[2]) else {
+        B::Sample => sample(args, 2, tex)?,
+        B::SampleNormal => {
+            let [_, uv, strength, Value::Str(convention), _] = args else {
                 return Err(Unsupported(String::from(
-                    "a texture sample needs an image and a wrap mode",
+                    "a normal map needs a texture, uv, strength, convention and wrap mode",
                 )));
             };
-            let Some(Value::Str(path)) = node.args.first() else {
-                return Err(Unsupported(String::from("a texture sample needs an image")));
+            let atlases = uv.atlases();
+            let (Some(k), 1) = (atlases.first(), atlases.len()) else {
+                return Err(Unsupported(String::from(
+                    "a normal map's uv must read one atlas",
+                )));
             };
-            // Texture derivatives from the pixel's footprint, analytically: the uv
-            // expression at the point and displaced by one footprint along two tangent
-            // directions (atlas uv moves isometrically, position along the surface). Unlike
-            // screen-space derivatives they cannot explode at uv seams, and they are valid
-            // in the non-uniform control flow after sphere tracing.
-            let uv = field(&args[1], tex)?;
-            let saved = tex.offset.take();
-            tex.offset = Some((
-                String::from("vec2<f32>(footprint, 0.0)"),
-                String::from("tangent_u * footprint"),
-            ));
-            let ux = field(&args[1], tex)?;
-            tex.offset = Some((
-                String::from("vec2<f32>(0.0, footprint)"),
-                String::from("tangent_v * footprint"),
-            ));
-            let uy = field(&args[1], tex)?;
-            tex.offset = saved;
-            let i = tex.index(path, wrap);
-            format!("textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})")
+            // Normal maps are data: sampled linear whatever field they are used in.
+            let saved = std::mem::replace(&mut tex.srgb, false);
+            let texel = sample(args, 4, tex);
+            tex.srgb = saved;
+            let texel = texel?;
+            tex.atlases.insert(*k);
+            let strength = field(strength, tex)?;
+            let green = lit(crate::ir::material::green_sign(convention));
+            let a = format!("atlas_sample_{}", k.index());
+            format!("sdfc_normal_map({texel}, {a}.tangent, {a}.bitangent, n, {strength}, {green})")
         }
         B::Cross => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
         // WGSL's normalize takes only vectors; a float's is its sign.
@@ -664,4 +658,40 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
         | B::LookAt
         | B::Sun => return Err(Unsupported(format!("`{name}` is not a surface field"))),
     })
+}
+
+/// `textureSampleGrad` of `args[0]` at uv `args[1]` with the wrap mode `args[wrap]`,
+/// in the colour space `tex.srgb` says.
+fn sample(args: &[Value], wrap: usize, tex: &mut Uses) -> Result<String, Unsupported> {
+    let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(wrap))
+    else {
+        return Err(Unsupported(String::from(
+            "a texture sample needs an image and a wrap mode",
+        )));
+    };
+    let Some(Value::Str(path)) = node.args.first() else {
+        return Err(Unsupported(String::from("a texture sample needs an image")));
+    };
+    // Texture derivatives from the pixel's footprint, analytically: the uv
+    // expression at the point and displaced by one footprint along two tangent
+    // directions (atlas uv moves isometrically, position along the surface). Unlike
+    // screen-space derivatives they cannot explode at uv seams, and they are valid
+    // in the non-uniform control flow after sphere tracing.
+    let uv = field(&args[1], tex)?;
+    let saved = tex.offset.take();
+    tex.offset = Some((
+        String::from("vec2<f32>(footprint, 0.0)"),
+        String::from("tangent_u * footprint"),
+    ));
+    let ux = field(&args[1], tex)?;
+    tex.offset = Some((
+        String::from("vec2<f32>(0.0, footprint)"),
+        String::from("tangent_v * footprint"),
+    ));
+    let uy = field(&args[1], tex)?;
+    tex.offset = saved;
+    let i = tex.index(path, wrap);
+    Ok(format!(
+        "textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})"
+    ))
 }

@@ -24,7 +24,7 @@ pub use targets::{compact, translate, validate, NagaError, Target, Validated};
 use crate::codes;
 use crate::diagnostic::{Diagnostic, Severity};
 use crate::ir::{self, Scene};
-use crate::sema::{MaterialAttrs, MaterialDef, Program, Ty, Value};
+use crate::sema::{FieldExpr, MaterialAttrs, MaterialDef, Program, SurfaceInput, Ty, Value};
 use crate::span::Span;
 use crate::uv::Atlas;
 use emit::{field, Unsupported, Uses, Writer};
@@ -178,6 +178,7 @@ enum MaterialField {
     Roughness,
     Metallic,
     Emission,
+    Normal,
 }
 
 impl MaterialField {
@@ -187,10 +188,11 @@ impl MaterialField {
             MaterialField::Roughness => "roughness",
             MaterialField::Metallic => "metallic",
             MaterialField::Emission => "emission",
+            MaterialField::Normal => "normal",
         }
     }
 
-    /// Colours are sampled as sRGB; data (roughness, metallic) as linear.
+    /// Colours are sampled as sRGB; data (roughness, metallic, normals) as linear.
     fn is_color(self) -> bool {
         matches!(self, MaterialField::Color | MaterialField::Emission)
     }
@@ -484,6 +486,13 @@ impl Generator<'_> {
         let r = attr(&m.roughness, MaterialField::Roughness);
         let mt = attr(&m.metallic, MaterialField::Metallic);
         let e = attr(&m.emission, MaterialField::Emission);
+        // The surface normal is already unit; anything else is normalized.
+        let normal = match &m.normal {
+            Value::Field(e, _) if **e == FieldExpr::Input(SurfaceInput::Normal) => {
+                String::from("n")
+            }
+            v => format!("sdfc_normalize_or({}, n)", attr(v, MaterialField::Normal)),
+        };
         let samples: String = uses
             .atlases
             .iter()
@@ -499,7 +508,7 @@ impl Generator<'_> {
             .iter()
             .map(|l| format!("            {l}\n"))
             .collect();
-        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e});\n")
+        format!("{samples}{lets}            return Material({color}, {r}, {mt}, {e}, {normal});\n")
     }
 
     /// The header, the libraries and the scene's code, with the source map shifted to

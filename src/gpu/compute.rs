@@ -44,13 +44,16 @@ pub struct AtlasValue {
     pub seed: i32,
     /// The chosen seed's normalized blend weight.
     pub weight: f32,
+    /// The blended transported seed frame (zero where the sample failed).
+    pub tangent: [f32; 3],
+    pub bitangent: [f32; 3],
 }
 
 /// The scene's atlas (the module's `scene_atlas`) at each point.
 pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasValue>, GpuError> {
-    let raw = run(gpu, wgsl, None, "cs_atlas", points, 3)?;
+    let raw = run(gpu, wgsl, None, "cs_atlas", points, 5)?;
     Ok(raw
-        .chunks(3)
+        .chunks(5)
         .map(|c| AtlasValue {
             uv: [c[0][0], c[0][1]],
             distance: c[0][2],
@@ -58,6 +61,8 @@ pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasVa
             transport: c[1],
             seed: c[2][0].round() as i32,
             weight: c[2][1],
+            tangent: [c[3][0], c[3][1], c[3][2]],
+            bitangent: [c[4][0], c[4][1], c[4][2]],
         })
         .collect())
 }
@@ -328,6 +333,8 @@ pub struct MaterialSample {
     pub roughness: f32,
     pub metallic: f32,
     pub emission: [f32; 3],
+    /// The unit shading normal.
+    pub normal: [f32; 3],
 }
 
 /// The most points one dispatch of [`eval_materials`] takes.
@@ -403,9 +410,9 @@ pub fn eval_materials(
             entries: &entries,
         })
     })?;
-    // Results take 32 bytes a point: a chunk stays within the binding size limit.
+    // Results take 48 bytes a point: a chunk stays within the binding size limit.
     let max_binding = d.limits().max_storage_buffer_binding_size as usize;
-    let chunk = MATERIAL_CHUNK.min(max_binding / 32).max(1);
+    let chunk = MATERIAL_CHUNK.min(max_binding / 48).max(1);
     let mut out = Vec::with_capacity(points.len());
     for part in points.chunks(chunk) {
         let input: Vec<[f32; 4]> = part
@@ -416,7 +423,7 @@ pub fn eval_materials(
             .iter()
             .map(|(_, n, _)| [n.x as f32, n.y as f32, n.z as f32, 0.0])
             .collect();
-        let size = (part.len() * 32) as u64;
+        let size = (part.len() * 48) as u64;
         let readback = gpu.scoped(|| {
             use wgpu::util::DeviceExt;
             let buffer = |label, data: &[[f32; 4]]| {
@@ -476,11 +483,12 @@ pub fn eval_materials(
         })?;
         let bytes = gpu.read_buffer(&readback)?;
         let raw: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-        out.extend(raw.chunks(2).map(|c| MaterialSample {
+        out.extend(raw.chunks(3).map(|c| MaterialSample {
             color: [c[0][0], c[0][1], c[0][2]],
             roughness: c[0][3],
             metallic: c[1][3],
             emission: [c[1][0], c[1][1], c[1][2]],
+            normal: [c[2][0], c[2][1], c[2][2]],
         }));
     }
     Ok(out)

@@ -170,6 +170,9 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
         };
         return Some(Hover { span, markdown });
     }
+    if let Some(h) = setting_hover(doc, offset) {
+        return Some(h);
+    }
     let Some(named) = named_at(doc, offset) else {
         return actions::merge_hover(doc, offset);
     };
@@ -201,6 +204,48 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
             })
         }
     }
+}
+
+/// Hover on the name of a block's setting (`roughness = …`): its type, default and
+/// documentation from the settings tables.
+fn setting_hover(doc: &Document, offset: usize) -> Option<Hover> {
+    for item in &doc.analysis.parsed.file.items {
+        let (settings, specs): (Vec<&Setting>, _) = match &item.kind {
+            ItemKind::Atlas { body, .. } => (
+                body.iter()
+                    .filter_map(|s| match s {
+                        AtlasStmt::Setting(s) => Some(s),
+                        _ => None,
+                    })
+                    .collect(),
+                builtins::ATLAS_SETTINGS,
+            ),
+            ItemKind::Material { body, .. } => (body.iter().collect(), builtins::MATERIAL_SETTINGS),
+            ItemKind::Render { body, .. } => (body.iter().collect(), builtins::RENDER_SETTINGS),
+            _ => continue,
+        };
+        let Some(s) = settings.into_iter().find(|s| s.name.span.contains(offset)) else {
+            continue;
+        };
+        let spec = specs.iter().find(|spec| spec.name == s.name.name)?;
+        let field = if spec.field {
+            " (may be a surface field)"
+        } else {
+            ""
+        };
+        return Some(Hover {
+            span: s.name.span,
+            markdown: format!(
+                "```sdf
+{}
+```
+setting{field} — {}",
+                spec.describe(),
+                spec.doc
+            ),
+        });
+    }
+    None
 }
 
 /// The definition of the name at an offset.

@@ -440,6 +440,7 @@ impl Lowerer<'_> {
             // Not shapes: they never appear as a shape node.
             B::Image
             | B::Sample
+            | B::SampleNormal
             | B::Checker
             | B::Grid
             | B::Orbit

@@ -45,6 +45,9 @@ pub struct MaterialValue {
     pub roughness: f64,
     pub metallic: f64,
     pub emission: DVec3,
+    /// The unit shading normal: the material's `normal` normalized (the surface normal
+    /// where it is zero or not finite), as `fs_main` shades with it.
+    pub normal: DVec3,
 }
 
 /// A material value with the distance of its discontinuous arguments from their
@@ -69,6 +72,10 @@ pub struct AtlasValues {
     pub transport: DVec4,
     /// The chosen seed (on failure the nearest seed that failed), or -1.
     pub seed: f64,
+    /// The blended transported seed frame ([`Sample::tangent`], [`Sample::bitangent`]);
+    /// zero where the sample failed.
+    pub tangent: DVec3,
+    pub bitangent: DVec3,
 }
 
 /// The shader's "infinite" distance of a failed sample (`uv_failed`).
@@ -82,6 +89,8 @@ impl AtlasValues {
         status: 1.0,
         transport: DVec4::new(0.0, 0.0, 0.0, 1.0),
         seed: -1.0,
+        tangent: DVec3::ZERO,
+        bitangent: DVec3::ZERO,
     };
 
     /// The values of a CPU atlas sample ([`Atlas::sample`]).
@@ -101,6 +110,8 @@ impl AtlasValues {
                 DVec4::new(0.0, 0.0, 0.0, 1.0)
             },
             seed: s.seed.map_or(-1.0, |i| i as f64),
+            tangent: if ok { s.tangent } else { DVec3::ZERO },
+            bitangent: if ok { s.bitangent } else { DVec3::ZERO },
         }
     }
 }
@@ -156,6 +167,40 @@ pub fn tangents(n: DVec3) -> (DVec3, DVec3) {
     (u, n.cross(u))
 }
 
+/// `sdfc_normalize_or` of shaders/render.wgsl: `v` normalized, or `fallback` where
+/// `v` is (nearly) zero or not finite.
+pub fn sdfc_normalize_or(v: DVec3, fallback: DVec3) -> DVec3 {
+    let l = v.length();
+    if l > 1e-20 && l.is_finite() {
+        v / l
+    } else {
+        fallback
+    }
+}
+
+/// The sign of a normal map's green along e2 (+v): sdfc's v runs down the image, so an
+/// OpenGL-convention map (green up the image) is negated and a DirectX one is not.
+pub fn green_sign(convention: &str) -> f64 {
+    if convention == "dx" {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// `sdfc_normal_map` of shaders/render.wgsl (Eqs. 50 and 52): the texel's rgb decoded
+/// to a tangent-space normal (rgb·2 − 1, green times `green` = [`green_sign`]), its
+/// tangent part scaled by `strength`, in the transported frame (t, b) re-orthonormalized
+/// about the unit normal n. The surface normal where the frame is degenerate.
+pub fn normal_map(texel: DVec3, t: DVec3, b: DVec3, n: DVec3, strength: f64, green: f64) -> DVec3 {
+    let Some((t, b)) = crate::uv::atlas::tangent_frame(t, b, n) else {
+        return n;
+    };
+    let c = texel * 2.0 - DVec3::ONE;
+    let (x, y) = (c.x * strength, c.y * green * strength);
+    sdfc_normalize_or(t * x + b * y + n * c.z, n)
+}
+
 /// The materials of a checked program, ready to evaluate on the CPU.
 pub struct MaterialEval<'a> {
     program: &'a Program,
@@ -193,6 +238,7 @@ impl<'a> MaterialEval<'a> {
                 &m.attrs.roughness,
                 &m.attrs.metallic,
                 &m.attrs.emission,
+                &m.attrs.normal,
             ] {
                 eval.validate(v)
                     .map_err(|e| format!("material `{}`: {e}", m.name))?;
@@ -281,12 +327,18 @@ impl<'a> MaterialEval<'a> {
             V::Num(c, _) => DVec3::new(c[0], c[1], c[2]),
             V::Bool(_) => DVec3::ZERO,
         };
+        // As the emitter: the surface normal as is, anything else normalized.
+        let normal = match &m.normal {
+            Value::Field(e, _) if **e == FieldExpr::Input(SurfaceInput::Normal) => n,
+            v => sdfc_normalize_or(cx.value(v).vec3(), n),
+        };
         Evaluated {
             value: MaterialValue {
                 color,
                 roughness,
                 metallic,
                 emission,
+                normal,
             },
             margin: cx.margin,
         }
@@ -308,11 +360,12 @@ impl<'a> MaterialEval<'a> {
                 FieldExpr::Swizzle { base, .. } => self.validate(base),
                 FieldExpr::Vector(args) => args.iter().try_for_each(|a| self.validate(a)),
                 FieldExpr::Call {
-                    builtin: BuiltinId::Sample,
+                    builtin: builtin @ (BuiltinId::Sample | BuiltinId::SampleNormal),
                     args,
                 } => {
+                    let wrap = if *builtin == BuiltinId::Sample { 2 } else { 4 };
                     let (Some(Value::Texture(node)), Some(Value::Str(_))) =
-                        (args.first(), args.get(2))
+                        (args.first(), args.get(wrap))
                     else {
                         return Err(String::from(
                             "a texture sample needs an image and a wrap mode",
@@ -324,7 +377,17 @@ impl<'a> MaterialEval<'a> {
                     if self.textures.get(path).is_none() {
                         return Err(format!("no decoded image for texture \"{path}\""));
                     }
-                    self.validate(&args[1])
+                    if *builtin == BuiltinId::SampleNormal && args[1].atlases().len() != 1 {
+                        return Err(String::from("a normal map's uv must read one atlas"));
+                    }
+                    // The uv, and a normal map's strength (its other arguments are
+                    // constant strings).
+                    let fields = if *builtin == BuiltinId::Sample {
+                        1..2
+                    } else {
+                        1..3
+                    };
+                    args[fields].iter().try_for_each(|a| self.validate(a))
                 }
                 FieldExpr::Call { builtin, args } => {
                     if !is_field_builtin(*builtin) {

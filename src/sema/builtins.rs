@@ -341,6 +341,7 @@ builtins! {
     // Textures and procedural patterns.
     Image: "image", [p("path", Str)], Texture, Texture, "Loads a PNG or JPEG image; the path is relative to the scene file.";
     Sample: "sample", [p("texture", Texture), p("uv", Vec2), Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec4, Texture, "Samples `texture` at `uv` (rgba, linear), with mip-mapping and the `wrap` mode `repeat`, `mirror` or `clamp`.";
+    SampleNormal: "sample_normal", [p("texture", Texture), p("uv", Vec2), Param { name: "strength", ty: Float, default: Some(F(1.0)), check: Check::NonNegative }, Param { name: "convention", ty: Str, default: Some(Dflt::S("gl")), check: Check::OneOf(&["gl", "dx"]) }, Param { name: "wrap", ty: Str, default: Some(Dflt::S("repeat")), check: Check::OneOf(&["repeat", "mirror", "clamp"]) }], Vec3, Texture, "A normal map (§5.2.1): samples `texture` at `uv` as linear data and decodes the tangent-space normal rgb·2 − 1 in the frame (e1, e2, n) of the seeds of `uv`'s atlas, carried to the point by the walk's parallel transport (Eq. 52) and blended like the uv across merged seeds; returns the world-space shading normal, for a material's `normal`. sdfc's v runs down the image (v = 0 is the top row), so `convention` \"gl\" (OpenGL: green points up the image) reads green along −e2 and \"dx\" (DirectX) along +e2. `strength` scales the tangent part (0: the surface normal).";
     Checker: "checker", [p("uv", Vec2), posd("n", Float, F(8.0))], Float, Texture, "A checkerboard of `n` squares per unit of uv: 0 or 1.";
     Grid: "grid", [p("uv", Vec2), posd("n", Float, F(8.0)), posd("width", Float, F(0.05))], Float, Texture, "Grid lines, `n` per unit of uv, of relative `width`: 1 on a line, 0 elsewhere.";
     // Render settings.
@@ -484,6 +485,14 @@ pub static MATERIAL_SETTINGS: &[SettingSpec] = &[
         Check::NonNegative,
         true,
         "Emitted radiance (linear RGB).",
+    ),
+    set(
+        "normal",
+        Vec3,
+        None,
+        Check::NonZero,
+        true,
+        "The shading normal (world space; normalized before shading), e.g. a normal map `tex.sample_normal(skin.uv)` (default: the surface normal `normal`).",
     ),
 ];
 

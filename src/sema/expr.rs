@@ -1,6 +1,6 @@
 //! The checker's expression level: names, operators, vectors, fields and calls.
 
-use super::builtins::{self, Builtin, Kind, PTy, Ret, BUILTINS, CONSTANTS};
+use super::builtins::{self, Builtin, BuiltinId, Kind, PTy, Ret, BUILTINS, CONSTANTS};
 use super::check::{suggest, Checker};
 use super::fold;
 use super::types::{AtlasAttr, FieldExpr, Node, SurfaceInput, Ty, Value};
@@ -614,6 +614,9 @@ impl Checker<'_> {
             return Value::Error;
         }
         let args: Vec<Value> = bound.iter().map(|(v, _)| v.clone()).collect();
+        if b.id == BuiltinId::SampleNormal && !self.normal_map_atlas(&bound[1]) {
+            return Value::Error;
+        }
         if b.name == "image" {
             if let (Value::Str(path), pspan) = (&args[0], bound[0].1) {
                 self.texture_file(path, pspan);
@@ -658,6 +661,40 @@ impl Checker<'_> {
                 self.finite(v, span)
             }
         }
+    }
+
+    /// A normal map's uv must read exactly one atlas: its seeds' frames, carried to the
+    /// point by the walk's parallel transport, are the tangent frame (Eq. 52).
+    fn normal_map_atlas(&mut self, (uv, span): &(Value, Span)) -> bool {
+        let atlases = uv.atlases();
+        if atlases.len() == 1 {
+            return true;
+        }
+        let names: Vec<String> = atlases
+            .iter()
+            .filter_map(|k| self.prog.atlases.get(k.index()))
+            .map(|a| format!("`{}`", a.name))
+            .collect();
+        let (message, label) = if atlases.is_empty() {
+            (
+                String::from("the uv of `sample_normal` must come from an atlas"),
+                String::from("this uv reads no atlas"),
+            )
+        } else {
+            (
+                String::from("the uv of `sample_normal` must come from one atlas"),
+                format!("this uv reads the atlases {}", names.join(" and ")),
+            )
+        };
+        self.error(
+            Diagnostic::error(codes::E_NORMAL_MAP_ATLAS, message, *span, label)
+                .with_note(
+                    "a normal map's tangent frame is the frame of its atlas's seeds, carried to \
+                     the point by the geodesic walk's parallel transport",
+                )
+                .with_help("sample it at an atlas's uv, e.g. `tex.sample_normal(skin.uv)`"),
+        );
+        false
     }
 
     fn texture_file(&mut self, path: &str, span: Span) {

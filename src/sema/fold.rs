@@ -232,6 +232,7 @@ pub fn math(builtin: BuiltinId, args: &[Value], n: usize) -> Value {
         | B::Shell
         | B::Image
         | B::Sample
+        | B::SampleNormal
         | B::Checker
         | B::Grid
         | B::Orbit

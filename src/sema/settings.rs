@@ -5,7 +5,7 @@
 use super::builtins::{
     self, BuiltinId, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS,
 };
-use super::types::Value;
+use super::types::{FieldExpr, SurfaceInput, Ty, Value};
 use crate::span::Span;
 use std::collections::HashMap;
 
@@ -85,6 +85,9 @@ pub struct MaterialAttrs {
     pub roughness: Value,
     pub metallic: Value,
     pub emission: Value,
+    /// The shading normal (vec3, world space): the surface normal unless the material
+    /// sets one, e.g. a normal map.
+    pub normal: Value,
 }
 
 impl MaterialAttrs {
@@ -96,6 +99,9 @@ impl MaterialAttrs {
             roughness: get("roughness"),
             metallic: get("metallic"),
             emission: get("emission"),
+            normal: s.get("normal").unwrap_or_else(|| {
+                Value::field(FieldExpr::Input(SurfaceInput::Normal), Ty::Vec(3))
+            }),
         }
     }
 }

@@ -219,6 +219,32 @@ impl Value {
         matches!(self, Value::Error)
     }
 
+    /// The atlases a surface field reads (`skin.uv`, …), in index order; empty for a
+    /// constant. A normal map takes its tangent frame from its uv's one atlas.
+    pub fn atlases(&self) -> std::collections::BTreeSet<AtlasId> {
+        fn walk(v: &Value, out: &mut std::collections::BTreeSet<AtlasId>) {
+            let Value::Field(e, _) = v else { return };
+            stacker::maybe_grow(64 * 1024, 1024 * 1024, || match &**e {
+                FieldExpr::Input(_) => {}
+                FieldExpr::Atlas { atlas, .. } => {
+                    out.insert(*atlas);
+                }
+                FieldExpr::Call { args, .. } | FieldExpr::Vector(args) => {
+                    args.iter().for_each(|a| walk(a, out))
+                }
+                FieldExpr::Unary { operand, .. } => walk(operand, out),
+                FieldExpr::Binary { lhs, rhs, .. } => {
+                    walk(lhs, out);
+                    walk(rhs, out);
+                }
+                FieldExpr::Swizzle { base, .. } => walk(base, out),
+            })
+        }
+        let mut out = std::collections::BTreeSet::new();
+        walk(self, &mut out);
+        out
+    }
+
     pub fn field(expr: FieldExpr, ty: Ty) -> Value {
         Value::Field(Arc::new(expr), ty)
     }

@@ -283,6 +283,8 @@ impl Atlas {
                 transport: m.transport,
                 seed: Some(seed),
                 weight: 1.0,
+                tangent: m.transport * self.seeds[seed].seed.e1,
+                bitangent: m.transport * self.seeds[seed].seed.e2,
             },
             None => {
                 let (seed, status) = first_failure
@@ -295,6 +297,8 @@ impl Atlas {
                     transport: DMat3::IDENTITY,
                     seed,
                     weight: 0.0,
+                    tangent: DVec3::ZERO,
+                    bitangent: DVec3::ZERO,
                 }
             }
         }
@@ -328,6 +332,8 @@ impl Atlas {
         let d = nearest.distance;
         let sigma = self.sigma;
         let (mut sum, mut total, mut w_own) = (DVec2::ZERO, 0.0, 1.0f64);
+        // The transported frames R_{p_j→x}·(e1_j, e2_j), blended with the uv's weights.
+        let (mut t_sum, mut b_sum) = (DVec3::ZERO, DVec3::ZERO);
         for &(j, d_ij) in neighbors {
             // Eq. 44: when even the Euclidean distance to p_j puts x beyond the band,
             // w_{i*,j} = 1 and p_j does not contribute.
@@ -343,10 +349,14 @@ impl Atlas {
             let w_j = 1.0 - w_ij; // Eq. 42
             sum += w_j * (m.uv + self.seeds[j].offset);
             total += w_j;
+            t_sum += w_j * (m.transport * self.seeds[j].seed.e1);
+            b_sum += w_j * (m.transport * self.seeds[j].seed.e2);
         }
         // The corrected last line of Alg. 2 (notes, item 3).
         out.uv = (sum + w_own * own) / (total + w_own);
         out.weight = w_own / (total + w_own);
+        out.tangent = (t_sum + w_own * nearest.tangent) / (total + w_own);
+        out.bitangent = (b_sum + w_own * nearest.bitangent) / (total + w_own);
         out
     }
 
@@ -397,6 +407,30 @@ pub struct Sample {
     pub seed: Option<usize>,
     /// The chosen seed's normalized blend weight (1 away from merged frontiers).
     pub weight: f64,
+    /// The seeds' frames (e1, e2) carried to x by the walks' parallel transport
+    /// (R_{p_i→x}·TBN_i of Eq. 52), blended with the uv's weights: the tangent frame
+    /// of normal maps, not yet re-orthonormalized ([`tangent_frame`]). Zero where the
+    /// sample failed.
+    pub tangent: DVec3,
+    pub bitangent: DVec3,
+}
+
+/// A blended transported frame (t, b) re-orthonormalized in the tangent plane of the
+/// unit normal n: the rotation of the plane nearest to the blend (the polar
+/// decomposition of the 2 × 2 frame, symmetric in t and b), as (t', b' = n × t'). `None`
+/// where the frame is degenerate (a failed sample). shaders/render.wgsl's
+/// `sdfc_tangent_frame` computes the same in f32.
+pub fn tangent_frame(t: DVec3, b: DVec3, n: DVec3) -> Option<(DVec3, DVec3)> {
+    // For a right-handed frame b = n × t, b × n is t again: their mean is the
+    // polar factor's first column.
+    let s = t + b.cross(n);
+    let s = s - n * n.dot(s);
+    let len = s.length();
+    if !(len >= 1e-6) {
+        return None;
+    }
+    let t = s / len;
+    Some((t, n.cross(t)))
 }
 
 /// Eq. 39: the approximate signed distance from x to the Voronoi frontier between seeds

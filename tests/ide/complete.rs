@@ -62,10 +62,10 @@ fn members_follow_the_receivers_type() {
     // after the cursor does not matter.
     assert_eq!(methods("let b = sphere(1).translate([0, 1, 0]).$0"), shape);
     assert_eq!(methods("let b = (ball | ball).rot$0 nonsense ]"), shape);
-    // A texture: `sample`.
+    // A texture: `sample` and `sample_normal`.
     assert_eq!(
         labels("let t = image(\"a.png\");\nmaterial m { color = t.$0 }"),
-        ["sample"]
+        ["sample", "sample_normal"]
     );
     // A vector: its swizzles and the math on it.
     let v = labels("let v = [1, 2, 3];\nlet w = v.$0");
@@ -110,7 +110,7 @@ fn keywords_and_settings_by_block() {
     );
     assert_eq!(
         labels("material m {\n    roughness = 0.5;\n    $0\n}"),
-        ["color", "roughness", "metallic", "emission"]
+        ["color", "roughness", "metallic", "emission", "normal"]
     );
     assert_eq!(
         labels("render ball { $0 }"),

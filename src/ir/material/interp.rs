@@ -241,7 +241,10 @@ impl Cx<'_> {
     pub(super) fn call(&mut self, builtin: BuiltinId, args: &[Value]) -> V {
         use BuiltinId as B;
         if builtin == B::Sample {
-            return self.sample(args);
+            return self.sample(args, 2);
+        }
+        if builtin == B::SampleNormal {
+            return self.sample_normal(args);
         }
         let vals: Vec<V> = args.iter().map(|a| self.value(a)).collect();
         // The call's type: the first vector argument's (the emitter's `t_ty`).
@@ -371,6 +374,7 @@ impl Cx<'_> {
             B::Checker
             | B::Grid
             | B::Sample
+            | B::SampleNormal
             | B::Cross
             | B::Normalize
             | B::Length
@@ -418,11 +422,32 @@ impl Cx<'_> {
         }
     }
 
-    /// `sample(texture, uv, wrap)`: `textureSampleGrad` with the emitter's analytic
-    /// derivatives (the uv expression displaced by one footprint along each tangent).
-    pub(super) fn sample(&mut self, args: &[Value]) -> V {
+    /// `sample_normal(texture, uv, strength, convention, wrap)`: the texel sampled as
+    /// data, in the blended transported frame of the uv's atlas ([`normal_map`]).
+    pub(super) fn sample_normal(&mut self, args: &[Value]) -> V {
+        let saved = self.srgb;
+        self.srgb = false;
+        let texel = self.sample(args, 4).vec3();
+        self.srgb = saved;
+        let strength = args.get(2).map_or(1.0, |s| self.value(s).x());
+        let green = match args.get(3) {
+            Some(Value::Str(c)) => green_sign(c),
+            _ => green_sign("gl"),
+        };
+        let frame = match args.get(1).map(Value::atlases) {
+            Some(a) if a.len() == 1 => a.first().map(|&k| self.atlas_sample(k)),
+            _ => None,
+        };
+        let (t, b) = frame.map_or((DVec3::ZERO, DVec3::ZERO), |s| (s.tangent, s.bitangent));
+        vec3v(normal_map(texel, t, b, self.n, strength, green))
+    }
+
+    /// `sample(texture, uv, wrap)` (the wrap mode is argument `wrap`): `textureSampleGrad`
+    /// with the emitter's analytic derivatives (the uv expression displaced by one
+    /// footprint along each tangent).
+    pub(super) fn sample(&mut self, args: &[Value], wrap: usize) -> V {
         let zero = V::Num([0.0; 4], 4);
-        let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(2))
+        let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(wrap))
         else {
             return zero;
         };
@@ -464,6 +489,7 @@ pub(super) fn is_field_builtin(builtin: BuiltinId) -> bool {
         B::Checker
         | B::Grid
         | B::Sample
+        | B::SampleNormal
         | B::Cross
         | B::Normalize
         | B::Length

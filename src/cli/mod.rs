@@ -111,7 +111,8 @@ pub enum Command {
     /// Bake a textured scene into a textured mesh with a seamless atlas (binary glTF).
     ///
     /// Meshes the shape's surface (dual contouring), makes one quadrilateral chart per
-    /// quad, samples the scene's material at every texel on the GPU (border texels are
+    /// quad (flat layout) or grows conforming rectangles of quads (--layout packed),
+    /// samples the scene's material at every texel on the GPU (border texels are
     /// computed once and shared), filters the boundary-symmetric mip levels of the
     /// Seamless Texture Atlases paper, and writes a .glb with POSITION, NORMAL, TANGENT,
     /// TEXCOORD_0 and a PBR material. Exit status: 0 on success, 1 when the scene has

@@ -359,21 +359,7 @@ pub fn eval_materials(
     }
     let d = &gpu.device;
     let table = &module.manifest.bindings;
-    let images = module
-        .manifest
-        .textures
-        .iter()
-        .map(|t| {
-            let chain = textures.get(&t.path).ok_or_else(|| {
-                GpuError::Texture(format!("no decoded image for texture \"{}\"", t.path))
-            })?;
-            let image = upload(gpu, chain, &t.path, t.srgb)?;
-            Ok((
-                image.create_view(&Default::default()),
-                sampler(gpu, &t.wrap),
-            ))
-        })
-        .collect::<Result<Vec<_>, GpuError>>()?;
+    let images = upload_all(gpu, module, textures)?;
     let slot = |r: Resource| {
         table
             .iter()
@@ -389,21 +375,7 @@ pub fn eval_materials(
     let (pipeline, layout0, layout1) =
         gpu.scoped(|| material_pipeline(d, module, [points_at, normals_at, results_at]))?;
     let group0 = gpu.scoped(|| {
-        let entries: Vec<wgpu::BindGroupEntry> = table
-            .iter()
-            .filter(|b| b.group == RENDER_GROUP)
-            .filter_map(|b| {
-                let resource = match b.resource {
-                    Resource::Texture(i) => wgpu::BindingResource::TextureView(&images.get(i)?.0),
-                    Resource::Sampler(i) => wgpu::BindingResource::Sampler(&images.get(i)?.1),
-                    _ => return None,
-                };
-                Some(wgpu::BindGroupEntry {
-                    binding: b.binding,
-                    resource,
-                })
-            })
-            .collect();
+        let entries = texture_group_entries(module, &images);
         d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("material textures"),
             layout: &layout0,

@@ -84,14 +84,16 @@ fn sdfc_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
 // tangent part scaled by strength. The surface normal where the frame is degenerate
 // (a failed atlas sample).
 fn sdfc_normal_map(texel: vec4<f32>, t: vec3<f32>, b: vec3<f32>, n: vec3<f32>, strength: f32, green: f32) -> vec3<f32> {
-    let s = t + cross(b, n);
+    // A mirrored frame (the atlas's `mirror`) is left-handed and keeps its handedness.
+    let hand = select(1.0, -1.0, dot(cross(t, b), n) < 0.0);
+    let s = t + hand * cross(b, n);
     let sp = s - n * dot(n, s);
     let len = length(sp);
     if (!(len >= 1e-6)) {
         return n;
     }
     let tt = sp / len;
-    let bb = cross(n, tt);
+    let bb = hand * cross(n, tt);
     let c = texel.rgb * 2.0 - vec3<f32>(1.0);
     return sdfc_normalize_or(tt * (c.x * strength) + bb * (c.y * green * strength) + n * c.z, n);
 }

@@ -66,6 +66,8 @@ codes! {
     W_OBSTRUCTION = "W0005": "a cycle of merges that cannot close into one uv chart (a topological obstruction)";
     W_SEED_JUMP = "W0006": "a seed that projection moved onto another part of the surface";
     W_TANGENT_PARALLEL = "W0007": "a seed tangent parallel to the surface normal (the default frame is used)";
+    W_MIRRORED_SEED = "W0008": "a seed on the mirrored side of an atlas's `mirror` plane (never used)";
+    W_NO_REST_POSE = "W0009": "an atlas whose shape the render uses through a warp without an inverse (`elongate`), or in too many places";
     N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
     N_TRUNCATED = "N0002": "more diagnostics than a file may report; the rest are counted, not shown";
 }

@@ -27,7 +27,7 @@ impl SeedGridChoice {
     }
 }
 
-use super::emit::{lit, vec3, Writer};
+use super::emit::{lit, point_expr, vec3, Writer};
 use super::template;
 use crate::uv::grid::SeedGrid;
 use crate::uv::Atlas;
@@ -110,9 +110,147 @@ pub fn emit(
             ),
         ),
         ("sigma", lit(atlas.sigma)),
+        ("entry", entry(k, atlas)),
         ("max_distance", lit(p.max_distance)),
     ];
     template::fill(template::ATLAS, &values)
+}
+
+/// The body of `atlas_K(x)`: Alg. 2, mirrored when the atlas has a `mirror` plane
+/// (as `Atlas::sample_with`). Reflecting a rotation's quaternion (v, w) through the
+/// plane of normal n gives (−reflect(v, n), w).
+fn entry(k: usize, atlas: &Atlas) -> String {
+    let Some(n) = atlas.mirror else {
+        return format!("    return atlas_{k}_alg2(x);
+");
+    };
+    let n = vec3(n);
+    format!(
+        "    let n = {n};
+    let side = dot(x, n);
+    if (side >= 0.0) {{
+        return atlas_{k}_alg2(x);
+    }}
+    var s = atlas_{k}_alg2(x - 2.0 * side * n);
+    s.tangent = reflect(s.tangent, n);
+    s.bitangent = reflect(s.bitangent, n);
+    s.transport = vec4<f32>(-reflect(s.transport.xyz, n), s.transport.w);
+    return s;
+"
+    )
+}
+
+/// `atlas_K_at(p) -> AtlasSample`: what materials and the atlas views read at a point of
+/// the render target (`Atlas::sample_at` on the CPU). Alg. 2 at the rest point ω⁻¹(p)
+/// of the occurrence of the atlas's shape that p lies on (§5.1, `ir::rest`), moved onto
+/// the surface, with the frames carried back by the inverse of ω⁻¹'s Jacobian.
+pub fn at(k: usize, atlas: &Atlas) -> String {
+    let rest = &atlas.rest;
+    let mut out = String::new();
+    if rest.is_identity() {
+        out.push_str(&format!(
+            "fn atlas_{k}_at(p: vec3<f32>) -> AtlasSample {{
+    return atlas_{k}(atlas_{k}_onto(p));
+}}
+
+"
+        ));
+        return out;
+    }
+    // One function per occurrence: ω_i⁻¹.
+    for (i, o) in rest.occurrences.iter().enumerate() {
+        let mut body = String::new();
+        let mut q = String::from("p");
+        for (j, op) in o.steps.iter().enumerate() {
+            let e = point_expr(op, &q).unwrap_or_else(|| q.clone());
+            body.push_str(&format!("    let q{j} = {e};
+"));
+            q = format!("q{j}");
+        }
+        out.push_str(&format!(
+            "fn atlas_{k}_rest{i}(p: vec3<f32>) -> vec3<f32> {{
+{body}    return {q};
+}}
+
+"
+        ));
+    }
+    // The occurrence whose rest point is nearest the surface.
+    let mut pick = String::from("    var occ = 0u;
+    var q = atlas_0_rest0(p);
+")
+        .replace("atlas_0_", &format!("atlas_{k}_"));
+    if rest.occurrences.len() > 1 {
+        pick.push_str(&format!("    var best = abs(atlas_{k}_f(q));
+"));
+        for i in 1..rest.occurrences.len() {
+            pick.push_str(&format!(
+                "    let q{i} = atlas_{k}_rest{i}(p);
+    let f{i} = abs(atlas_{k}_f(q{i}));
+    if (f{i} < best) {{
+        best = f{i};
+        q = q{i};
+        occ = {i}u;
+    }}
+"
+            ));
+        }
+    }
+    let arms: String = rest
+        .occurrences
+        .iter()
+        .enumerate()
+        .map(|(i, _)| format!("        case {i}u: {{ return atlas_{k}_rest{i}(p); }}
+"))
+        .collect();
+    out.push_str(&format!(
+        "fn atlas_{k}_rest(p: vec3<f32>, occ: u32) -> vec3<f32> {{
+    switch occ {{
+{arms}        default: {{ return p; }}
+    }}
+}}
+
+"
+    ));
+    let moves: Vec<String> = rest
+        .occurrences
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| o.moves_frames())
+        .map(|(i, _)| format!("occ == {i}u"))
+        .collect();
+    let frames = if moves.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "    if ({}) {{
+        // The columns of ω⁻¹'s Jacobian; tangents map by its inverse (rows' cross products).
+        let h = {h};
+        let c0 = (atlas_{k}_rest(p + vec3<f32>(h, 0.0, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(h, 0.0, 0.0), occ)) / (2.0 * h);
+        let c1 = (atlas_{k}_rest(p + vec3<f32>(0.0, h, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, h, 0.0), occ)) / (2.0 * h);
+        let c2 = (atlas_{k}_rest(p + vec3<f32>(0.0, 0.0, h), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, 0.0, h), occ)) / (2.0 * h);
+        let rows = transpose(mat3x3<f32>(c0, c1, c2));
+        let det = dot(rows[0], cross(rows[1], rows[2]));
+        if (abs(det) > 1e-12) {{
+            let inv = mat3x3<f32>(cross(rows[1], rows[2]), cross(rows[2], rows[0]), cross(rows[0], rows[1])) * (1.0 / det);
+            s.tangent = inv * s.tangent;
+            s.bitangent = inv * s.bitangent;
+        }}
+    }}
+",
+            moves.join(" || "),
+            h = lit(atlas.params.h_gradient)
+        )
+    };
+    out.push_str(&format!(
+        "fn atlas_{k}_at(p: vec3<f32>) -> AtlasSample {{
+{pick}    var s = atlas_{k}(atlas_{k}_onto(q));
+{frames}    return s;
+}}
+
+"
+    ));
+    out
 }
 
 /// The atlas's constants: seeds (position, normal, e1, offset), the merge graph's

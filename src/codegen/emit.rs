@@ -182,40 +182,20 @@ impl Writer {
                 };
                 self.line(&format!("let {d} = {f}({da}, {db}, {});", lit(*k)));
             }
-            Op::Translate { offset, child } => {
-                return self.point(shape, *child, &format!("{p} - {}", vec3(*offset)))
-            }
-            Op::Rotate { inverse, child } => {
-                return self.point(shape, *child, &format!("{} * {p}", mat3(*inverse)))
+            Op::Translate { child, .. } | Op::Rotate { child, .. } => {
+                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                return self.point(shape, *child, &q);
             }
             Op::Scale { factor, child } => {
-                let dc = self.point(shape, *child, &format!("{p} / {}", vec3(*factor)));
+                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                let dc = self.point(shape, *child, &q);
                 self.line(&format!(
                     "let {d} = vec2<f32>({dc}.x * {}, {dc}.y);",
                     lit(factor.min_element())
                 ));
             }
-            Op::Twist {
-                frame,
-                rate,
-                radius,
-                child,
-            }
-            | Op::Bend {
-                frame,
-                rate,
-                radius,
-                child,
-            } => {
-                let warp = if matches!(shape[id].op, Op::Twist { .. }) {
-                    "op_twist"
-                } else {
-                    "op_bend"
-                };
-                let inner = apply(
-                    frame.transpose(),
-                    &format!("{warp}({}, {})", apply(*frame, p), lit(*rate)),
-                );
+            Op::Twist { radius, child, .. } | Op::Bend { radius, child, .. } => {
+                let inner = point_expr(&shape[id].op, p).unwrap_or_default();
                 if radius.is_finite() {
                     let l = self.fresh("l");
                     self.line(&format!("let {l} = length({p});"));
@@ -248,14 +228,9 @@ impl Writer {
                     return self.point(shape, *child, &inner);
                 }
             }
-            Op::Repeat { period, child } => {
-                return self.point(shape, *child, &format!("op_repeat({p}, {})", vec3(*period)))
-            }
-            Op::Mirror { normal, child } => {
-                return self.point(shape, *child, &format!("op_mirror({p}, {})", vec3(*normal)))
-            }
-            Op::Elongate { h, child } => {
-                return self.point(shape, *child, &format!("op_elongate({p}, {})", vec3(*h)))
+            Op::Repeat { child, .. } | Op::Mirror { child, .. } | Op::Elongate { child, .. } => {
+                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                return self.point(shape, *child, &q);
             }
             Op::Round { r, child } => {
                 let dc = self.shape(shape, *child, p);
@@ -343,6 +318,32 @@ impl Writer {
         self.line(&format!("let {q} = {expr};"));
         self.shape(shape, child, &q)
     }
+}
+
+/// The WGSL of the point at which a point-mapping op evaluates its child (the
+/// `ir::rest::child_point` of the CPU), for the point expression `p`; `None` for ops
+/// that are not point maps.
+pub fn point_expr(op: &Op, p: &str) -> Option<String> {
+    Some(match op {
+        Op::Translate { offset, .. } => format!("{p} - {}", vec3(*offset)),
+        Op::Rotate { inverse, .. } => format!("{} * {p}", mat3(*inverse)),
+        Op::Scale { factor, .. } => format!("{p} / {}", vec3(*factor)),
+        Op::Twist { frame, rate, .. } | Op::Bend { frame, rate, .. } => {
+            let warp = if matches!(op, Op::Twist { .. }) {
+                "op_twist"
+            } else {
+                "op_bend"
+            };
+            apply(
+                frame.transpose(),
+                &format!("{warp}({}, {})", apply(*frame, p), lit(*rate)),
+            )
+        }
+        Op::Repeat { period, .. } => format!("op_repeat({p}, {})", vec3(*period)),
+        Op::Mirror { normal, .. } => format!("op_mirror({p}, {})", vec3(*normal)),
+        Op::Elongate { h, .. } => format!("op_elongate({p}, {})", vec3(*h)),
+        _ => return None,
+    })
 }
 
 /// What a surface field needs that the generator cannot give yet.

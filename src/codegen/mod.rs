@@ -338,6 +338,7 @@ impl Generator<'_> {
             let start = self.out.len();
             let code = atlas::emit(k, a, options.walk, &options.seed_grid.grid(a))?;
             self.out.push_str(&code);
+            self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
         }
         Ok(())
@@ -357,7 +358,7 @@ impl Generator<'_> {
             None => (!atlases.is_empty()).then_some(0),
         };
         let (sample, merged) = match chosen {
-            Some(k) => (format!("atlas_{k}(p)"), format!("atlas_{k}_merged(i, j)")),
+            Some(k) => (format!("atlas_{k}_at(p)"), format!("atlas_{k}_merged(i, j)")),
             None => (
                 String::from("uv_failed(UV_TOO_FAR, -1.0)"),
                 String::from("false"),
@@ -498,7 +499,7 @@ impl Generator<'_> {
             .iter()
             .map(|&k| {
                 format!(
-                    "            let atlas_sample_{0} = atlas_{0}(atlas_{0}_onto(p));\n",
+                    "            let atlas_sample_{0} = atlas_{0}_at(p);\n",
                     k.index()
                 )
             })

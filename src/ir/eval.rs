@@ -168,8 +168,6 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
                 Csg::Difference => (-smin(-da, db, *k), if da >= -db { ma } else { mb }),
             }
         }
-        Op::Translate { offset, child } => eval_node(shape, *child, p - *offset),
-        Op::Rotate { inverse, child } => eval_node(shape, *child, *inverse * p),
         Op::Scale { factor, child } => {
             let (d, m) = eval_node(shape, *child, p / *factor);
             (d * factor.min_element(), m)
@@ -177,29 +175,16 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
         Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > warp_outer(*radius) => {
             (p.length() - radius, 0)
         }
-        Op::Twist {
-            frame, rate, child, ..
-        } => {
-            let q = *frame * p;
-            let (s, c) = (rate * q.y).sin_cos();
-            let t = DVec3::new(c * q.x - s * q.z, q.y, s * q.x + c * q.z);
-            eval_node(shape, *child, frame.transpose() * t)
+        Op::Translate { child, .. }
+        | Op::Rotate { child, .. }
+        | Op::Twist { child, .. }
+        | Op::Bend { child, .. }
+        | Op::Repeat { child, .. }
+        | Op::Mirror { child, .. }
+        | Op::Elongate { child, .. } => {
+            let op = &shape[id].op;
+            eval_node(shape, *child, super::rest::child_point(op, p))
         }
-        Op::Bend {
-            frame, rate, child, ..
-        } => {
-            let q = *frame * p;
-            let (s, c) = (rate * q.x).sin_cos();
-            let t = DVec3::new(c * q.x - s * q.y, s * q.x + c * q.y, q.z);
-            eval_node(shape, *child, frame.transpose() * t)
-        }
-        Op::Repeat { period, child } => {
-            eval_node(shape, *child, p - *period * (p / *period).round())
-        }
-        Op::Mirror { normal, child } => {
-            eval_node(shape, *child, p - 2.0 * p.dot(*normal).min(0.0) * *normal)
-        }
-        Op::Elongate { h, child } => eval_node(shape, *child, p - p.clamp(-*h, *h)),
         Op::Round { r, child } => {
             let (d, m) = eval_node(shape, *child, p);
             (d - r, m)

@@ -273,7 +273,7 @@ impl<'a> MaterialEval<'a> {
     /// The generated `atlas_K(p)` on the CPU: Alg. 2 of the prepared atlas.
     pub fn atlas_values(&self, atlas: AtlasId, p: DVec3) -> AtlasValues {
         match self.atlases.get(atlas.index()) {
-            Some(Some(a)) => AtlasValues::from_sample(&a.sample(a.onto(p))),
+            Some(Some(a)) => AtlasValues::from_sample(&a.sample_at(p)),
             _ => AtlasValues::FAILED,
         }
     }

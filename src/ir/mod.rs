@@ -12,6 +12,7 @@ pub mod displace;
 pub mod eval;
 mod lower;
 pub mod material;
+pub mod rest;
 
 pub use displace::Height;
 pub use lower::{lower, lower_shape, lower_with};

@@ -450,6 +450,7 @@ pub static ATLAS_SETTINGS: &[SettingSpec] = &[
     set("min_reach", Float, Some(F(0.01)), Check::Positive, false, "r_min: the walk fails (not_reached) when it ends farther than this from the seed."),
     set("reproject", Bool, Some(Dflt::B(false)), Check::None, false, "Project every step back onto the surface (Eq. 18)."),
     set("sigma", Float, None, Check::Positive, false, "σ: half-width of the blend band between merged seeds (default: the shortest merge edge / 3)."),
+    set("mirror", Vec3, None, Check::NonZero, false, "The normal of a symmetry plane through the shape's origin (§5.1): a point on its negative side takes the uv of its reflection, e.g. `mirror = [1, 0, 0]` queries (|x|, y, z). Seeds are needed on the positive side only."),
 ];
 
 /// Settings of a `material` block. Each may be a surface field.

@@ -53,6 +53,8 @@ pub struct AtlasParams {
     pub min_reach: f64,
     pub reproject: bool,
     pub sigma: Option<f64>,
+    /// The normal of the symmetry plane of `mirror` (not normalized; checked non-zero).
+    pub mirror: Option<[f64; 3]>,
 }
 
 impl AtlasParams {
@@ -66,6 +68,7 @@ impl AtlasParams {
             min_reach: s.float("min_reach"),
             reproject: matches!(s.get("reproject"), Some(Value::Bool(true))),
             sigma: s.get("sigma").and_then(|v| v.as_float()),
+            mirror: s.get("mirror").and_then(|v| v.as_vec3()),
         }
     }
 }

@@ -6,6 +6,7 @@
 use super::grid::SeedGrid;
 use super::logmap::{gradient, log_map, LogMap, Params, Seed, Status};
 use super::merge::{self, MergeGraph};
+use crate::ir::rest::RestQuery;
 use crate::ir::{eval, Shape};
 use crate::sema::AtlasDef;
 use glam::{DMat3, DVec2, DVec3};
@@ -55,6 +56,12 @@ pub struct Atlas {
     pub sigma: f64,
     /// Pairs of seeds that project to the same point (within 1e-3 · scale).
     pub coincident: Vec<(usize, usize)>,
+    /// The unit normal of the symmetry plane (through the origin) of the `mirror`
+    /// setting: points on its negative side are queried at their reflection (§5.1).
+    pub mirror: Option<DVec3>,
+    /// Where the atlas's shape occurs in the render target: materials query the uv at
+    /// the rest pose ([`Atlas::sample_at`]); set by `diagnose::prepare_all`.
+    pub rest: RestQuery,
 }
 
 /// Choices for [`Atlas::sample_with`].
@@ -176,6 +183,8 @@ impl Atlas {
             graph,
             sigma,
             coincident,
+            mirror: a.mirror.map(|n| DVec3::from_array(n).normalize()),
+            rest: RestQuery::default(),
         })
     }
 
@@ -310,9 +319,41 @@ impl Atlas {
         self.sample_with(x, Search::default())
     }
 
+    /// [`Atlas::sample`] with a choice of search. With a `mirror` plane, a point on its
+    /// negative side is sampled at its reflection, and the transported frames and
+    /// transport come back reflected (so a mirrored frame is left-handed).
     pub fn sample_with(&self, x: DVec3, search: Search) -> Sample {
-        let nearest = self.nearest(x, search.brute_force);
-        self.blend(x, nearest)
+        let Some(n) = self.mirror.filter(|n| x.dot(*n) < 0.0) else {
+            let nearest = self.nearest(x, search.brute_force);
+            return self.blend(x, nearest);
+        };
+        let r = DMat3::IDENTITY - 2.0 * DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+        let y = r * x;
+        let mut s = self.blend(y, self.nearest(y, search.brute_force));
+        s.tangent = r * s.tangent;
+        s.bitangent = r * s.bitangent;
+        s.transport = r * s.transport * r;
+        s
+    }
+
+    /// What a material reads at a point `p` of the render target (the generated
+    /// `atlas_K_at`): Alg. 2 at the rest point ω⁻¹(p) of the occurrence of the atlas's
+    /// shape that `p` lies on ([`RestQuery`]), moved onto the surface ([`Atlas::onto`]),
+    /// with the transported frames carried back by the differential of ω.
+    pub fn sample_at(&self, p: DVec3) -> Sample {
+        let Some((i, q)) = self.rest.locate(&self.shape, p) else {
+            return self.sample(self.onto(p));
+        };
+        let mut s = self.sample(self.onto(q));
+        let occ = &self.rest.occurrences[i];
+        if occ.moves_frames() {
+            let j = occ.jacobian(p, self.params.h_gradient);
+            if let Some(inv) = (j.determinant().abs() > 1e-12).then(|| j.inverse()) {
+                s.tangent = inv * s.tangent;
+                s.bitangent = inv * s.bitangent;
+            }
+        }
+        s
     }
 
     /// The blend of Alg. 2 around an already found nearest seed. `uv` comes back in the
@@ -422,15 +463,17 @@ pub struct Sample {
 /// `sdfc_tangent_frame` computes the same in f32.
 pub fn tangent_frame(t: DVec3, b: DVec3, n: DVec3) -> Option<(DVec3, DVec3)> {
     // For a right-handed frame b = n × t, b × n is t again: their mean is the
-    // polar factor's first column.
-    let s = t + b.cross(n);
+    // polar factor's first column. A mirrored frame (§5.1) is left-handed, b = −n × t,
+    // and keeps its handedness.
+    let hand = if t.cross(b).dot(n) < 0.0 { -1.0 } else { 1.0 };
+    let s = t + hand * b.cross(n);
     let s = s - n * n.dot(s);
     let len = s.length();
     if !(len >= 1e-6) {
         return None;
     }
     let t = s / len;
-    Some((t, n.cross(t)))
+    Some((t, hand * n.cross(t)))
 }
 
 /// Eq. 39: the approximate signed distance from x to the Voronoi frontier between seeds

@@ -16,13 +16,21 @@ use glam::DVec3;
 pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
+    let target = program
+        .render
+        .as_ref()
+        .and_then(|r| ir::lower_shape(&r.target));
     for def in &program.atlases {
         let Some(shape) = ir::lower_shape(&def.shape) else {
             out.push(None);
             continue;
         };
         match Atlas::prepare(def, &shape) {
-            Ok(a) => {
+            Ok(mut a) => {
+                if let Some(t) = &target {
+                    a.rest = ir::rest::RestQuery::find(t, &shape);
+                    rest_pose(def, &a, program, &mut diags);
+                }
                 diags.extend(diagnostics(def, &a));
                 out.push(Some(a));
             }
@@ -58,7 +66,60 @@ pub fn diagnostics(def: &AtlasDef, atlas: &Atlas) -> Vec<Diagnostic> {
     coincident_seeds(def, atlas, &mut out);
     unreachable_merges(def, atlas, &mut out);
     obstructions(def, atlas, &mut out);
+    mirrored_seeds(def, atlas, &mut out);
     out
+}
+
+/// Seeds on the negative side of the `mirror` plane: their side takes the uv of the
+/// other, so they are never the nearest seed of any point.
+fn mirrored_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
+    let Some(n) = atlas.mirror else { return };
+    let tol = 1e-6 * scale(&atlas.shape);
+    for (i, s) in atlas.seeds.iter().enumerate() {
+        let side = s.seed.p.dot(n);
+        if side < -tol {
+            out.push(
+                Diagnostic::warning(
+                    codes::W_MIRRORED_SEED,
+                    format!(
+                        "seed `{}` of atlas `{}` is on the mirrored side of its `mirror` plane",
+                        def.seeds[i].name, def.name
+                    ),
+                    def.seeds[i].position_span,
+                    "this side takes the uv of its reflection, so this seed is never used",
+                )
+                .with_help(format!(
+                    "place it on the other side, at {}, or remove it",
+                    fmt_point(s.written - 2.0 * s.written.dot(n) * n)
+                )),
+            );
+        }
+    }
+}
+
+/// Where the render target uses the atlas's shape through `elongate` (no inverse) or in
+/// more places than are followed.
+fn rest_pose(def: &AtlasDef, atlas: &Atlas, program: &Program, out: &mut Vec<Diagnostic>) {
+    let Some(render) = &program.render else { return };
+    let why = if atlas.rest.stretched {
+        "through `elongate`, which has no inverse: the uv are constant across its stretched middle"
+    } else if atlas.rest.truncated {
+        "in more places than the rest-pose query follows; the others take the uv at the point itself"
+    } else {
+        return;
+    };
+    out.push(
+        Diagnostic::warning(
+            codes::W_NO_REST_POSE,
+            format!("the render uses the shape of atlas `{}` {why}", def.name),
+            render.target_span,
+            "the render target",
+        )
+        .with_note(format!(
+            "uv follow a warped shape by querying the atlas at the rest pose ω⁻¹(x) (§5.1); at most {} places are followed",
+            ir::rest::MAX_OCCURRENCES
+        )),
+    );
 }
 
 /// Seeds that projection moved far (onto another part) or visibly (onto the surface).

@@ -1,0 +1,219 @@
+//! Rest-pose queries (§5.1 of the Implicit UVs paper, Fig. 13 row A).
+//!
+//! An atlas is declared on a shape `body`; the render target may use `body` under
+//! transforms and warps ω (`body.twist(…).translate(…)`). A point x on the rendered
+//! surface ω(M) satisfies f(ω⁻¹(x)) = 0, so its uv is Alg. 2 on f queried at ω⁻¹(x): the
+//! walk runs on the rest pose and the texture follows the deformation at no extra cost.
+//!
+//! Every IR transform already evaluates its child at ω⁻¹(p) (translations, rotations,
+//! scales, twists, bends, and the folds of `repeat` and `mirror`), so ω⁻¹ is the
+//! composition of the point maps on the path from the target's root to the atlas's
+//! shape. [`RestQuery::find`] finds every place where the atlas's shape occurs in the
+//! target (structurally: the same subtree); where it occurs several times (a rest-pose
+//! copy beside a deformed one), a point takes the occurrence whose rest point lies
+//! nearest the atlas's surface (smallest |f(ω_i⁻¹(x))|).
+//!
+//! The transported seed frames (the tangent frame of normal maps) live in the rest
+//! pose; they are carried to the deformed surface by the differential of ω, which is
+//! the inverse of the Jacobian of ω⁻¹ (by central differences).
+//!
+//! `elongate` has no inverse (it collapses its middle), so uv through it are constant
+//! across the stretched part; [`RestQuery::stretched`] says so, for a warning.
+
+use super::{eval, NodeId, Op, Shape};
+use glam::{DMat3, DVec3};
+
+/// Most occurrences followed; beyond it the rest are left out (and said so).
+pub const MAX_OCCURRENCES: usize = 16;
+
+/// One place the atlas's shape occurs in the target: the point maps from the target's
+/// root down to it (each op's own child point, see [`child_point`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Occurrence {
+    pub steps: Vec<Op>,
+}
+
+impl Occurrence {
+    /// ω⁻¹(p).
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        self.steps.iter().fold(p, |q, op| child_point(op, q))
+    }
+
+    /// Whether tangent vectors change on the way (anything but translations).
+    pub fn moves_frames(&self) -> bool {
+        self.steps.iter().any(|op| !matches!(op, Op::Translate { .. }))
+    }
+
+    /// The Jacobian of ω⁻¹ at `p` (columns ∂ω⁻¹/∂x, ∂/∂y, ∂/∂z) by central differences
+    /// of step `h`.
+    pub fn jacobian(&self, p: DVec3, h: f64) -> DMat3 {
+        let c = |e: DVec3| (self.apply(p + e * h) - self.apply(p - e * h)) / (2.0 * h);
+        DMat3::from_cols(c(DVec3::X), c(DVec3::Y), c(DVec3::Z))
+    }
+}
+
+/// Where an atlas's shape occurs in a render target.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RestQuery {
+    /// Empty when the target does not contain the atlas's shape: the uv are then queried
+    /// at the point itself (the projection onto the atlas's surface).
+    pub occurrences: Vec<Occurrence>,
+    /// Some path goes through `elongate`, which has no inverse.
+    pub stretched: bool,
+    /// More than [`MAX_OCCURRENCES`] occurrences: the rest were left out.
+    pub truncated: bool,
+}
+
+impl RestQuery {
+    /// Every occurrence of `atlas_shape` in `target`.
+    pub fn find(target: &Shape, atlas_shape: &Shape) -> RestQuery {
+        let mut q = RestQuery::default();
+        if target.nodes.is_empty() || atlas_shape.nodes.is_empty() {
+            return q;
+        }
+        let mut steps = Vec::new();
+        let mut stretched = false;
+        q.visit(target, target.root(), atlas_shape, &mut steps, &mut stretched);
+        q
+    }
+
+    fn visit(
+        &mut self,
+        target: &Shape,
+        id: NodeId,
+        atlas: &Shape,
+        steps: &mut Vec<Op>,
+        stretched: &mut bool,
+    ) {
+        if same(target, id, atlas, atlas.root()) {
+            if self.occurrences.len() == MAX_OCCURRENCES {
+                self.truncated = true;
+            } else {
+                self.occurrences.push(Occurrence {
+                    steps: steps.clone(),
+                });
+                self.stretched |= *stretched;
+            }
+            return;
+        }
+        let op = &target[id].op;
+        let maps = is_point_map(op);
+        let was = *stretched;
+        if maps {
+            steps.push(op.clone());
+            *stretched |= matches!(op, Op::Elongate { .. });
+        }
+        for c in op.children() {
+            stacker::maybe_grow(64 * 1024, 1024 * 1024, || {
+                self.visit(target, c, atlas, steps, stretched)
+            });
+        }
+        if maps {
+            steps.pop();
+        }
+        *stretched = was;
+    }
+
+    /// Whether the query is the point itself.
+    pub fn is_identity(&self) -> bool {
+        self.occurrences.len() <= 1 && self.occurrences.iter().all(|o| o.steps.is_empty())
+    }
+
+    /// The occurrence a point belongs to (the one whose rest point is nearest the
+    /// atlas's surface; the first on ties) and its rest point; `None` without any.
+    pub fn locate(&self, atlas_shape: &Shape, p: DVec3) -> Option<(usize, DVec3)> {
+        let mut best: Option<(usize, DVec3, f64)> = None;
+        for (i, o) in self.occurrences.iter().enumerate() {
+            let q = o.apply(p);
+            if self.occurrences.len() == 1 {
+                return Some((0, q));
+            }
+            let f = eval::distance(atlas_shape, q).abs();
+            if best.is_none_or(|b| f < b.2) {
+                best = Some((i, q, f));
+            }
+        }
+        best.map(|(i, q, _)| (i, q))
+    }
+}
+
+/// Whether an op evaluates its child at a moved point.
+pub fn is_point_map(op: &Op) -> bool {
+    matches!(
+        op,
+        Op::Translate { .. }
+            | Op::Rotate { .. }
+            | Op::Scale { .. }
+            | Op::Twist { .. }
+            | Op::Bend { .. }
+            | Op::Repeat { .. }
+            | Op::Mirror { .. }
+            | Op::Elongate { .. }
+    )
+}
+
+/// The point at which `op` evaluates its child, for the ops of [`is_point_map`] (p
+/// itself for the others). Twists and bends outside their bound use the bounding
+/// sphere instead of the child ([`eval`]); that region holds no surface.
+pub fn child_point(op: &Op, p: DVec3) -> DVec3 {
+    match op {
+        Op::Translate { offset, .. } => p - *offset,
+        Op::Rotate { inverse, .. } => *inverse * p,
+        Op::Scale { factor, .. } => p / *factor,
+        Op::Twist { frame, rate, .. } => {
+            let q = *frame * p;
+            let (s, c) = (rate * q.y).sin_cos();
+            frame.transpose() * DVec3::new(c * q.x - s * q.z, q.y, s * q.x + c * q.z)
+        }
+        Op::Bend { frame, rate, .. } => {
+            let q = *frame * p;
+            let (s, c) = (rate * q.x).sin_cos();
+            frame.transpose() * DVec3::new(c * q.x - s * q.y, s * q.x + c * q.y, q.z)
+        }
+        Op::Repeat { period, .. } => p - *period * (p / *period).round(),
+        Op::Mirror { normal, .. } => p - 2.0 * p.dot(*normal).min(0.0) * *normal,
+        Op::Elongate { h, .. } => p - p.clamp(-*h, *h),
+        _ => p,
+    }
+}
+
+/// Whether subtree `x` of `a` and subtree `y` of `b` are the same shape.
+pub fn same(a: &Shape, x: NodeId, b: &Shape, y: NodeId) -> bool {
+    let (oa, ob) = (&a[x].op, &b[y].op);
+    if std::mem::discriminant(oa) != std::mem::discriminant(ob) {
+        return false;
+    }
+    let (ca, cb) = (oa.children(), ob.children());
+    if ca.len() != cb.len() || strip(oa) != strip(ob) {
+        return false;
+    }
+    ca.iter().zip(&cb).all(|(&i, &j)| {
+        stacker::maybe_grow(64 * 1024, 1024 * 1024, || same(a, i, b, j))
+    })
+}
+
+/// The op with its children's ids zeroed, to compare the op's own parameters.
+fn strip(op: &Op) -> Op {
+    let z = NodeId::new(0);
+    let mut o = op.clone();
+    match &mut o {
+        Op::Prim(_) => {}
+        Op::Csg { a, b, .. } => {
+            *a = z;
+            *b = z;
+        }
+        Op::Translate { child, .. }
+        | Op::Rotate { child, .. }
+        | Op::Scale { child, .. }
+        | Op::Twist { child, .. }
+        | Op::Bend { child, .. }
+        | Op::Repeat { child, .. }
+        | Op::Mirror { child, .. }
+        | Op::Elongate { child, .. }
+        | Op::Round { child, .. }
+        | Op::Shell { child, .. }
+        | Op::Paint { child, .. }
+        | Op::Displace { child, .. } => *child = z,
+    }
+    o
+}

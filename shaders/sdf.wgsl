@@ -155,6 +155,40 @@ fn op_difference(a: vec2<f32>, b: vec2<f32>, k: f32) -> vec2<f32> {
     return vec2<f32>(-op_smin(-a.x, b.x, k), select(b.y, a.y, a.x >= -b.x));
 }
 
+// Material blends (`scene_blend`): (distance, material a, material b, b's weight).
+// The material that dominates a blend: a up to half b's weight.
+fn op_dominant(m: vec4<f32>) -> f32 {
+    return select(m.z, m.y, m.w <= 0.5);
+}
+
+// A smooth union blends its operands' (dominant) materials with the distance blend's
+// own weight: b's is clamp(0.5 - 0.5 (b - a) / k, 0, 1), as in the polynomial smin.
+fn op_union_blend(a: vec4<f32>, b: vec4<f32>, k: f32) -> vec4<f32> {
+    if (k <= 0.0) {
+        return vec4<f32>(min(a.x, b.x), select(b.yzw, a.yzw, a.x <= b.x));
+    }
+    let ma = op_dominant(a);
+    let mb = op_dominant(b);
+    let t = clamp(0.5 - 0.5 * (b.x - a.x) / k, 0.0, 1.0);
+    if (ma == mb || t <= 0.0) {
+        return vec4<f32>(op_smin(a.x, b.x, k), ma, ma, 0.0);
+    }
+    if (t >= 1.0) {
+        return vec4<f32>(op_smin(a.x, b.x, k), mb, mb, 0.0);
+    }
+    return vec4<f32>(op_smin(a.x, b.x, k), ma, mb, t);
+}
+
+// A hard union, intersections and differences keep the materials of the operand that
+// bounds the result, blends included.
+fn op_intersection_blend(a: vec4<f32>, b: vec4<f32>, k: f32) -> vec4<f32> {
+    return vec4<f32>(-op_smin(-a.x, -b.x, k), select(b.yzw, a.yzw, a.x >= b.x));
+}
+
+fn op_difference_blend(a: vec4<f32>, b: vec4<f32>, k: f32) -> vec4<f32> {
+    return vec4<f32>(-op_smin(-a.x, b.x, k), select(b.yzw, a.yzw, a.x >= -b.x));
+}
+
 // Warps, in a frame whose y (twist) or x (bend) is the axis.
 fn op_twist(q: vec3<f32>, rate: f32) -> vec3<f32> {
     let c = cos(rate * q.y);

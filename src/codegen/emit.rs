@@ -66,6 +66,10 @@ pub struct Writer {
     own: Option<NodeId>,
     /// The displacements' heights the code calls (`height_ID`), once each.
     pub heights: Vec<std::sync::Arc<crate::ir::Height>>,
+    /// Material blend mode (`scene_blend`): every node is a `vec4<f32>` (distance,
+    /// material a, material b, b's weight) instead of (distance, material), and smooth
+    /// unions blend their operands' materials with the distance blend's weight.
+    pub blend: bool,
 }
 
 impl Writer {
@@ -81,6 +85,41 @@ impl Writer {
             emitted: std::collections::HashSet::new(),
             own: None,
             heights: Vec::new(),
+            blend: false,
+        }
+    }
+
+    /// A writer for a helper function of this one, in the same mode.
+    fn sub(&self, name: &str) -> Writer {
+        let mut w = Writer::new(name);
+        w.blend = self.blend;
+        w
+    }
+
+    /// The WGSL type of a node's value.
+    pub fn ty(&self) -> &'static str {
+        if self.blend {
+            "vec4<f32>"
+        } else {
+            "vec2<f32>"
+        }
+    }
+
+    /// A node's value with distance `e` and the material of `dc`.
+    fn with_d(&self, dc: &str, e: &str) -> String {
+        if self.blend {
+            format!("vec4<f32>({e}, {dc}.yzw)")
+        } else {
+            format!("vec2<f32>({e}, {dc}.y)")
+        }
+    }
+
+    /// A node's value with distance `e` and the single material `m`.
+    fn leaf(&self, e: &str, m: &str) -> String {
+        if self.blend {
+            format!("vec4<f32>({e}, {m}, {m}, 0.0)")
+        } else {
+            format!("vec2<f32>({e}, {m})")
         }
     }
 
@@ -105,14 +144,15 @@ impl Writer {
             // called from each: the WGSL stays linear in the scene.
             let name = format!("{}_n{}", self.prefix, id.index());
             if self.emitted.insert(id) {
-                let mut w = Writer::new(&name);
+                let mut w = self.sub(&name);
                 w.own = Some(id);
                 let dc = w.shape(shape, id, "p");
                 self.helpers.push_str(&w.helpers);
                 self.take_heights(&mut w);
                 let _ = writeln!(
                     self.helpers,
-                    "fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                    "fn {name}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
+                    self.ty(),
                     w.out
                 );
             }
@@ -170,7 +210,8 @@ impl Writer {
                         format!("sd_link({p}, {}, {}, {})", lit(*le), lit(*r1), lit(*r2))
                     }
                 };
-                self.line(&format!("let {d} = vec2<f32>({call}, 0.0);"));
+                let v = self.leaf(&call, "0.0");
+                self.line(&format!("let {d} = {v};"));
             }
             Op::Csg { op, k, a, b } => {
                 let da = self.shape(shape, *a, p);
@@ -180,7 +221,8 @@ impl Writer {
                     Csg::Intersection => "op_intersection",
                     Csg::Difference => "op_difference",
                 };
-                self.line(&format!("let {d} = {f}({da}, {db}, {});", lit(*k)));
+                let mode = if self.blend { "_blend" } else { "" };
+                self.line(&format!("let {d} = {f}{mode}({da}, {db}, {});", lit(*k)));
             }
             Op::Translate { child, .. } | Op::Rotate { child, .. } => {
                 let q = point_expr(&shape[id].op, p).unwrap_or_default();
@@ -189,36 +231,36 @@ impl Writer {
             Op::Scale { factor, child } => {
                 let q = point_expr(&shape[id].op, p).unwrap_or_default();
                 let dc = self.point(shape, *child, &q);
-                self.line(&format!(
-                    "let {d} = vec2<f32>({dc}.x * {}, {dc}.y);",
-                    lit(factor.min_element())
-                ));
+                let v = self.with_d(&dc, &format!("{dc}.x * {}", lit(factor.min_element())));
+                self.line(&format!("let {d} = {v};"));
             }
             Op::Twist { radius, child, .. } | Op::Bend { radius, child, .. } => {
                 let inner = point_expr(&shape[id].op, p).unwrap_or_default();
                 if radius.is_finite() {
                     let l = self.fresh("l");
                     self.line(&format!("let {l} = length({p});"));
-                    self.line(&format!("var {d}: vec2<f32>;"));
+                    self.line(&format!("var {d}: {};", self.ty()));
                     self.line(&format!(
                         "if ({l} > {}) {{",
                         lit(crate::ir::warp_outer(*radius))
                     ));
                     self.indent += 1;
-                    self.line(&format!("{d} = vec2<f32>({l} - {}, 0.0);", lit(*radius)));
+                    let v = self.leaf(&format!("{l} - {}", lit(*radius)), "0.0");
+                    self.line(&format!("{d} = {v};"));
                     self.indent -= 1;
                     self.line("} else {");
                     self.indent += 1;
                     // The child goes into a helper function, so chains of warps do not
                     // nest blocks (naga limits brace nesting).
                     let helper = self.fresh(&format!("{}_w", self.prefix));
-                    let mut inner_w = Writer::new(&helper);
+                    let mut inner_w = self.sub(&helper);
                     let dc = inner_w.shape(shape, *child, "p");
                     self.helpers.push_str(&inner_w.helpers);
                     self.take_heights(&mut inner_w);
                     let _ = writeln!(
                         self.helpers,
-                        "fn {helper}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                        "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
+                        self.ty(),
                         inner_w.out
                     );
                     self.line(&format!("{d} = {helper}({inner});"));
@@ -234,28 +276,25 @@ impl Writer {
             }
             Op::Round { r, child } => {
                 let dc = self.shape(shape, *child, p);
-                self.line(&format!(
-                    "let {d} = vec2<f32>({dc}.x - {}, {dc}.y);",
-                    lit(*r)
-                ));
+                let v = self.with_d(&dc, &format!("{dc}.x - {}", lit(*r)));
+                self.line(&format!("let {d} = {v};"));
             }
             Op::Shell { thickness, child } => {
                 let dc = self.shape(shape, *child, p);
-                self.line(&format!(
-                    "let {d} = vec2<f32>(abs({dc}.x) - {}, {dc}.y);",
-                    lit(thickness * 0.5)
-                ));
+                let v = self.with_d(&dc, &format!("abs({dc}.x) - {}", lit(thickness * 0.5)));
+                self.line(&format!("let {d} = {v};"));
             }
             Op::Displace { height, child } => {
                 // Eq. 58: the child in a helper (evaluated 7 times inside the band for Π_f).
                 let helper = self.fresh(&format!("{}_h", self.prefix));
-                let mut inner_w = Writer::new(&helper);
+                let mut inner_w = self.sub(&helper);
                 let dc = inner_w.shape(shape, *child, "p");
                 self.helpers.push_str(&inner_w.helpers);
                 self.take_heights(&mut inner_w);
                 let _ = writeln!(
                     self.helpers,
-                    "fn {helper}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {dc};\n}}\n",
+                    "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
+                    self.ty(),
                     inner_w.out
                 );
                 if !self.heights.iter().any(|h| h.id == height.id) {
@@ -263,10 +302,8 @@ impl Writer {
                 }
                 let b = self.fresh("b");
                 self.line(&format!("let {b} = {helper}({p});"));
-                self.line(&format!(
-                    "var {d} = vec2<f32>({b}.x - {}, {b}.y);",
-                    lit(height.hi)
-                ));
+                let v = self.with_d(&b, &format!("{b}.x - {}", lit(height.hi)));
+                self.line(&format!("var {d} = {v};"));
                 self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
                 self.indent += 1;
                 self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
@@ -295,10 +332,8 @@ impl Writer {
             }
             Op::Paint { material, child } => {
                 let dc = self.shape(shape, *child, p);
-                self.line(&format!(
-                    "let {d} = vec2<f32>({dc}.x, {});",
-                    lit(*material as f64)
-                ));
+                let v = self.leaf(&format!("{dc}.x"), &lit(*material as f64));
+                self.line(&format!("let {d} = {v};"));
             }
         }
         d

@@ -319,12 +319,36 @@ impl Generator<'_> {
         let start = self.out.len();
         let h = map_fn(&mut self.out, "scene_map", target);
         self.add_heights(h);
+        self.surface(target);
         let span = match (options.shape.as_deref(), &self.program.render) {
             (Some(n), _) => self.let_span(n),
             (None, Some(r)) => Some(r.target_span),
             (None, None) => scene.shapes.first().and_then(|s| self.let_span(&s.name)),
         };
         self.region(start, span, Definition::RenderedShape);
+    }
+
+    /// `scene_surface(id, p, n, footprint)`: the material the entry points shade with.
+    /// Where a smooth union has painted operands, `scene_blend` (the target in the
+    /// writer's blend mode, `ir::eval::eval_blend` on the CPU) gives two materials and
+    /// a weight, and their attributes mix (the normal renormalized); otherwise it is
+    /// `scene_material` of scene_map's material `id`.
+    fn surface(&mut self, target: &ir::Shape) {
+        if !target.blends_materials() {
+            self.out.push_str("fn scene_surface(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {\n    return scene_material(id, p, n, footprint);\n}\n\n");
+            return;
+        }
+        let mut w = emit::Writer::new("scene_blend");
+        w.blend = true;
+        let d = w.shape(target, target.root(), "p");
+        let _ = writeln!(
+            self.out,
+            "{}// Textured CSG: (distance, material a, material b, b's weight).\nfn scene_blend(p: vec3<f32>) -> vec4<f32> {{\n{}    return {d};\n}}\n",
+            w.helpers, w.out
+        );
+        let heights = std::mem::take(&mut w.heights);
+        self.add_heights(heights);
+        self.out.push_str("fn scene_surface(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {\n    let bl = scene_blend(p);\n    var m = scene_material(i32(bl.y + 0.5), p, n, footprint);\n    if (bl.w > 0.0) {\n        let o = scene_material(i32(bl.z + 0.5), p, n, footprint);\n        m.color = mix(m.color, o.color, bl.w);\n        m.roughness = mix(m.roughness, o.roughness, bl.w);\n        m.metallic = mix(m.metallic, o.metallic, bl.w);\n        m.emission = mix(m.emission, o.emission, bl.w);\n        m.normal = sdfc_normalize_or(mix(m.normal, o.normal, bl.w), n);\n    }\n    return m;\n}\n\n");
     }
 
     /// Every prepared atlas's code, from the atlas template.

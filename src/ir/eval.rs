@@ -142,8 +142,57 @@ pub fn smin(a: f64, b: f64, k: f64) -> f64 {
     a.min(b) - h * h * k * 0.25
 }
 
-/// Distance and material id (0 = default) of a shape at `p`.
+/// Distance and material id (0 = default) of a shape at `p`: the material that
+/// dominates there ([`Blend::dominant`]).
 pub fn eval(shape: &Shape, p: DVec3) -> (f64, u32) {
+    let (d, m) = eval_node(shape, shape.root(), p);
+    (d, m.dominant())
+}
+
+/// The materials at a point (textured CSG, §5.1): material `a`, or `a` and `b` mixed
+/// with `b`'s weight `t` across a smooth union's blend band. Blends of blends keep
+/// each operand's dominant material.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blend {
+    pub a: u32,
+    pub b: u32,
+    pub t: f64,
+}
+
+impl Blend {
+    pub fn single(m: u32) -> Blend {
+        Blend { a: m, b: m, t: 0.0 }
+    }
+
+    /// `a` up to half `b`'s weight (shaders/sdf.wgsl's `op_dominant`).
+    pub fn dominant(self) -> u32 {
+        if self.t <= 0.5 {
+            self.a
+        } else {
+            self.b
+        }
+    }
+
+    /// `op_union_blend`: b's weight is the polynomial smin's, clamp(0.5 − 0.5 (db − da)
+    /// / k, 0, 1); a hard union takes the nearer operand's blend as it is.
+    fn union(da: f64, ma: Blend, db: f64, mb: Blend, k: f64) -> Blend {
+        if k <= 0.0 {
+            return if da <= db { ma } else { mb };
+        }
+        let (a, b) = (ma.dominant(), mb.dominant());
+        let t = (0.5 - 0.5 * (db - da) / k).clamp(0.0, 1.0);
+        if a == b || t <= 0.0 {
+            Blend::single(a)
+        } else if t >= 1.0 {
+            Blend::single(b)
+        } else {
+            Blend { a, b, t }
+        }
+    }
+}
+
+/// Distance and materials of a shape at `p` (the generated `scene_blend`).
+pub fn eval_blend(shape: &Shape, p: DVec3) -> (f64, Blend) {
     eval_node(shape, shape.root(), p)
 }
 
@@ -152,18 +201,18 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
     eval(shape, p).0
 }
 
-fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
+fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
     stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p))
 }
 
-fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
+fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
     match &shape[id].op {
-        Op::Prim(pr) => (prim(p, pr), 0),
+        Op::Prim(pr) => (prim(p, pr), Blend::single(0)),
         Op::Csg { op, k, a, b } => {
             let (da, ma) = eval_node(shape, *a, p);
             let (db, mb) = eval_node(shape, *b, p);
             match op {
-                Csg::Union => (smin(da, db, *k), if da <= db { ma } else { mb }),
+                Csg::Union => (smin(da, db, *k), Blend::union(da, ma, db, mb, *k)),
                 Csg::Intersection => (-smin(-da, -db, *k), if da >= db { ma } else { mb }),
                 Csg::Difference => (-smin(-da, db, *k), if da >= -db { ma } else { mb }),
             }
@@ -173,7 +222,7 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
             (d * factor.min_element(), m)
         }
         Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > warp_outer(*radius) => {
-            (p.length() - radius, 0)
+            (p.length() - radius, Blend::single(0))
         }
         Op::Translate { child, .. }
         | Op::Rotate { child, .. }
@@ -193,7 +242,10 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, u32) {
             let (d, m) = eval_node(shape, *child, p);
             (d.abs() - thickness * 0.5, m)
         }
-        Op::Paint { material, child } => (eval_node(shape, *child, p).0, *material),
+        Op::Paint { material, child } => (
+            eval_node(shape, *child, p).0,
+            Blend::single(*material),
+        ),
         Op::Displace { height, child } => {
             let (f, m) = eval_node(shape, *child, p);
             let d = height.field(f, || {

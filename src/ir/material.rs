@@ -35,6 +35,7 @@ pub use texture::{MipChain, Textures, Wrap};
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, MaterialAttrs, Program, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
+use crate::ir::{eval, Shape};
 use crate::uv::{Atlas, Sample};
 use glam::{DMat3, DVec2, DVec3, DVec4};
 
@@ -270,7 +271,8 @@ impl<'a> MaterialEval<'a> {
         }
     }
 
-    /// The generated `atlas_K(p)` on the CPU: Alg. 2 of the prepared atlas.
+    /// The generated `atlas_K_at(p)` on the CPU: Alg. 2 of the prepared atlas at the
+    /// rest point of `p` ([`Atlas::sample_at`]).
     pub fn atlas_values(&self, atlas: AtlasId, p: DVec3) -> AtlasValues {
         match self.atlases.get(atlas.index()) {
             Some(Some(a)) => AtlasValues::from_sample(&a.sample_at(p)),
@@ -283,6 +285,26 @@ impl<'a> MaterialEval<'a> {
     pub fn eval(&self, id: u32, p: DVec3, n: DVec3, footprint: f64) -> MaterialValue {
         self.eval_with(id, p, n, footprint, &mut |k| self.atlas_values(k, p))
             .value
+    }
+
+    /// The generated `scene_surface` at surface point `p` of the render target `shape`:
+    /// the materials of [`eval::eval_blend`], mixed with b's weight across a smooth
+    /// union's band (textured CSG), the normal renormalized.
+    pub fn eval_surface(&self, shape: &Shape, p: DVec3, n: DVec3, footprint: f64) -> MaterialValue {
+        let (_, bl) = eval::eval_blend(shape, p);
+        let a = self.eval(bl.a, p, n, footprint);
+        if bl.t <= 0.0 {
+            return a;
+        }
+        let b = self.eval(bl.b, p, n, footprint);
+        let t = bl.t;
+        MaterialValue {
+            color: a.color.lerp(b.color, t),
+            roughness: a.roughness + (b.roughness - a.roughness) * t,
+            metallic: a.metallic + (b.metallic - a.metallic) * t,
+            emission: a.emission.lerp(b.emission, t),
+            normal: sdfc_normalize_or(a.normal.lerp(b.normal, t), n),
+        }
     }
 
     /// [`MaterialEval::eval`] with the atlas attributes given by `atlas` (called at most

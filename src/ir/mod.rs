@@ -235,6 +235,30 @@ impl Shape {
         }
     }
 
+    /// Whether some smooth union has a painted operand: its materials then blend across
+    /// the band (textured CSG, [`eval::Blend`]), and the generator emits `scene_blend`.
+    pub fn blends_materials(&self) -> bool {
+        let painted = |id: NodeId| {
+            let mut stack = vec![id];
+            while let Some(n) = stack.pop() {
+                if matches!(self[n].op, Op::Paint { .. }) {
+                    return true;
+                }
+                stack.extend(self[n].op.children());
+            }
+            false
+        };
+        self.nodes.iter().any(|n| match n.op {
+            Op::Csg {
+                op: Csg::Union,
+                k,
+                a,
+                b,
+            } => k > 0.0 && (painted(a) || painted(b)),
+            _ => false,
+        })
+    }
+
     /// Whether a node has more than one parent (a `let` used twice).
     pub fn is_shared(&self, id: NodeId) -> bool {
         self.shared

@@ -305,6 +305,7 @@ mod tests {
         assert_eq!(p.min_reach, table_float(ATLAS_SETTINGS, "min_reach"));
         assert!(!p.reproject);
         assert_eq!(p.sigma, None);
+        assert_eq!(p.mirror, None);
     }
 
     #[test]
@@ -313,6 +314,7 @@ mod tests {
         for spec in ATLAS_SETTINGS {
             let value = match spec.name {
                 "reproject" => Value::Bool(true),
+                "mirror" => Value::Vec(vec![1.0, 0.0, 0.0]),
                 _ => Value::Float(7.0),
             };
             let given = HashMap::from([(spec.name, (value, Span::new(0, 0)))]);

@@ -121,39 +121,25 @@ pub fn emit(
 /// plane of normal n gives (−reflect(v, n), w).
 fn entry(k: usize, atlas: &Atlas) -> String {
     let Some(n) = atlas.mirror else {
-        return format!("    return atlas_{k}_alg2(x);
-");
+        return format!("    return atlas_{k}_alg2(x);\n");
     };
     let n = vec3(n);
     format!(
-        "    let n = {n};
-    let side = dot(x, n);
-    if (side >= 0.0) {{
-        return atlas_{k}_alg2(x);
-    }}
-    var s = atlas_{k}_alg2(x - 2.0 * side * n);
-    s.tangent = reflect(s.tangent, n);
-    s.bitangent = reflect(s.bitangent, n);
-    s.transport = vec4<f32>(-reflect(s.transport.xyz, n), s.transport.w);
-    return s;
-"
+        "    let n = {n};\n    let side = dot(x, n);\n    if (side >= 0.0) {{\n        return atlas_{k}_alg2(x);\n    }}\n    var s = atlas_{k}_alg2(x - 2.0 * side * n);\n    s.tangent = reflect(s.tangent, n);\n    s.bitangent = reflect(s.bitangent, n);\n    s.transport = vec4<f32>(-reflect(s.transport.xyz, n), s.transport.w);\n    return s;\n"
     )
 }
 
-/// `atlas_K_at(p) -> AtlasSample`: what materials and the atlas views read at a point of
-/// the render target (`Atlas::sample_at` on the CPU). Alg. 2 at the rest point ω⁻¹(p)
-/// of the occurrence of the atlas's shape that p lies on (§5.1, `ir::rest`), moved onto
-/// the surface, with the frames carried back by the inverse of ω⁻¹'s Jacobian.
+/// `atlas_K_at(p, onto) -> AtlasSample`: what materials (`onto`) and the atlas views
+/// read at a point of the render target (`Atlas::sample_at_with` on the CPU). Alg. 2 at
+/// the rest point ω⁻¹(p) of the occurrence of the atlas's shape that p lies on (§5.1,
+/// `ir::rest`), moved onto the surface with `onto`, with the frames carried back by the
+/// inverse of ω⁻¹'s Jacobian.
 pub fn at(k: usize, atlas: &Atlas) -> String {
     let rest = &atlas.rest;
     let mut out = String::new();
     if rest.is_identity() {
         out.push_str(&format!(
-            "fn atlas_{k}_at(p: vec3<f32>) -> AtlasSample {{
-    return atlas_{k}(atlas_{k}_onto(p));
-}}
-
-"
+            "fn atlas_{k}_at(p: vec3<f32>, onto: bool) -> AtlasSample {{\n    if (onto) {{\n        return atlas_{k}(atlas_{k}_onto(p));\n    }}\n    return atlas_{k}(p);\n}}\n\n"
         ));
         return out;
     }
@@ -163,36 +149,21 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
         let mut q = String::from("p");
         for (j, op) in o.steps.iter().enumerate() {
             let e = point_expr(op, &q).unwrap_or_else(|| q.clone());
-            body.push_str(&format!("    let q{j} = {e};
-"));
+            body.push_str(&format!("    let q{j} = {e};\n"));
             q = format!("q{j}");
         }
         out.push_str(&format!(
-            "fn atlas_{k}_rest{i}(p: vec3<f32>) -> vec3<f32> {{
-{body}    return {q};
-}}
-
-"
+            "fn atlas_{k}_rest{i}(p: vec3<f32>) -> vec3<f32> {{\n{body}    return {q};\n}}\n\n"
         ));
     }
     // The occurrence whose rest point is nearest the surface.
-    let mut pick = String::from("    var occ = 0u;
-    var q = atlas_0_rest0(p);
-")
+    let mut pick = String::from("    var occ = 0u;\n    var q = atlas_0_rest0(p);\n")
         .replace("atlas_0_", &format!("atlas_{k}_"));
     if rest.occurrences.len() > 1 {
-        pick.push_str(&format!("    var best = abs(atlas_{k}_f(q));
-"));
+        pick.push_str(&format!("    var best = abs(atlas_{k}_f(q));\n"));
         for i in 1..rest.occurrences.len() {
             pick.push_str(&format!(
-                "    let q{i} = atlas_{k}_rest{i}(p);
-    let f{i} = abs(atlas_{k}_f(q{i}));
-    if (f{i} < best) {{
-        best = f{i};
-        q = q{i};
-        occ = {i}u;
-    }}
-"
+                "    let q{i} = atlas_{k}_rest{i}(p);\n    let f{i} = abs(atlas_{k}_f(q{i}));\n    if (f{i} < best) {{\n        best = f{i};\n        q = q{i};\n        occ = {i}u;\n    }}\n"
             ));
         }
     }
@@ -200,17 +171,10 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
         .occurrences
         .iter()
         .enumerate()
-        .map(|(i, _)| format!("        case {i}u: {{ return atlas_{k}_rest{i}(p); }}
-"))
+        .map(|(i, _)| format!("        case {i}u: {{ return atlas_{k}_rest{i}(p); }}\n"))
         .collect();
     out.push_str(&format!(
-        "fn atlas_{k}_rest(p: vec3<f32>, occ: u32) -> vec3<f32> {{
-    switch occ {{
-{arms}        default: {{ return p; }}
-    }}
-}}
-
-"
+        "fn atlas_{k}_rest(p: vec3<f32>, occ: u32) -> vec3<f32> {{\n    switch occ {{\n{arms}        default: {{ return p; }}\n    }}\n}}\n\n"
     ));
     let moves: Vec<String> = rest
         .occurrences
@@ -223,32 +187,13 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
         String::new()
     } else {
         format!(
-            "    if ({}) {{
-        // The columns of ω⁻¹'s Jacobian; tangents map by its inverse (rows' cross products).
-        let h = {h};
-        let c0 = (atlas_{k}_rest(p + vec3<f32>(h, 0.0, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(h, 0.0, 0.0), occ)) / (2.0 * h);
-        let c1 = (atlas_{k}_rest(p + vec3<f32>(0.0, h, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, h, 0.0), occ)) / (2.0 * h);
-        let c2 = (atlas_{k}_rest(p + vec3<f32>(0.0, 0.0, h), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, 0.0, h), occ)) / (2.0 * h);
-        let rows = transpose(mat3x3<f32>(c0, c1, c2));
-        let det = dot(rows[0], cross(rows[1], rows[2]));
-        if (abs(det) > 1e-12) {{
-            let inv = mat3x3<f32>(cross(rows[1], rows[2]), cross(rows[2], rows[0]), cross(rows[0], rows[1])) * (1.0 / det);
-            s.tangent = inv * s.tangent;
-            s.bitangent = inv * s.bitangent;
-        }}
-    }}
-",
+            "    if ({}) {{\n        // The columns of ω⁻¹'s Jacobian; tangents map by its inverse (rows' cross products).\n        let h = {h};\n        let c0 = (atlas_{k}_rest(p + vec3<f32>(h, 0.0, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(h, 0.0, 0.0), occ)) / (2.0 * h);\n        let c1 = (atlas_{k}_rest(p + vec3<f32>(0.0, h, 0.0), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, h, 0.0), occ)) / (2.0 * h);\n        let c2 = (atlas_{k}_rest(p + vec3<f32>(0.0, 0.0, h), occ) - atlas_{k}_rest(p - vec3<f32>(0.0, 0.0, h), occ)) / (2.0 * h);\n        let rows = transpose(mat3x3<f32>(c0, c1, c2));\n        let det = dot(rows[0], cross(rows[1], rows[2]));\n        if (abs(det) > 1e-12) {{\n            let inv = mat3x3<f32>(cross(rows[1], rows[2]), cross(rows[2], rows[0]), cross(rows[0], rows[1])) * (1.0 / det);\n            s.tangent = inv * s.tangent;\n            s.bitangent = inv * s.bitangent;\n        }}\n    }}\n",
             moves.join(" || "),
             h = lit(atlas.params.h_gradient)
         )
     };
     out.push_str(&format!(
-        "fn atlas_{k}_at(p: vec3<f32>) -> AtlasSample {{
-{pick}    var s = atlas_{k}(atlas_{k}_onto(q));
-{frames}    return s;
-}}
-
-"
+        "fn atlas_{k}_at(p: vec3<f32>, onto: bool) -> AtlasSample {{\n{pick}    if (onto) {{\n        q = atlas_{k}_onto(q);\n    }}\n    var s = atlas_{k}(q);\n{frames}    return s;\n}}\n\n"
     ));
     out
 }

@@ -252,17 +252,7 @@ impl Writer {
                     self.indent += 1;
                     // The child goes into a helper function, so chains of warps do not
                     // nest blocks (naga limits brace nesting).
-                    let helper = self.fresh(&format!("{}_w", self.prefix));
-                    let mut inner_w = self.sub(&helper);
-                    let dc = inner_w.shape(shape, *child, "p");
-                    self.helpers.push_str(&inner_w.helpers);
-                    self.take_heights(&mut inner_w);
-                    let _ = writeln!(
-                        self.helpers,
-                        "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
-                        self.ty(),
-                        inner_w.out
-                    );
+                    let helper = self.helper_fn(shape, *child, "w");
                     self.line(&format!("{d} = {helper}({inner});"));
                     self.indent -= 1;
                     self.line("}");
@@ -286,17 +276,7 @@ impl Writer {
             }
             Op::Displace { height, child } => {
                 // Eq. 58: the child in a helper (evaluated 7 times inside the band for Π_f).
-                let helper = self.fresh(&format!("{}_h", self.prefix));
-                let mut inner_w = self.sub(&helper);
-                let dc = inner_w.shape(shape, *child, "p");
-                self.helpers.push_str(&inner_w.helpers);
-                self.take_heights(&mut inner_w);
-                let _ = writeln!(
-                    self.helpers,
-                    "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
-                    self.ty(),
-                    inner_w.out
-                );
+                let helper = self.helper_fn(shape, *child, "h");
                 if !self.heights.iter().any(|h| h.id == height.id) {
                     self.heights.push(height.clone());
                 }
@@ -313,20 +293,56 @@ impl Writer {
                     lit(height.band_width())
                 ));
                 self.indent += 1;
-                let h = lit(height.grad_step);
-                let g = self.fresh("g");
-                self.line(&format!(
-                    "let {g} = vec3<f32>({helper}({p} + vec3<f32>({h}, 0.0, 0.0)).x - {helper}({p} - vec3<f32>({h}, 0.0, 0.0)).x, {helper}({p} + vec3<f32>(0.0, {h}, 0.0)).x - {helper}({p} - vec3<f32>(0.0, {h}, 0.0)).x, {helper}({p} + vec3<f32>(0.0, 0.0, {h})).x - {helper}({p} - vec3<f32>(0.0, 0.0, {h})).x) / (2.0 * {h});"
-                ));
-                // Π_f (Eq. 57).
-                let q = self.fresh("q");
-                self.line(&format!(
-                    "let {q} = {p} - {g} * ({b}.x / max(dot({g}, {g}), 1e-20));"
-                ));
+                let (q, g) = self.projection(&helper, p, &b, height.grad_step);
                 self.line(&format!(
                     "{d}.x = {b}.x - height_{}({q}, normalize({g}));",
                     height.id
                 ));
+                self.indent -= 1;
+                self.line("}");
+            }
+            Op::ShellMap { map, base, tile } => {
+                // §5.4: the base in a helper (7 evaluations inside the shell), the tile in
+                // another, evaluated at the shell coordinates.
+                let helper = self.helper_fn(shape, *base, "s");
+                let tile_fn = self.helper_fn(shape, *tile, "t");
+                if !self.heights.iter().any(|h| h.id == map.uv.id) {
+                    self.heights.push(std::sync::Arc::new(map.uv.clone()));
+                }
+                let eps = lit(map.thickness);
+                let b = self.fresh("b");
+                self.line(&format!("let {b} = {helper}({p});"));
+                let (lo, hi) = (map.thickness * map.lo, map.thickness * map.hi);
+                let lower = format!("max({b}.x - {}, {} - {b}.x)", lit(hi), lit(lo));
+                let outside = if map.keep_base {
+                    format!("min({b}.x, {lower})")
+                } else {
+                    lower.clone()
+                };
+                let v = self.with_d(&b, &outside);
+                self.line(&format!("var {d} = {v};"));
+                let band = crate::ir::shell::BAND * map.thickness;
+                self.line(&format!(
+                    "if ({b}.x < {} && {b}.x > {}) {{",
+                    lit(hi + band),
+                    lit(lo - band)
+                ));
+                self.indent += 1;
+                let (q, g) = self.projection(&helper, p, &b, map.uv.grad_step);
+                let uv = self.fresh("uv");
+                self.line(&format!("let {uv} = height_{}({q}, normalize({g}));", map.uv.id));
+                let t = self.fresh("t");
+                self.line(&format!(
+                    "let {t} = {tile_fn}(vec3<f32>(fract({uv}.x) - 0.5, {b}.x / {eps}, fract({uv}.y) - 0.5));"
+                ));
+                let v = self.with_d(&t, &format!("max({} * {t}.x, {lower})", lit(map.scale)));
+                if map.keep_base {
+                    let tv = self.fresh("tv");
+                    self.line(&format!("let {tv} = {v};"));
+                    self.line(&format!("{d} = select({b}, {tv}, {tv}.x < {b}.x);"));
+                } else {
+                    self.line(&format!("{d} = {v};"));
+                }
                 self.indent -= 1;
                 self.line("}");
             }
@@ -337,6 +353,38 @@ impl Writer {
             }
         }
         d
+    }
+
+    /// Writes node `child` as a helper function `PREFIX_TAGn(p)` (for nodes evaluated
+    /// at several points, or behind a branch: naga limits brace nesting); its name.
+    fn helper_fn(&mut self, shape: &Shape, child: NodeId, tag: &str) -> String {
+        let helper = self.fresh(&format!("{}_{tag}", self.prefix));
+        let mut inner_w = self.sub(&helper);
+        let dc = inner_w.shape(shape, child, "p");
+        self.helpers.push_str(&inner_w.helpers);
+        self.take_heights(&mut inner_w);
+        let _ = writeln!(
+            self.helpers,
+            "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
+            self.ty(),
+            inner_w.out
+        );
+        helper
+    }
+
+    /// Π_f (Eq. 57) from point `p`, where helper `f` has the value `b`: the gradient by
+    /// central differences of step `h` and the projected point; their names.
+    fn projection(&mut self, f: &str, p: &str, b: &str, h: f64) -> (String, String) {
+        let h = lit(h);
+        let g = self.fresh("g");
+        self.line(&format!(
+            "let {g} = vec3<f32>({f}({p} + vec3<f32>({h}, 0.0, 0.0)).x - {f}({p} - vec3<f32>({h}, 0.0, 0.0)).x, {f}({p} + vec3<f32>(0.0, {h}, 0.0)).x - {f}({p} - vec3<f32>(0.0, {h}, 0.0)).x, {f}({p} + vec3<f32>(0.0, 0.0, {h})).x - {f}({p} - vec3<f32>(0.0, 0.0, {h})).x) / (2.0 * {h});"
+        ));
+        let q = self.fresh("q");
+        self.line(&format!(
+            "let {q} = {p} - {g} * ({b}.x / max(dot({g}, {g}), 1e-20));"
+        ));
+        (q, g)
     }
 
     fn take_heights(&mut self, w: &mut Writer) {
@@ -682,6 +730,7 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
         | B::Scale
         | B::Paint
         | B::Displace
+        | B::ShellMap
         | B::Twist
         | B::Bend
         | B::Repeat

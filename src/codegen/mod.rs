@@ -382,7 +382,7 @@ impl Generator<'_> {
             None => (!atlases.is_empty()).then_some(0),
         };
         let (sample, merged) = match chosen {
-            Some(k) => (format!("atlas_{k}_at(p)"), format!("atlas_{k}_merged(i, j)")),
+            Some(k) => (format!("atlas_{k}_at(p, false)"), format!("atlas_{k}_merged(i, j)")),
             None => (
                 String::from("uv_failed(UV_TOO_FAR, -1.0)"),
                 String::from("false"),
@@ -427,10 +427,15 @@ impl Generator<'_> {
                 .iter()
                 .map(|&k| format!("    let atlas_sample_{0} = atlas_{0}(p);\n", k.index()))
                 .collect();
+            let (what, ty) = if h.dims == 2 {
+                ("A shell map's uv", "vec2<f32>")
+            } else {
+                ("A displacement's height", "f32")
+            };
             let lets: String = uses.lets.iter().map(|l| format!("    {l}\n")).collect();
             let _ = writeln!(
                 self.out,
-                "// A displacement's height (level-0 texels: a zero footprint).\nfn height_{}(p: vec3<f32>, n: vec3<f32>) -> f32 {{\n    let footprint = 0.0;\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n{samples}{lets}    return {} * f32({e});\n}}\n",
+                "// {what} (level-0 texels: a zero footprint).\nfn height_{}(p: vec3<f32>, n: vec3<f32>) -> {ty} {{\n    let footprint = 0.0;\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n{samples}{lets}    return {} * {ty}({e});\n}}\n",
                 h.id,
                 lit(h.scale)
             );
@@ -523,7 +528,7 @@ impl Generator<'_> {
             .iter()
             .map(|&k| {
                 format!(
-                    "            let atlas_sample_{0} = atlas_{0}_at(p);\n",
+                    "            let atlas_sample_{0} = atlas_{0}_at(p, true);\n",
                     k.index()
                 )
             })

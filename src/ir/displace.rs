@@ -53,6 +53,9 @@ pub struct Height {
     pub id: usize,
     /// The difference step of ∇f for Π_f: 1e-3 of the base's scale (f32-safe, notes).
     pub grad_step: f64,
+    /// 1 for a displacement's height; 2 for a shell map's uv (`height_ID` then returns
+    /// a `vec2<f32>`).
+    pub dims: u8,
     cpu: OnceLock<HeightCpu>,
 }
 
@@ -66,6 +69,7 @@ impl PartialEq for Height {
             && self.slope == o.slope
             && self.atlas == o.atlas
             && self.id == o.id
+            && self.dims == o.dims
     }
 }
 
@@ -97,8 +101,44 @@ impl Height {
             atlas,
             id,
             grad_step,
+            dims: 1,
             cpu: OnceLock::new(),
         }
+    }
+
+    /// A shell map's uv field: a vec2 with slope bound `slope` (per unit of surface).
+    pub fn uv_field(value: Value, slope: f64, id: usize, grad_step: f64) -> Height {
+        let mut h = Height::new(
+            value,
+            1.0,
+            1.0,
+            Bound {
+                lo: 0.0,
+                hi: 0.0,
+                slope,
+            },
+            id,
+            grad_step,
+        );
+        h.dims = 2;
+        h
+    }
+
+    /// A shell map's uv at surface point `q` with unit normal `n`; `None` when unbound.
+    pub fn uv_at(&self, q: DVec3, n: DVec3) -> Option<glam::DVec2> {
+        let cpu = self.cpu.get()?;
+        let mut atlas = |k: AtlasId| match (&cpu.atlas, self.atlas) {
+            (Some(a), Some(mine)) if mine == k => AtlasValues::from_sample(&a.sample(q)),
+            _ => AtlasValues::FAILED,
+        };
+        Some(material::eval_vec2(
+            &self.value,
+            q,
+            n,
+            &cpu.textures,
+            cpu.atlas_count,
+            &mut atlas,
+        ))
     }
 
     /// ε of Eq. 58: the largest displacement.
@@ -131,7 +171,7 @@ impl Height {
     }
 
     pub fn is_bound(&self) -> bool {
-        self.cpu.get().is_some() || self.lo == self.hi
+        self.cpu.get().is_some() || (self.dims == 1 && self.lo == self.hi)
     }
 
     /// d at surface point `q` with unit normal `n` (the generated `height_ID`).
@@ -370,6 +410,15 @@ fn texture_bound(
         out[c].2 = ((sx[c] * w as f64).powi(2) + (sy[c] * h as f64).powi(2)).sqrt();
     }
     Ok(out)
+}
+
+/// A bound of a vec2 field's slope (a shell map's uv), or why there is none.
+pub fn analyze_uv(v: &Value, textures: &Textures) -> Result<f64, String> {
+    let b = bound(v, textures)?;
+    if !b.joint.is_finite() {
+        return Err(String::from("its slope is unbounded"));
+    }
+    Ok(b.joint)
 }
 
 /// The range and slope bound of a float height, or why there is none.

@@ -248,20 +248,28 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
         ),
         Op::Displace { height, child } => {
             let (f, m) = eval_node(shape, *child, p);
-            let d = height.field(f, || {
-                // Π_f (Eq. 57) with the gradient by central differences.
-                let h = GRADIENT_STEP;
-                let g = |o: DVec3| {
-                    eval_node(shape, *child, p + o).0 - eval_node(shape, *child, p - o).0
-                };
-                let grad =
-                    DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
-                let q = p - grad * (f / grad.length_squared().max(1e-300));
-                (q, grad.normalize_or_zero())
-            });
+            let d = height.field(f, || project_onto(shape, *child, p, f));
             (d, m)
         }
+        Op::ShellMap { map, base, tile } => {
+            let fb = eval_node(shape, *base, p);
+            map.field(
+                fb,
+                || project_onto(shape, *base, p, fb.0),
+                |s| eval_node(shape, *tile, s),
+            )
+        }
     }
+}
+
+/// Π_f (Eq. 57) onto node `child`'s surface from p, where its distance is `f`, with
+/// the gradient by central differences: the point and the unit normal.
+fn project_onto(shape: &Shape, child: NodeId, p: DVec3, f: f64) -> (DVec3, DVec3) {
+    let h = GRADIENT_STEP;
+    let g = |o: DVec3| eval_node(shape, child, p + o).0 - eval_node(shape, child, p - o).0;
+    let grad = DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
+    let q = p - grad * (f / grad.length_squared().max(1e-300));
+    (q, grad.normalize_or_zero())
 }
 
 /// Step for central differences, relative to the scene's scale.

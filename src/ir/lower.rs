@@ -437,6 +437,38 @@ impl Lowerer<'_> {
                     lipschitz,
                 )
             }
+            B::ShellMap => {
+                let base = self.node(&a[0])?;
+                let tile = self.node(&a[1])?;
+                let thickness = f(&a[3])?;
+                let keep = !matches!(a[4], Value::Bool(false));
+                let slope = match displace::analyze_uv(&a[2], self.textures) {
+                    Ok(s) => s,
+                    Err(why) => {
+                        self.errors.push((n.span, why));
+                        return None;
+                    }
+                };
+                let (b, l) = self.info(base);
+                let (tb, lt) = self.info(tile);
+                let size = if b.is_finite() {
+                    (b.max - b.min).max_element().max(1e-3)
+                } else {
+                    4.0
+                };
+                let uv = Height::uv_field(a[2].clone(), slope, n.span.start, 1e-3 * size);
+                let map = super::shell::ShellMap::new(uv, thickness, keep, (tb.min.y, tb.max.y));
+                let lipschitz = map.lipschitz(l, lt);
+                self.push(
+                    Op::ShellMap {
+                        map: std::sync::Arc::new(map),
+                        base,
+                        tile,
+                    },
+                    b.expand(thickness),
+                    lipschitz,
+                )
+            }
             // Not shapes: they never appear as a shape node.
             B::Image
             | B::Sample

@@ -452,3 +452,32 @@ pub fn eval_scalar(
     };
     cx.value(value).x()
 }
+
+/// [`eval_scalar`] for a vec2 field (a shell map's uv): its first two components.
+pub fn eval_vec2(
+    value: &Value,
+    p: DVec3,
+    n: DVec3,
+    textures: &Textures,
+    atlas_count: usize,
+    atlas: &mut dyn FnMut(AtlasId) -> AtlasValues,
+) -> DVec2 {
+    let (tangent_u, tangent_v) = tangents(n);
+    let mut cx = Cx {
+        textures,
+        atlas,
+        samples: vec![None; atlas_count],
+        p,
+        n,
+        footprint: 0.0,
+        tangent_u,
+        tangent_v,
+        offset: None,
+        srgb: false,
+        margin: f64::INFINITY,
+    };
+    match cx.value(value) {
+        V::Num(c, _) => DVec2::new(c[0], c[1]),
+        V::Bool(_) => DVec2::ZERO,
+    }
+}

@@ -13,6 +13,7 @@ pub mod eval;
 mod lower;
 pub mod material;
 pub mod rest;
+pub mod shell;
 
 pub use displace::Height;
 pub use lower::{lower, lower_shape, lower_with};
@@ -174,6 +175,12 @@ pub enum Op {
         height: std::sync::Arc<Height>,
         child: NodeId,
     },
+    /// The tile copied into the base's shell (§5.4; see [`shell`]).
+    ShellMap {
+        map: std::sync::Arc<shell::ShellMap>,
+        base: NodeId,
+        tile: NodeId,
+    },
 }
 
 impl Op {
@@ -182,6 +189,7 @@ impl Op {
         match self {
             Op::Prim(_) => Vec::new(),
             Op::Csg { a, b, .. } => vec![*a, *b],
+            Op::ShellMap { base, tile, .. } => vec![*base, *tile],
             Op::Translate { child, .. }
             | Op::Rotate { child, .. }
             | Op::Scale { child, .. }
@@ -203,10 +211,13 @@ impl Shape {
     pub fn heights(&self) -> Vec<std::sync::Arc<Height>> {
         let mut out: Vec<std::sync::Arc<Height>> = Vec::new();
         for n in &self.nodes {
-            if let Op::Displace { height, .. } = &n.op {
-                if !out.iter().any(|h| h.id == height.id) {
-                    out.push(height.clone());
-                }
+            let h = match &n.op {
+                Op::Displace { height, .. } => height.clone(),
+                Op::ShellMap { map, .. } => std::sync::Arc::new(map.uv.clone()),
+                _ => continue,
+            };
+            if !out.iter().any(|x| x.id == h.id) {
+                out.push(h);
             }
         }
         out
@@ -229,8 +240,10 @@ impl Shape {
         textures: &material::Textures,
     ) {
         for n in &self.nodes {
-            if let Op::Displace { height, .. } = &n.op {
-                height.bind(atlases, textures);
+            match &n.op {
+                Op::Displace { height, .. } => height.bind(atlases, textures),
+                Op::ShellMap { map, .. } => map.uv.bind(atlases, textures),
+                _ => {}
             }
         }
     }

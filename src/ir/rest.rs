@@ -103,7 +103,13 @@ impl RestQuery {
             steps.push(op.clone());
             *stretched |= matches!(op, Op::Elongate { .. });
         }
-        for c in op.children() {
+        // A shell map's tile is evaluated at shell coordinates, not at a moved point:
+        // only its base is followed.
+        let children = match op {
+            Op::ShellMap { base, .. } => vec![*base],
+            _ => op.children(),
+        };
+        for c in children {
             stacker::maybe_grow(64 * 1024, 1024 * 1024, || {
                 self.visit(target, c, atlas, steps, stretched)
             });
@@ -201,6 +207,10 @@ fn strip(op: &Op) -> Op {
         Op::Csg { a, b, .. } => {
             *a = z;
             *b = z;
+        }
+        Op::ShellMap { base, tile, .. } => {
+            *base = z;
+            *tile = z;
         }
         Op::Translate { child, .. }
         | Op::Rotate { child, .. }

@@ -26,10 +26,10 @@ fn same_shape(a: &Value, b: &Value) -> bool {
     }
 }
 
-/// The `displace` call inside a shape value, if any (its span).
+/// The `displace` or `shell_map` call inside a shape value, if any (its span).
 pub fn displaced(v: &Value) -> Option<Span> {
     let Value::Shape(n) = v else { return None };
-    if n.builtin == BuiltinId::Displace {
+    if matches!(n.builtin, BuiltinId::Displace | BuiltinId::ShellMap) {
         return Some(n.span);
     }
     n.args.iter().find_map(displaced)
@@ -146,12 +146,22 @@ impl Checker<'_> {
                 ok = false;
             }
         }
+        ok &= self.check_read_field(shape, height, *hspan, "the height of `displace`");
+        ok
+    }
+
+    /// A surface field a shape reads at the projection onto its base (a displacement's
+    /// height, a shell map's uv): its slope must be bounded, and it may read one atlas,
+    /// on the base shape. False after reporting a problem.
+    fn check_read_field(&mut self, shape: &Value, field: &Value, span: Span, what: &str) -> bool {
+        let mut ok = true;
+        let height = field;
         if let Some(why) = unbounded(height) {
             self.error(
                 Diagnostic::error(
                     codes::E_DISPLACE_HEIGHT,
-                    "the height of `displace` must have a bounded slope",
-                    *hspan,
+                    format!("{what} must have a bounded slope"),
+                    span,
                     why,
                 )
                 .with_note(
@@ -171,14 +181,14 @@ impl Checker<'_> {
                     Diagnostic::error(
                         codes::E_DISPLACE_ATLAS,
                         format!(
-                            "the height of `displace` reads two atlases, `{}` and `{}`",
+                            "{what} reads two atlases, `{}` and `{}`",
                             self.prog.atlas(read[0]).name,
                             def.name
                         ),
-                        *hspan,
-                        "one atlas per height",
+                        span,
+                        "one atlas per field",
                     )
-                    .with_help("read one atlas in a height"),
+                    .with_help("read one atlas"),
                 );
                 ok = false;
             } else if !same_shape(&def.shape, shape) && !def.shape.is_error() && !shape.is_error() {
@@ -186,23 +196,42 @@ impl Checker<'_> {
                     Diagnostic::error(
                         codes::E_DISPLACE_ATLAS,
                         format!(
-                            "the height of `displace` reads atlas `{}`, which is on another shape",
+                            "{what} reads atlas `{}`, which is on another shape",
                             def.name
                         ),
-                        *hspan,
+                        span,
                         format!("reads `{}`", def.name),
                     )
                     .with_label(def.shape_span, format!("atlas `{}` is on this shape", def.name))
                     .with_note(
-                        "the height is read at the projection of each point onto the displaced \
-                         shape's surface (Eq. 57), where only an atlas on that surface has coordinates",
+                        "it is read at the projection of each point onto the base shape's surface \
+                         (Eq. 57), where only an atlas on that surface has coordinates",
                     )
-                    .with_help("declare an atlas on the shape that is displaced, or displace the atlas's shape"),
+                    .with_help("declare an atlas on the base shape, or use the atlas's shape as the base"),
                 );
                 ok = false;
             }
         }
         ok
+    }
+
+    /// The checks of a `shell_map` call beyond its parameters' types: a positive
+    /// thickness and a uv read as a displacement's height is.
+    pub(crate) fn check_shell_map(&mut self, bound: &[(crate::sema::Value, Span)]) -> bool {
+        let (shape, _) = &bound[0];
+        let (uv, uspan) = &bound[2];
+        let (eps, espan) = &bound[3];
+        let mut ok = true;
+        if eps.as_float().is_some_and(|e| !(e > 0.0)) {
+            self.error(Diagnostic::error(
+                codes::E_OUT_OF_RANGE,
+                "`thickness` of `shell_map` must be positive",
+                *espan,
+                format!("found {}", eps.display()),
+            ));
+            ok = false;
+        }
+        ok & self.check_read_field(shape, uv, *uspan, "the uv of `shell_map`")
     }
 
     /// An atlas on a shape with a displacement is refused: its walk would evaluate the
@@ -216,7 +245,7 @@ impl Checker<'_> {
                     span,
                     "this shape is displaced",
                 )
-                .with_label(call, "displaced here")
+                .with_label(call, "displaced or shell-mapped here")
                 .with_note(
                     "the walk of Alg. 1 would differentiate the displaced field, whose every \
                      evaluation walks the height's atlas; and the displaced surface's coordinates \
@@ -233,7 +262,7 @@ impl Checker<'_> {
 /// displacement's cost is measured against (`sdfc bench`).
 pub fn undisplaced(v: &Value) -> Value {
     let Value::Shape(n) = v else { return v.clone() };
-    if n.builtin == BuiltinId::Displace {
+    if matches!(n.builtin, BuiltinId::Displace | BuiltinId::ShellMap) {
         return undisplaced(&n.args[0]);
     }
     if displaced(v).is_none() {

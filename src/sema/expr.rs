@@ -539,7 +539,9 @@ impl Checker<'_> {
             }
             let ty = v.ty();
             // A displacement's height is the one surface field a shape takes.
-            let field_ok = lifts || (b.id == builtins::BuiltinId::Displace && p.name == "height");
+            let field_ok = lifts
+                || (b.id == builtins::BuiltinId::Displace && p.name == "height")
+                || (b.id == builtins::BuiltinId::ShellMap && p.name == "uv");
             if ty.is_field() && !field_ok {
                 self.error(
                     Diagnostic::error(
@@ -611,6 +613,9 @@ impl Checker<'_> {
             return Value::Error;
         };
         if b.id == builtins::BuiltinId::Displace && !self.check_displace(&bound) {
+            return Value::Error;
+        }
+        if b.id == builtins::BuiltinId::ShellMap && !self.check_shell_map(&bound) {
             return Value::Error;
         }
         let args: Vec<Value> = bound.iter().map(|(v, _)| v.clone()).collect();

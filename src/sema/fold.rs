@@ -223,6 +223,7 @@ pub fn math(builtin: BuiltinId, args: &[Value], n: usize) -> Value {
         | B::Scale
         | B::Paint
         | B::Displace
+        | B::ShellMap
         | B::Twist
         | B::Bend
         | B::Repeat

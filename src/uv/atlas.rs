@@ -341,10 +341,17 @@ impl Atlas {
     /// shape that `p` lies on ([`RestQuery`]), moved onto the surface ([`Atlas::onto`]),
     /// with the transported frames carried back by the differential of ω.
     pub fn sample_at(&self, p: DVec3) -> Sample {
+        self.sample_at_with(p, true)
+    }
+
+    /// [`Atlas::sample_at`], with the rest point moved onto the surface only with
+    /// `onto` (the atlas views sample as they are, `atlas_K_at(p, false)`).
+    pub fn sample_at_with(&self, p: DVec3, onto: bool) -> Sample {
+        let at = |q: DVec3| if onto { self.onto(q) } else { q };
         let Some((i, q)) = self.rest.locate(&self.shape, p) else {
-            return self.sample(self.onto(p));
+            return self.sample(at(p));
         };
-        let mut s = self.sample(self.onto(q));
+        let mut s = self.sample(at(q));
         let occ = &self.rest.occurrences[i];
         if occ.moves_frames() {
             let j = occ.jacobian(p, self.params.h_gradient);

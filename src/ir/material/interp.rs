@@ -408,6 +408,7 @@ impl Cx<'_> {
             | B::Scale
             | B::Paint
             | B::Displace
+            | B::ShellMap
             | B::Twist
             | B::Bend
             | B::Repeat
@@ -549,6 +550,7 @@ pub(super) fn is_field_builtin(builtin: BuiltinId) -> bool {
         | B::Scale
         | B::Paint
         | B::Displace
+        | B::ShellMap
         | B::Twist
         | B::Bend
         | B::Repeat

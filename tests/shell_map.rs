@@ -44,8 +44,8 @@ fn plane_scene(base: bool) -> Analysis {
 /// The tile's surface lands where S(x) = (fract(C·u) − 0.5, y/ε, fract(C·v) − 0.5)
 /// puts it: world points built from the seed's frame on each tile sphere are zeros of
 /// the field (≤ 1e-9), the tile's inside is negative and its outside positive; on the
-/// plane between tiles the field is the base's (0) with `base`, and above the shell it
-/// is |f| − ε.
+/// plane between tiles the field is the base's (0) with `base`, and above the tiles'
+/// extent it is the distance bound f − ε·top.
 #[test]
 fn plane_tiles_land_at_their_shell_coordinates() {
     let a = plane_scene(true);
@@ -74,9 +74,10 @@ fn plane_tiles_land_at_their_shell_coordinates() {
     // Between tiles, on the plane: the base.
     let corner = world((1.0, 2.0), DVec3::new(0.5, 0.0, 0.5));
     assert!(eval::distance(s, corner).abs() < 1e-9);
-    // Above the shell: the lower bound |f| − ε.
+    // Above the tiles' extent (their top is at 0.5 + R in shell height): the lower
+    // bound f − ε·(0.5 + R).
     let above = world((0.0, 0.0), DVec3::new(0.0, 0.0, 0.0)) + n * 1.0;
-    assert!((eval::distance(s, above) - (1.0 - EPS)).abs() < 1e-9);
+    assert!((eval::distance(s, above) - (1.0 - EPS * (0.5 + R))).abs() < 1e-9);
 }
 
 /// Without `base`, only the tiles: the plane between tiles is not a surface.

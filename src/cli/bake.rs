@@ -220,6 +220,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         seed_grid: sdfc::codegen::SeedGridChoice::Auto,
         atlas: None,
         plain: false,
+        cold: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

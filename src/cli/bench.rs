@@ -49,6 +49,15 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
+    // Without the warm start of Alg. 2's search, to measure what it saves.
+    let cold = match variant(Options {
+        walk: WalkForm::Loop,
+        cold: true,
+        ..base.clone()
+    }) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
@@ -134,6 +143,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("plain sphere trace (no materials)", &plain, ViewMode::Color),
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
         ("shaded, loop walk", &rolled, ViewMode::Color),
+        ("shaded, loop walk, cold start", &cold, ViewMode::Color),
     ];
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
@@ -164,6 +174,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
+    // The warm start against none, loop walk, frames alternated.
+    let warm_ratio = match paired(&renderers[2], &renderers[3]) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(super::exit::gpu(&e));
+        }
+    };
     // Normal maps against none, unrolled then loop, with frames alternated.
     let mut normal_map_ratios = Vec::new();
     if let Some((no_unrolled, no_loop)) = unmapped_rows {
@@ -214,7 +232,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
         "ratio unrolled ÷ loop, pipeline:     {:.2}",
         ms(unrolled_r.0) / ms(loop_r.0)
     );
+    println!("ratio warm ÷ cold start, loop:       {warm_ratio:.2} (frames alternated)");
     if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
+        // Displacements and shell maps alike are replaced by their base.
         println!(
             "ratio displaced ÷ undisplaced, loop: {:.2}",
             ms(loop_r.1) / ms(undisplaced.1)

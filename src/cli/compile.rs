@@ -88,6 +88,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
         plain: false,
+        cold: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

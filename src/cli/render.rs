@@ -99,6 +99,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
         plain: false,
+        cold: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

@@ -50,6 +50,7 @@ pub fn emit(
     atlas: &Atlas,
     form: WalkForm,
     grid: &SeedGrid,
+    warm: bool,
 ) -> Result<String, template::Mismatch> {
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
@@ -111,6 +112,7 @@ pub fn emit(
         ),
         ("sigma", lit(atlas.sigma)),
         ("entry", entry(k, atlas)),
+        ("warm", warm.to_string()),
         ("max_distance", lit(p.max_distance)),
     ];
     template::fill(template::ATLAS, &values)

@@ -169,6 +169,9 @@ pub struct Options {
     pub plain: bool,
     /// Whether the nearest-seed search uses the seed grid.
     pub seed_grid: SeedGridChoice,
+    /// Leave out the warm start of Alg. 2's search (the previous query's nearest seed
+    /// walked first): the baseline `sdfc bench` measures the warm start against.
+    pub cold: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.
@@ -360,7 +363,7 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(k, a, options.walk, &options.seed_grid.grid(a))?;
+            let code = atlas::emit(k, a, options.walk, &options.seed_grid.grid(a), !options.cold)?;
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));

@@ -45,7 +45,6 @@ codes! {
     E_RENDER_NOT_SHAPE = "E0205": "a render item whose target is not a shape";
     E_DISPLACE_ATLAS = "E0206": "a displacement height read from an atlas on another shape";
     E_DISPLACE_HEIGHT = "E0207": "a displacement height whose slope cannot be bounded (a jump, or an input without a bound)";
-    E_ATLAS_ON_DISPLACED = "E0208": "an atlas on a displaced shape (declare it on the base shape)";
     E_NORMAL_MAP_ATLAS = "E0209": "a normal map whose uv does not come from exactly one atlas (its tangent frame is that atlas's)";
     E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
     E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
@@ -70,4 +69,5 @@ codes! {
     W_NO_REST_POSE = "W0009": "an atlas whose shape the render uses through a warp without an inverse (`elongate`), or in too many places";
     N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
     N_TRUNCATED = "N0002": "more diagnostics than a file may report; the rest are counted, not shown";
+    N_ATLAS_ON_DISPLACED = "N0003": "an atlas on a displaced or shell-mapped shape (it works, at the cost of a walk of the base's atlas per evaluation)";
 }

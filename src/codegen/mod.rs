@@ -235,6 +235,10 @@ pub fn generate(
         heights: Vec::new(),
     };
     g.scene_constants(target);
+    // Atlases on displaced shapes call their heights in their fields.
+    for a in atlases.iter().flatten() {
+        g.add_heights(a.shape.heights());
+    }
     g.shapes(scene, target);
     g.render_target(scene, target, options);
     let plain = options.plain;

@@ -43,6 +43,11 @@ pub fn lower_shape(value: &Value) -> Option<Shape> {
     lower_shape_with(value, &Textures::default(), &mut Vec::new())
 }
 
+/// [`lower_shape`] with the decoded textures its displacements' heights read.
+pub fn lower_shape_textured(value: &Value, textures: &Textures) -> Option<Shape> {
+    lower_shape_with(value, textures, &mut Vec::new())
+}
+
 fn lower_shape_with(
     value: &Value,
     textures: &Textures,

@@ -16,7 +16,7 @@ pub mod rest;
 pub mod shell;
 
 pub use displace::Height;
-pub use lower::{lower, lower_shape, lower_with};
+pub use lower::{lower, lower_shape, lower_shape_textured, lower_with};
 
 use glam::{DMat3, DVec3};
 

@@ -234,25 +234,25 @@ impl Checker<'_> {
         ok & self.check_read_field(shape, uv, *uspan, "the uv of `shell_map`")
     }
 
-    /// An atlas on a shape with a displacement is refused: its walk would evaluate the
-    /// displaced field, and so another atlas's walk, at every step.
+    /// An atlas on a shape with a displacement (or a shell map) works, at a cost worth a
+    /// note: its walks differentiate the displaced field, each evaluation of which walks
+    /// the height's atlas.
     pub(crate) fn check_atlas_shape(&mut self, shape: &Value, span: Span) {
         if let Some(call) = displaced(shape) {
             self.error(
-                Diagnostic::error(
-                    codes::E_ATLAS_ON_DISPLACED,
-                    "an atlas cannot be declared on a displaced shape",
+                Diagnostic::note_diag(
+                    codes::N_ATLAS_ON_DISPLACED,
+                    "this atlas is on a displaced shape: each step of its walks evaluates the base's atlas",
                     span,
                     "this shape is displaced",
                 )
                 .with_label(call, "displaced or shell-mapped here")
                 .with_note(
-                    "the walk of Alg. 1 would differentiate the displaced field, whose every \
-                     evaluation walks the height's atlas; and the displaced surface's coordinates \
-                     are already the base's: a material on the displaced shape can read the \
-                     base's atlas",
-                )
-                .with_help("declare the atlas on the shape before `displace`"),
+                    "the walk of Alg. 1 differentiates the displaced field, whose every \
+                     evaluation projects onto the base and walks the height's atlas, so this \
+                     atlas costs about that atlas times 7 per step; a material on the displaced \
+                     shape can also read the base's atlas, which is cheaper",
+                ),
             );
         }
     }

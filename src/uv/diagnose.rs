@@ -16,15 +16,27 @@ use glam::DVec3;
 pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
+    // Atlases on displaced shapes evaluate their heights: those read textures (their
+    // texels bound the heights) and the atlases prepared before them.
+    let displaced = program
+        .atlases
+        .iter()
+        .any(|d| crate::sema::displaced(&d.shape).is_some());
+    let textures = if displaced {
+        ir::material::Textures::load(program).unwrap_or_default()
+    } else {
+        ir::material::Textures::default()
+    };
     let target = program
         .render
         .as_ref()
-        .and_then(|r| ir::lower_shape(&r.target));
+        .and_then(|r| ir::lower_shape_textured(&r.target, &textures));
     for def in &program.atlases {
-        let Some(shape) = ir::lower_shape(&def.shape) else {
+        let Some(shape) = ir::lower_shape_textured(&def.shape, &textures) else {
             out.push(None);
             continue;
         };
+        shape.bind_heights(&out, &textures);
         match Atlas::prepare(def, &shape) {
             Ok(mut a) => {
                 if let Some(t) = &target {

@@ -566,3 +566,52 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
     let worst = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
     assert!(worst <= 2, "the renders differ by {worst}");
 }
+
+/// Normal maps are baked: the baked texels' normals of examples/normal_map.sdf are the
+/// material's shading normal (Eqs. 50–52, from the CPU reference at the texel's point
+/// with the surface normal there), not the surface's; at least 90 % within 2° (the
+/// sampler's fixed-point filtering moves a bevel's normal by up to about 1°, see
+/// tests/normal_map.rs), and the normal map tilts them visibly from the surface normal.
+#[test]
+fn baked_normals_carry_the_normal_map() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/normal_map.sdf");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let base = path.parent().unwrap();
+    let baked = bake_source(&gpu, &source, base, &small(8)).expect("bakes");
+    let analysis = sdfc::driver::check(&source, Some(base));
+    let shape = analysis.scene.as_ref().unwrap().render.clone().unwrap();
+    let eval =
+        sdfc::ir::material::MaterialEval::load(&analysis.program, &analysis.atlases).unwrap();
+    let inputs = pipeline::sample_points(&baked.quads, &baked.table, baked.levels[0].n);
+    let footprints: Vec<f64> = inputs
+        .corners
+        .iter()
+        .chain(&inputs.edges)
+        .chain(&inputs.interiors)
+        .map(|p| p[3] as f64)
+        .collect();
+    let p = &baked.points;
+    let points: Vec<&[f32; 3]> = p.corners.iter().chain(&p.edges).chain(&p.interiors).collect();
+    let l0 = &baked.levels[0];
+    let texels: Vec<&[f32; 11]> = l0.corners.iter().chain(&l0.edges).chain(&l0.interiors).collect();
+    let (mut within, mut compared, mut tilted) = (0, 0, 0);
+    for k in (0..texels.len()).step_by(7) {
+        let t = texels[k];
+        let x = DVec3::from_array(points[k].map(|v| v as f64));
+        let n = sdfc::ir::eval::gradient(&shape, x).normalize();
+        let want = eval.eval_surface(&shape, x, n, footprints[k]).normal;
+        let got = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize();
+        compared += 1;
+        if got.angle_between(want).to_degrees() <= 2.0 {
+            within += 1;
+        }
+        if got.angle_between(n).to_degrees() > 5.0 {
+            tilted += 1;
+        }
+    }
+    let share = within as f64 / compared as f64;
+    eprintln!("{within} of {compared} baked normals within 2° of the material's; {tilted} tilted over 5° from the surface");
+    assert!(compared > 100 && share >= 0.9, "{within} of {compared}");
+    assert!(tilted * 10 > compared, "{tilted} of {compared} tilted: the normal map is not baked");
+}

@@ -19,7 +19,8 @@ pub struct Shaded {
     pub roughness: f32,
     pub metallic: f32,
     pub emission: [f32; 3],
-    /// The unit surface normal (object space).
+    /// The unit shading normal (object space): the material's, normal maps included
+    /// (the surface normal where the material sets none).
     pub normal: [f32; 3],
     /// The material id (0 is the default material).
     pub material: u32,

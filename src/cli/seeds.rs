@@ -2,9 +2,9 @@
 //! as scene text or written into the scene file.
 
 use super::{exit, read_source};
-use glam::DVec3;
 use sdfc::bake::mesh::surface_samples;
-use sdfc::uv::seeds::{place, PlaceOptions, Placement};
+use sdfc::ide::seeds::{rewrite, statements};
+use sdfc::uv::seeds::{place, PlaceOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -29,66 +29,6 @@ pub struct SeedsArgs {
     /// formatted) instead of printing them.
     #[arg(long)]
     pub write: bool,
-}
-
-fn num(x: f64) -> String {
-    let s = format!("{x:.6}");
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if s == "-0" {
-        "0".into()
-    } else {
-        s
-    }
-}
-
-fn vec3(p: DVec3) -> String {
-    format!("[{}, {}, {}]", num(p.x), num(p.y), num(p.z))
-}
-
-/// The placement as atlas statements, four spaces in.
-pub fn statements(placement: &Placement) -> String {
-    let mut out = String::new();
-    for (k, (p, t)) in placement.seeds.iter().enumerate() {
-        match t {
-            Some(t) => out.push_str(&format!(
-                "    seed s{k} = {} tangent {};\n",
-                vec3(*p),
-                vec3(*t)
-            )),
-            None => out.push_str(&format!("    seed s{k} = {};\n", vec3(*p))),
-        }
-    }
-    for (a, b) in &placement.merges {
-        out.push_str(&format!("    merge s{a} s{b};\n"));
-    }
-    out
-}
-
-/// `source` with the atlas item spanning `start..end` holding `statements` instead of
-/// its seeds and merges (other settings and comments on their own lines stay).
-fn rewrite(source: &str, start: usize, end: usize, statements: &str) -> Option<String> {
-    let block = &source[start..end];
-    let open = block.find('{')?;
-    let close = block.rfind('}')?;
-    let inner = &block[open + 1..close];
-    let mut kept = String::new();
-    for line in inner.split_inclusive('\n') {
-        let t = line.trim_start();
-        if t.starts_with("seed ") || t.starts_with("merge ") {
-            continue;
-        }
-        kept.push_str(line);
-    }
-    let kept = kept.trim_end();
-    let mut body = String::from(kept);
-    body.push('\n');
-    body.push_str(statements);
-    Some(format!(
-        "{}{{{}}}{}",
-        &source[..start + open],
-        body,
-        &source[start + close + 1..]
-    ))
 }
 
 pub fn run(args: SeedsArgs) -> ExitCode {
@@ -188,10 +128,11 @@ pub fn run(args: SeedsArgs) -> ExitCode {
         print!("{text}");
         return ExitCode::SUCCESS;
     }
-    let (start, end) = (def.span.start as usize, def.span.end as usize);
-    let Some(edited) = rewrite(&source, start, end, &text) else {
+    let (start, end) = (def.span.start, def.span.end);
+    let Some(item) = rewrite(&source[start..end], &text) else {
         return usage(format!("cannot find the body of atlas `{}`", def.name));
     };
+    let edited = format!("{}{item}{}", &source[..start], &source[end..]);
     let formatted = sdfc::ide::format::format(&edited).unwrap_or(edited);
     let check = sdfc::driver::check(&formatted, Some(&base));
     if check.diagnostics.iter().any(|d| d.is_error()) {

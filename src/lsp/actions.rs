@@ -4,6 +4,7 @@
 use super::dispatch::Failure;
 use super::{convert, to_offset, to_position, to_range, Docs, Open};
 use crate::ide::actions::{self, InlayKind};
+use crate::ide::seeds;
 use crate::span::Span;
 use lsp_types as lsp;
 use std::collections::HashMap;
@@ -11,7 +12,11 @@ use std::collections::HashMap;
 pub(super) fn capabilities(caps: &mut lsp::ServerCapabilities) {
     caps.code_action_provider = Some(lsp::CodeActionProviderCapability::Options(
         lsp::CodeActionOptions {
-            code_action_kinds: Some(vec![lsp::CodeActionKind::QUICKFIX]),
+            code_action_kinds: Some(vec![
+                lsp::CodeActionKind::QUICKFIX,
+                lsp::CodeActionKind::REFACTOR_REWRITE,
+            ]),
+            resolve_provider: Some(true),
             ..Default::default()
         },
     ));
@@ -35,7 +40,7 @@ pub(super) fn code_actions(
     let Some(o) = docs.get(uri.as_str()) else {
         return Ok(Some(Vec::new()));
     };
-    let actions = actions::code_actions(&o.doc, span_of(o, p.range))
+    let actions: Vec<lsp::CodeActionOrCommand> = actions::code_actions(&o.doc, span_of(o, p.range))
         .into_iter()
         .map(|a| {
             let edits = a
@@ -58,8 +63,52 @@ pub(super) fn code_actions(
                 ..Default::default()
             })
         })
-        .collect();
+        .collect::<Vec<_>>();
+    // "Place seeds automatically" on the atlas under the range: offered cheaply, its
+    // edit computed on `codeAction/resolve` (placement takes about a second).
+    let mut actions = actions;
+    for (atlas, _) in seeds::offered(&o.doc, span_of(o, p.range)) {
+        actions.push(lsp::CodeActionOrCommand::CodeAction(lsp::CodeAction {
+            title: format!("{} in `{atlas}`", seeds::TITLE),
+            kind: Some(lsp::CodeActionKind::REFACTOR_REWRITE),
+            data: Some(serde_json::json!({ "uri": uri.as_str(), "atlas": atlas })),
+            ..Default::default()
+        }));
+    }
     Ok(Some(actions))
+}
+
+/// The edit of "place seeds automatically", computed against the latest text.
+pub(super) fn resolve(docs: &Docs, mut a: lsp::CodeAction) -> Result<lsp::CodeAction, Failure> {
+    let data = a.data.clone().unwrap_or_default();
+    let (Some(uri), Some(atlas)) = (data["uri"].as_str(), data["atlas"].as_str()) else {
+        return Err(Failure::new(
+            lsp_server::ErrorCode::InvalidParams,
+            String::from("this code action has nothing to resolve"),
+        ));
+    };
+    let Some(o) = docs.get(uri) else {
+        return Err(Failure::new(
+            lsp_server::ErrorCode::InvalidParams,
+            format!("{uri} is not open"),
+        ));
+    };
+    let (_, edit) = seeds::place_edit(&o.doc, atlas, Default::default())
+        .map_err(|e| Failure::new(lsp_server::ErrorCode::RequestFailed, e))?;
+    let uri: lsp::Uri = uri
+        .parse()
+        .map_err(|_| Failure::new(lsp_server::ErrorCode::InvalidParams, format!("bad uri {uri}")))?;
+    a.edit = Some(lsp::WorkspaceEdit {
+        changes: Some(HashMap::from([(
+            uri,
+            vec![lsp::TextEdit {
+                range: to_range(&o.index, &o.doc.text, edit.span),
+                new_text: edit.text,
+            }],
+        )])),
+        ..Default::default()
+    });
+    Ok(a)
 }
 
 pub(super) fn inlay_hints(

@@ -219,6 +219,7 @@ fn answer(docs: &Docs, req: Request) -> Response {
         .on::<Completion>(features::completion)
         .on::<SignatureHelpRequest>(features::signature_help)
         .on::<CodeActionRequest>(actions::code_actions)
+        .on::<CodeActionResolveRequest>(actions::resolve)
         .on::<InlayHintRequest>(actions::inlay_hints)
         .finish()
 }

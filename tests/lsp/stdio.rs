@@ -352,3 +352,49 @@ fn requests_are_answered_while_a_large_document_is_analysed() {
     );
     assert!(p.stop().success());
 }
+
+/// "Place seeds automatically" over the real pipe: offered on an atlas with no seeds
+/// (E0115), without an edit; resolved into an edit of the atlas block that keeps its
+/// settings; the edited text has seeds and checks clean (no diagnostic at all).
+#[test]
+fn place_seeds_automatically_is_a_resolved_code_action() {
+    let mut p = Pipe::spawn();
+    let caps = p.initialize();
+    assert_eq!(
+        caps["result"]["capabilities"]["codeActionProvider"]["resolveProvider"],
+        true
+    );
+    let text = "let body = capsule(a: [0, -0.6, 0], b: [0, 0.6, 0], radius: 0.4);\natlas skin on body {\n    steps = 12;\n}\nmaterial m { color = [skin.uv, 0]; }\nrender body.paint(m);\n";
+    p.send(did_open(super::URI, text));
+    let d = p.diagnostics();
+    assert_eq!(d["diagnostics"][0]["code"], "E0115");
+    p.send(json!({ "jsonrpc": "2.0", "id": 2, "method": "textDocument/codeAction", "params": {
+        "textDocument": { "uri": super::URI },
+        "range": { "start": { "line": 1, "character": 2 }, "end": { "line": 1, "character": 2 } },
+        "context": { "diagnostics": [] } } }));
+    let r = p.response(2);
+    let list = r["result"].as_array().unwrap();
+    let action = list
+        .iter()
+        .find(|a| a["title"] == "Place seeds automatically in `skin`")
+        .unwrap_or_else(|| panic!("{r}"))
+        .clone();
+    assert_eq!(action["kind"], "refactor.rewrite");
+    assert!(action["edit"].is_null(), "the edit waits for resolve");
+    p.send(json!({ "jsonrpc": "2.0", "id": 3, "method": "codeAction/resolve", "params": action }));
+    let resolved = p.response(3)["result"].clone();
+    let edits = resolved["edit"]["changes"][super::URI].as_array().unwrap().clone();
+    assert_eq!(edits.len(), 1);
+    assert_eq!(edits[0]["range"]["start"], json!({ "line": 1, "character": 0 }));
+    assert_eq!(edits[0]["range"]["end"], json!({ "line": 3, "character": 1 }));
+    let block = edits[0]["newText"].as_str().unwrap();
+    assert!(block.contains("steps = 12;") && block.contains("seed s1 = "), "{block}");
+    // Applying the edit (lines 1..=3 replaced) gives a scene that checks clean.
+    let lines: Vec<&str> = text.lines().collect();
+    let edited = format!("{}\n{block}\n{}\n", lines[0], lines[4..].join("\n"));
+    let a = sdfc::driver::check(&edited, None);
+    assert!(a.diagnostics.is_empty(), "{edited}\n{:?}", a.diagnostics);
+    p.send(did_change(super::URI, 2, &edited));
+    assert_eq!(p.diagnostics()["diagnostics"], json!([]));
+    assert!(p.stop().success());
+}

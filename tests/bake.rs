@@ -592,9 +592,19 @@ fn baked_normals_carry_the_normal_map() {
         .map(|p| p[3] as f64)
         .collect();
     let p = &baked.points;
-    let points: Vec<&[f32; 3]> = p.corners.iter().chain(&p.edges).chain(&p.interiors).collect();
+    let points: Vec<&[f32; 3]> = p
+        .corners
+        .iter()
+        .chain(&p.edges)
+        .chain(&p.interiors)
+        .collect();
     let l0 = &baked.levels[0];
-    let texels: Vec<&[f32; 11]> = l0.corners.iter().chain(&l0.edges).chain(&l0.interiors).collect();
+    let texels: Vec<&[f32; 11]> = l0
+        .corners
+        .iter()
+        .chain(&l0.edges)
+        .chain(&l0.interiors)
+        .collect();
     let (mut within, mut compared, mut tilted) = (0, 0, 0);
     for k in (0..texels.len()).step_by(7) {
         let t = texels[k];
@@ -613,5 +623,8 @@ fn baked_normals_carry_the_normal_map() {
     let share = within as f64 / compared as f64;
     eprintln!("{within} of {compared} baked normals within 2° of the material's; {tilted} tilted over 5° from the surface");
     assert!(compared > 100 && share >= 0.9, "{within} of {compared}");
-    assert!(tilted * 10 > compared, "{tilted} of {compared} tilted: the normal map is not baked");
+    assert!(
+        tilted * 10 > compared,
+        "{tilted} of {compared} tilted: the normal map is not baked"
+    );
 }

@@ -336,7 +336,11 @@ fn an_atlas_on_a_displaced_shape_walks_the_displaced_surface() {
     let mut rng = Rng(12);
     let mut points = Vec::new();
     while points.len() < 60 {
-        let d = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(0.0, 1.0));
+        let d = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(0.0, 1.0),
+        );
         if d.length() > 0.2 {
             points.push(d.normalize() * 1.1);
         }
@@ -349,7 +353,9 @@ fn an_atlas_on_a_displaced_shape_walks_the_displaced_surface() {
     }
     eprintln!("atlas on the displaced sphere vs on the sphere of radius 1.1: {worst:.2e}");
     assert!(worst <= 1e-6, "{worst}");
-    let Some(gpu) = sdfc::gpu::gpu_for_tests() else { return };
+    let Some(gpu) = sdfc::gpu::gpu_for_tests() else {
+        return;
+    };
     let options = sdfc::codegen::Options {
         walk: sdfc::codegen::WalkForm::Loop,
         atlas: Some("outer".into()),

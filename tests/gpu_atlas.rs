@@ -33,7 +33,11 @@ fn examples() -> Vec<PathBuf> {
 /// moved (a rest pose, §5.1), on the render target's surface, where the atlas views
 /// query it.
 fn surface_points(a: &Atlas, target: &sdfc::ir::Shape, n: usize, seed: u64) -> Vec<DVec3> {
-    let shape = if a.rest.is_identity() { &a.shape } else { target };
+    let shape = if a.rest.is_identity() {
+        &a.shape
+    } else {
+        target
+    };
     let b = shape.framing_bounds();
     let mut rng = Rng(seed);
     let mut out = Vec::new();

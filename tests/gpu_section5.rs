@@ -94,7 +94,11 @@ fn section_5_examples_agree_with_the_cpu() {
                 "{name} at {x}: colour {} vs {c}",
                 cpu.color
             );
-            assert!((cpu.normal - gn).length() <= 1e-2, "{name} at {x}: normal {} vs {gn}", cpu.normal);
+            assert!(
+                (cpu.normal - gn).length() <= 1e-2,
+                "{name} at {x}: normal {} vs {gn}",
+                cpu.normal
+            );
         }
         eprintln!("{name}: {compared}/150 compared, worst colour {colour:.4}, normal {normal:.2e}");
         // The mirrored robot's bevelled normal map turns steeply at every brick's edge,

@@ -91,7 +91,12 @@ fn twisted_box_uv_at_omega_x_equal_the_rest_uv_at_x() {
             .length()
             .max((push(rest.bitangent) - moved.bitangent).length());
         frame_err = frame_err.max(e);
-        assert!(e <= 1e-4, "at {x}: frame {} vs {}", push(rest.tangent), moved.tangent);
+        assert!(
+            e <= 1e-4,
+            "at {x}: frame {} vs {}",
+            push(rest.tangent),
+            moved.tangent
+        );
     }
     eprintln!("twist: uv error {uv_err:.2e}, frame error {frame_err:.2e}");
 }
@@ -254,11 +259,45 @@ fn gpu_rest_pose_and_mirror_agree_with_the_cpu() {
                 .length()
                 .max((cpu.bitangent - v3(g.bitangent)).length());
             frame_err = frame_err.max(e);
-            assert!(e <= 1e-3, "{name} at {x}: frame {} vs {:?}", cpu.tangent, g.tangent);
+            assert!(
+                e <= 1e-3,
+                "{name} at {x}: frame {} vs {:?}",
+                cpu.tangent,
+                g.tangent
+            );
         }
         eprintln!("{name}: {compared}/200 compared, uv {uv_err:.2e}, frame {frame_err:.2e}");
         // The bar's rounded edges and ends stop walks (sharp features): about half its
         // points have no uv on either side.
         assert!(compared >= 70, "{name}: only {compared} compared");
     }
+}
+
+/// A shape shared by a deep chain of `let`s (each used twice by the next) occurs in
+/// 2^13 places of the inlined tree: the query follows the first 16, says so (W0009),
+/// and stays quick (memoized comparisons, no walk into parts without an occurrence).
+#[test]
+fn shared_chains_are_followed_up_to_the_limit() {
+    let mut src =
+        String::from("let a0 = sphere(0.1);\natlas skin on a0 { seed s = [0, 0, 0.1]; }\n");
+    for i in 1..=13 {
+        src.push_str(&format!(
+            "let a{i} = a{p} | a{p}.translate([{x}, 0, 0]);\n",
+            p = i - 1,
+            x = 0.25 * i as f64
+        ));
+    }
+    src.push_str("material m { color = [skin.uv, 0]; }\nrender a13.paint(m);\n");
+    let started = std::time::Instant::now();
+    let a = check(&src, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics);
+    let at = a.atlases[0].as_ref().unwrap();
+    assert_eq!(at.rest.occurrences.len(), sdfc::ir::rest::MAX_OCCURRENCES);
+    assert!(at.rest.truncated);
+    assert!(
+        a.diagnostics.iter().any(|d| d.code == "W0009"),
+        "{:?}",
+        a.diagnostics
+    );
+    eprintln!("checked in {:.2} s", started.elapsed().as_secs_f64());
 }

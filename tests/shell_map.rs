@@ -51,7 +51,11 @@ fn plane_tiles_land_at_their_shell_coordinates() {
     let a = plane_scene(true);
     let s = target(&a);
     let atlas = a.atlases[0].as_ref().unwrap();
-    let (e1, e2, n) = (atlas.seeds[0].seed.e1, atlas.seeds[0].seed.e2, atlas.seeds[0].seed.n);
+    let (e1, e2, n) = (
+        atlas.seeds[0].seed.e1,
+        atlas.seeds[0].seed.e2,
+        atlas.seeds[0].seed.n,
+    );
     assert!((n - DVec3::Y).length() < 1e-9);
     let world = |cell: (f64, f64), t: DVec3| {
         let u = (cell.0 + 0.5 + t.x) / C;
@@ -60,9 +64,16 @@ fn plane_tiles_land_at_their_shell_coordinates() {
     };
     let mut rng = Rng(4);
     for _ in 0..300 {
-        let cell = ((rng.range(-5.0, 5.0)).floor(), (rng.range(-5.0, 5.0)).floor());
-        let dir = DVec3::new(rng.range(-1.0, 1.0), rng.range(0.0, 1.0), rng.range(-1.0, 1.0))
-            .normalize();
+        let cell = (
+            (rng.range(-5.0, 5.0)).floor(),
+            (rng.range(-5.0, 5.0)).floor(),
+        );
+        let dir = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(0.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize();
         let on = world(cell, DVec3::new(0.0, 0.5, 0.0) + dir * R);
         let d = eval::distance(s, on);
         assert!(d.abs() < 1e-9, "tile surface at {on}: {d}");
@@ -118,7 +129,11 @@ fn the_step_bound_holds_within_cells() {
             if eval::distance(s, p).abs() > 0.1 || (name == "column" && p.y.abs() > 0.9) {
                 continue;
             }
-            let q = p + DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * 1e-4;
+            let q = p + DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ) * 1e-4;
             let (dp, dq) = (eval::distance(s, p), eval::distance(s, q));
             let slope = (dp - dq).abs() / (p - q).length();
             // A jump across a cell border (fract) is not a slope.
@@ -151,7 +166,11 @@ fn shell_map_uv_must_come_from_an_atlas_on_the_base() {
     let codes: Vec<&str> = a.diagnostics.iter().map(|d| d.code).collect();
     assert!(codes.contains(&"E0206"), "{codes:?}");
     assert!(codes.contains(&"E0207"), "{codes:?}");
-    let thin = a.diagnostics.iter().find(|d| d.message.contains("thickness")).unwrap();
+    let thin = a
+        .diagnostics
+        .iter()
+        .find(|d| d.message.contains("thickness"))
+        .unwrap();
     assert!(thin.code.starts_with("E030"), "{thin:?}");
 }
 
@@ -173,7 +192,11 @@ fn gpu_shell_map_agrees_with_the_cpu() {
     let mut rng = Rng(21);
     let mut points = Vec::new();
     while points.len() < 300 {
-        let p = DVec3::new(rng.range(-0.9, 0.9), rng.range(-1.0, 1.0), rng.range(-0.9, 0.9));
+        let p = DVec3::new(
+            rng.range(-0.9, 0.9),
+            rng.range(-1.0, 1.0),
+            rng.range(-0.9, 0.9),
+        );
         let r = DVec3::new(p.x, 0.0, p.z).length();
         if (r - 0.6).abs() < 0.3 {
             points.push(p);

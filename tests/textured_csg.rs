@@ -58,7 +58,9 @@ fn operand_distances(slab: &sdfc::ir::Shape, p: DVec3) -> (f64, f64) {
 }
 
 fn slab() -> sdfc::ir::Shape {
-    let a = analyze("let s = round_box([1.6, 0.5, 1.2], radius: 0.06).translate([0, -0.45, 0]);\nrender s;");
+    let a = analyze(
+        "let s = round_box([1.6, 0.5, 1.2], radius: 0.06).translate([0, -0.45, 0]);\nrender s;",
+    );
     a.scene.as_ref().unwrap().render.clone().unwrap()
 }
 
@@ -98,7 +100,9 @@ fn each_operand_keeps_its_material_away_from_the_band_and_blends_inside() {
             assert!((bl.t - t).abs() < 1e-9, "at {x}: {} vs {t}", bl.t);
             let (ma, mb) = (m.eval(brick, x, n, 1e-3), m.eval(tile, x, n, 1e-3));
             assert!((got.color - ma.color.lerp(mb.color, t)).length() < 1e-9);
-            assert!((got.roughness - (ma.roughness + (mb.roughness - ma.roughness) * t)).abs() < 1e-9);
+            assert!(
+                (got.roughness - (ma.roughness + (mb.roughness - ma.roughness) * t)).abs() < 1e-9
+            );
         }
     }
     eprintln!("{outside} points beyond the band, {inside} inside it");
@@ -112,7 +116,11 @@ fn blend_distance_equals_the_plain_distance() {
     let target = a.scene.as_ref().unwrap().render.clone().unwrap();
     let mut rng = Rng(2);
     for _ in 0..500 {
-        let p = DVec3::new(rng.range(-3.0, 3.0), rng.range(-1.5, 1.5), rng.range(-1.5, 1.5));
+        let p = DVec3::new(
+            rng.range(-3.0, 3.0),
+            rng.range(-1.5, 1.5),
+            rng.range(-1.5, 1.5),
+        );
         assert_eq!(eval::eval_blend(&target, p).0, eval::distance(&target, p));
     }
 }
@@ -145,7 +153,10 @@ fn gpu_textured_csg_agrees_with_the_cpu() {
     let Some(gpu) = gpu_for_tests() else { return };
     let src = example();
     let probe = src
-        .replace("color = bricks.sample(skin.uv * 1.5).rgb;", "color = [1, 0, 0];")
+        .replace(
+            "color = bricks.sample(skin.uv * 1.5).rgb;",
+            "color = [1, 0, 0];",
+        )
         .replace(
             "color = mix([0.15, 0.3, 0.55], [0.85, 0.85, 0.8], checker(tiles.uv, 4));",
             "color = [0, 0, 1];",
@@ -176,7 +187,10 @@ fn gpu_textured_csg_agrees_with_the_cpu() {
             compared += 1;
             let c = DVec3::from_array(g.color.map(|x| x as f64));
             worst = worst.max((cpu.color - c).abs().max_element());
-            assert!(close(&cpu, g, 2.0 / 255.0), "{name} at {x}: {cpu:?} vs {g:?}");
+            assert!(
+                close(&cpu, g, 2.0 / 255.0),
+                "{name} at {x}: {cpu:?} vs {g:?}"
+            );
         }
         eprintln!("{name}: {compared}/300 compared, worst colour {:.4}", worst);
         assert!(compared >= 250, "{name}: {compared}");

@@ -330,7 +330,10 @@ impl Writer {
                 self.indent += 1;
                 let (q, g) = self.projection(&helper, p, &b, map.uv.grad_step);
                 let uv = self.fresh("uv");
-                self.line(&format!("let {uv} = height_{}({q}, normalize({g}));", map.uv.id));
+                self.line(&format!(
+                    "let {uv} = height_{}({q}, normalize({g}));",
+                    map.uv.id
+                ));
                 let t = self.fresh("t");
                 self.line(&format!(
                     "let {t} = {tile_fn}(vec3<f32>(fract({uv}.x) - 0.5, {b}.x / {eps}, fract({uv}.y) - 0.5));"

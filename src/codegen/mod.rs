@@ -367,7 +367,13 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(k, a, options.walk, &options.seed_grid.grid(a), !options.cold)?;
+            let code = atlas::emit(
+                k,
+                a,
+                options.walk,
+                &options.seed_grid.grid(a),
+                !options.cold,
+            )?;
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
@@ -389,7 +395,10 @@ impl Generator<'_> {
             None => (!atlases.is_empty()).then_some(0),
         };
         let (sample, merged) = match chosen {
-            Some(k) => (format!("atlas_{k}_at(p, false)"), format!("atlas_{k}_merged(i, j)")),
+            Some(k) => (
+                format!("atlas_{k}_at(p, false)"),
+                format!("atlas_{k}_merged(i, j)"),
+            ),
             None => (
                 String::from("uv_failed(UV_TOO_FAR, -1.0)"),
                 String::from("false"),

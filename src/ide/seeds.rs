@@ -66,7 +66,12 @@ pub fn rewrite(item: &str, statements: &str) -> Option<String> {
     let mut body = String::from(kept.trim_end());
     body.push('\n');
     body.push_str(statements);
-    Some(format!("{}{{{}}}{}", &item[..open], body, &item[close + 1..]))
+    Some(format!(
+        "{}{{{}}}{}",
+        &item[..open],
+        body,
+        &item[close + 1..]
+    ))
 }
 
 /// The atlases whose item touches `range`, by name, with their item spans: where the
@@ -92,7 +97,11 @@ pub fn offered(doc: &Document, range: Span) -> Vec<(String, Span)> {
 
 /// Places seeds and merges for atlas `name` and returns the placement with the edit
 /// that writes them into its block.
-pub fn place_edit(doc: &Document, name: &str, options: PlaceOptions) -> Result<(Placement, Edit), String> {
+pub fn place_edit(
+    doc: &Document,
+    name: &str,
+    options: PlaceOptions,
+) -> Result<(Placement, Edit), String> {
     let def = doc
         .analysis
         .program

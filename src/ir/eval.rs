@@ -242,10 +242,7 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
             let (d, m) = eval_node(shape, *child, p);
             (d.abs() - thickness * 0.5, m)
         }
-        Op::Paint { material, child } => (
-            eval_node(shape, *child, p).0,
-            Blend::single(*material),
-        ),
+        Op::Paint { material, child } => (eval_node(shape, *child, p).0, Blend::single(*material)),
         Op::Displace { height, child } => {
             let (f, m) = eval_node(shape, *child, p);
             let d = height.field(f, || project_onto(shape, *child, p, f));

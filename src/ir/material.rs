@@ -32,10 +32,10 @@ use interp::{is_field_builtin, Cx, V};
 
 pub use texture::{MipChain, Textures, Wrap};
 
+use crate::ir::{eval, Shape};
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, MaterialAttrs, Program, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
-use crate::ir::{eval, Shape};
 use crate::uv::{Atlas, Sample};
 use glam::{DMat3, DVec2, DVec3, DVec4};
 

@@ -251,23 +251,19 @@ impl Shape {
     /// Whether some smooth union has a painted operand: its materials then blend across
     /// the band (textured CSG, [`eval::Blend`]), and the generator emits `scene_blend`.
     pub fn blends_materials(&self) -> bool {
-        let painted = |id: NodeId| {
-            let mut stack = vec![id];
-            while let Some(n) = stack.pop() {
-                if matches!(self[n].op, Op::Paint { .. }) {
-                    return true;
-                }
-                stack.extend(self[n].op.children());
-            }
-            false
-        };
+        // Children come before parents: one pass (the nodes form a DAG).
+        let mut painted = vec![false; self.nodes.len()];
+        for (i, n) in self.nodes.iter().enumerate() {
+            painted[i] = matches!(n.op, Op::Paint { .. })
+                || n.op.children().iter().any(|c| painted[c.index()]);
+        }
         self.nodes.iter().any(|n| match n.op {
             Op::Csg {
                 op: Csg::Union,
                 k,
                 a,
                 b,
-            } => k > 0.0 && (painted(a) || painted(b)),
+            } => k > 0.0 && (painted[a.index()] || painted[b.index()]),
             _ => false,
         })
     }

@@ -41,7 +41,9 @@ impl Occurrence {
 
     /// Whether tangent vectors change on the way (anything but translations).
     pub fn moves_frames(&self) -> bool {
-        self.steps.iter().any(|op| !matches!(op, Op::Translate { .. }))
+        self.steps
+            .iter()
+            .any(|op| !matches!(op, Op::Translate { .. }))
     }
 
     /// The Jacobian of ω⁻¹ at `p` (columns ∂ω⁻¹/∂x, ∂/∂y, ∂/∂z) by central differences
@@ -71,9 +73,25 @@ impl RestQuery {
         if target.nodes.is_empty() || atlas_shape.nodes.is_empty() {
             return q;
         }
+        // Which nodes are the atlas's shape, and which contain it: one pass over the
+        // DAG (children come before parents), so the paths below only go where an
+        // occurrence is, and shared nodes are compared once.
+        let mut memo = Memo::default();
+        let n = target.nodes.len();
+        let mut is = vec![false; n];
+        let mut contains = vec![false; n];
+        for i in 0..n {
+            let id = NodeId::new(i);
+            is[i] = same_memo(target, id, atlas_shape, atlas_shape.root(), &mut memo);
+            contains[i] = is[i] || target[id].op.children().iter().any(|c| contains[c.index()]);
+        }
         let mut steps = Vec::new();
         let mut stretched = false;
-        q.visit(target, target.root(), atlas_shape, &mut steps, &mut stretched);
+        let found = Found {
+            is: &is,
+            contains: &contains,
+        };
+        q.visit(target, target.root(), &found, &mut steps, &mut stretched);
         q
     }
 
@@ -81,11 +99,14 @@ impl RestQuery {
         &mut self,
         target: &Shape,
         id: NodeId,
-        atlas: &Shape,
+        found: &Found,
         steps: &mut Vec<Op>,
         stretched: &mut bool,
     ) {
-        if same(target, id, atlas, atlas.root()) {
+        if !found.contains[id.index()] || self.truncated {
+            return;
+        }
+        if found.is[id.index()] {
             if self.occurrences.len() == MAX_OCCURRENCES {
                 self.truncated = true;
             } else {
@@ -111,7 +132,7 @@ impl RestQuery {
         };
         for c in children {
             stacker::maybe_grow(64 * 1024, 1024 * 1024, || {
-                self.visit(target, c, atlas, steps, stretched)
+                self.visit(target, c, found, steps, stretched)
             });
         }
         if maps {
@@ -183,19 +204,36 @@ pub fn child_point(op: &Op, p: DVec3) -> DVec3 {
     }
 }
 
+/// Which target nodes are the atlas's shape, and which contain it.
+struct Found<'a> {
+    is: &'a [bool],
+    contains: &'a [bool],
+}
+
+/// Comparisons already made, by node pair: shapes are DAGs (a `let` used twice), and
+/// comparing them as trees can take exponential time.
+type Memo = std::collections::HashMap<(NodeId, NodeId), bool>;
+
 /// Whether subtree `x` of `a` and subtree `y` of `b` are the same shape.
 pub fn same(a: &Shape, x: NodeId, b: &Shape, y: NodeId) -> bool {
+    same_memo(a, x, b, y, &mut Memo::default())
+}
+
+fn same_memo(a: &Shape, x: NodeId, b: &Shape, y: NodeId, memo: &mut Memo) -> bool {
+    if let Some(&r) = memo.get(&(x, y)) {
+        return r;
+    }
     let (oa, ob) = (&a[x].op, &b[y].op);
-    if std::mem::discriminant(oa) != std::mem::discriminant(ob) {
-        return false;
-    }
-    let (ca, cb) = (oa.children(), ob.children());
-    if ca.len() != cb.len() || strip(oa) != strip(ob) {
-        return false;
-    }
-    ca.iter().zip(&cb).all(|(&i, &j)| {
-        stacker::maybe_grow(64 * 1024, 1024 * 1024, || same(a, i, b, j))
-    })
+    let r = std::mem::discriminant(oa) == std::mem::discriminant(ob) && {
+        let (ca, cb) = (oa.children(), ob.children());
+        ca.len() == cb.len()
+            && strip(oa) == strip(ob)
+            && ca.iter().zip(&cb).all(|(&i, &j)| {
+                stacker::maybe_grow(64 * 1024, 1024 * 1024, || same_memo(a, i, b, j, memo))
+            })
+    };
+    memo.insert((x, y), r);
+    r
 }
 
 /// The op with its children's ids zeroed, to compare the op's own parameters.

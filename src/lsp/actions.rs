@@ -95,9 +95,12 @@ pub(super) fn resolve(docs: &Docs, mut a: lsp::CodeAction) -> Result<lsp::CodeAc
     };
     let (_, edit) = seeds::place_edit(&o.doc, atlas, Default::default())
         .map_err(|e| Failure::new(lsp_server::ErrorCode::RequestFailed, e))?;
-    let uri: lsp::Uri = uri
-        .parse()
-        .map_err(|_| Failure::new(lsp_server::ErrorCode::InvalidParams, format!("bad uri {uri}")))?;
+    let uri: lsp::Uri = uri.parse().map_err(|_| {
+        Failure::new(
+            lsp_server::ErrorCode::InvalidParams,
+            format!("bad uri {uri}"),
+        )
+    })?;
     a.edit = Some(lsp::WorkspaceEdit {
         changes: Some(HashMap::from([(
             uri,

@@ -202,12 +202,17 @@ impl Checker<'_> {
                         span,
                         format!("reads `{}`", def.name),
                     )
-                    .with_label(def.shape_span, format!("atlas `{}` is on this shape", def.name))
+                    .with_label(
+                        def.shape_span,
+                        format!("atlas `{}` is on this shape", def.name),
+                    )
                     .with_note(
                         "it is read at the projection of each point onto the base shape's surface \
                          (Eq. 57), where only an atlas on that surface has coordinates",
                     )
-                    .with_help("declare an atlas on the base shape, or use the atlas's shape as the base"),
+                    .with_help(
+                        "declare an atlas on the base shape, or use the atlas's shape as the base",
+                    ),
                 );
                 ok = false;
             }

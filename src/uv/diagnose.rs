@@ -112,7 +112,9 @@ fn mirrored_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
 /// Where the render target uses the atlas's shape through `elongate` (no inverse) or in
 /// more places than are followed.
 fn rest_pose(def: &AtlasDef, atlas: &Atlas, program: &Program, out: &mut Vec<Diagnostic>) {
-    let Some(render) = &program.render else { return };
+    let Some(render) = &program.render else {
+        return;
+    };
     let why = if atlas.rest.stretched {
         "through `elongate`, which has no inverse: the uv are constant across its stretched middle"
     } else if atlas.rest.truncated {

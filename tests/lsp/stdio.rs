@@ -368,10 +368,12 @@ fn place_seeds_automatically_is_a_resolved_code_action() {
     p.send(did_open(super::URI, text));
     let d = p.diagnostics();
     assert_eq!(d["diagnostics"][0]["code"], "E0115");
-    p.send(json!({ "jsonrpc": "2.0", "id": 2, "method": "textDocument/codeAction", "params": {
+    p.send(
+        json!({ "jsonrpc": "2.0", "id": 2, "method": "textDocument/codeAction", "params": {
         "textDocument": { "uri": super::URI },
         "range": { "start": { "line": 1, "character": 2 }, "end": { "line": 1, "character": 2 } },
-        "context": { "diagnostics": [] } } }));
+        "context": { "diagnostics": [] } } }),
+    );
     let r = p.response(2);
     let list = r["result"].as_array().unwrap();
     let action = list
@@ -383,12 +385,24 @@ fn place_seeds_automatically_is_a_resolved_code_action() {
     assert!(action["edit"].is_null(), "the edit waits for resolve");
     p.send(json!({ "jsonrpc": "2.0", "id": 3, "method": "codeAction/resolve", "params": action }));
     let resolved = p.response(3)["result"].clone();
-    let edits = resolved["edit"]["changes"][super::URI].as_array().unwrap().clone();
+    let edits = resolved["edit"]["changes"][super::URI]
+        .as_array()
+        .unwrap()
+        .clone();
     assert_eq!(edits.len(), 1);
-    assert_eq!(edits[0]["range"]["start"], json!({ "line": 1, "character": 0 }));
-    assert_eq!(edits[0]["range"]["end"], json!({ "line": 3, "character": 1 }));
+    assert_eq!(
+        edits[0]["range"]["start"],
+        json!({ "line": 1, "character": 0 })
+    );
+    assert_eq!(
+        edits[0]["range"]["end"],
+        json!({ "line": 3, "character": 1 })
+    );
     let block = edits[0]["newText"].as_str().unwrap();
-    assert!(block.contains("steps = 12;") && block.contains("seed s1 = "), "{block}");
+    assert!(
+        block.contains("steps = 12;") && block.contains("seed s1 = "),
+        "{block}"
+    );
     // Applying the edit (lines 1..=3 replaced) gives a scene that checks clean.
     let lines: Vec<&str> = text.lines().collect();
     let edited = format!("{}\n{block}\n{}\n", lines[0], lines[4..].join("\n"));

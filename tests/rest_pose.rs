@@ -301,3 +301,24 @@ fn shared_chains_are_followed_up_to_the_limit() {
     );
     eprintln!("checked in {:.2} s", started.elapsed().as_secs_f64());
 }
+
+/// A displaced shape under a warp, textured from its base's atlas: the render target
+/// needs the height's texture to be lowered, and then its rest-pose query finds the
+/// base under the displacement and the twist.
+#[test]
+fn a_twisted_displaced_shape_queries_its_base_at_the_rest_pose() {
+    let a = checked(
+        "let shaft = cylinder(radius: 0.44, height: 2.6);\n\
+         let bumps = image(\"textures/bricks_height.png\");\n\
+         atlas skin on shaft { steps = 12; seed f = [0, 0, 0.44] tangent [1, 0, 0]; }\n\
+         let column = shaft.displace(bumps.sample(skin.uv).r, scale: 0.05);\n\
+         material m { color = [skin.uv, 0]; }\n\
+         render column.twist(axis: [0, 1, 0], rate: 0.5).paint(m);",
+    );
+    let at = atlas(&a);
+    assert_eq!(at.rest.occurrences.len(), 1);
+    assert!(matches!(
+        at.rest.occurrences[0].steps[..],
+        [sdfc::ir::Op::Twist { .. }]
+    ));
+}

@@ -17,11 +17,14 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
     // Atlases on displaced shapes evaluate their heights: those read textures (their
-    // texels bound the heights) and the atlases prepared before them.
+    // texels bound the heights) and the atlases prepared before them. A displaced
+    // render target needs the textures to be lowered for its rest-pose query.
     let displaced = program
         .atlases
         .iter()
-        .any(|d| crate::sema::displaced(&d.shape).is_some());
+        .map(|d| &d.shape)
+        .chain(program.render.as_ref().map(|r| &r.target))
+        .any(|v| crate::sema::displaced(v).is_some());
     let textures = if displaced {
         ir::material::Textures::load(program).unwrap_or_default()
     } else {

@@ -120,3 +120,54 @@ fn every_face_of_a_box_gets_a_seed_and_placement_is_deterministic() {
 fn sdfc_samples(shape: &sdfc::ir::Shape) -> Vec<sdfc::uv::seeds::SurfaceSample> {
     sdfc::bake::mesh::surface_samples(shape, 40).unwrap()
 }
+
+/// `--keep` ("add seeds to cover the gaps"): the robot with its legs' seeds removed
+/// keeps every seed and merge it has, word for word and in place, and gains seeds
+/// where the legs are uncovered; the result covers the target share and checks clean.
+#[test]
+fn keep_adds_seeds_to_the_gaps_and_leaves_the_seeds_there() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("textures")).unwrap();
+    std::fs::copy(
+        "examples/textures/bricks.png",
+        dir.path().join("textures/bricks.png"),
+    )
+    .unwrap();
+    let robot = std::fs::read_to_string("examples/robot.sdf").unwrap();
+    let without: String = robot
+        .lines()
+        .filter(|l| !["shin_", "calf_", "hip_"].iter().any(|k| l.contains(k)))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let path = dir.path().join("robot.sdf");
+    std::fs::write(&path, &without).unwrap();
+    let (code, _, err) = sdfc(&["seeds", path.to_str().unwrap(), "--keep", "--write"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("(24 kept)"), "{err}");
+    let coverage: f64 = err
+        .split("coverage ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(coverage >= 99.5, "{err}");
+    let written = std::fs::read_to_string(&path).unwrap();
+    // Every line of the atlas block that was there is still there, in order.
+    let mut rest = written.as_str();
+    for line in without
+        .lines()
+        .filter(|l| l.trim_start().starts_with("seed ") || l.trim_start().starts_with("merge "))
+    {
+        let at = rest
+            .find(line.trim())
+            .unwrap_or_else(|| panic!("lost: {line}\n{written}"));
+        rest = &rest[at..];
+    }
+    assert!(written.contains("seed auto0 = "), "{written}");
+    let (code, out, err) = sdfc(&["check", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("0 errors, 0 warnings") || err.contains("0 errors, 0 warnings"),
+        "{out}{err}"
+    );
+}

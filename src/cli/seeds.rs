@@ -2,9 +2,8 @@
 //! as scene text or written into the scene file.
 
 use super::{exit, read_source};
-use sdfc::bake::mesh::surface_samples;
-use sdfc::ide::seeds::{rewrite, statements};
-use sdfc::uv::seeds::{place, PlaceOptions};
+use sdfc::ide::seeds::{place_edit_with, statements};
+use sdfc::uv::seeds::PlaceOptions;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -29,6 +28,10 @@ pub struct SeedsArgs {
     /// formatted) instead of printing them.
     #[arg(long)]
     pub write: bool,
+    /// Keep the atlas's own seeds and merges and add seeds (and merges) only where
+    /// the surface is still uncovered.
+    #[arg(long)]
+    pub keep: bool,
 }
 
 pub fn run(args: SeedsArgs) -> ExitCode {
@@ -84,32 +87,29 @@ pub fn run(args: SeedsArgs) -> ExitCode {
         (None, 0) => return usage(format!("{name} has no atlas")),
         (None, _) => return usage(format!("{name} has several atlases: name one with --atlas")),
     };
-    let Some(shape) = sdfc::ir::lower_shape(&def.shape) else {
-        return ExitCode::from(exit::SCENE);
-    };
+    let atlas = def.name.clone();
     let started = Instant::now();
-    let samples = match surface_samples(&shape, args.grid) {
-        Ok(s) => s,
+    let options = PlaceOptions {
+        target: args.target_coverage,
+        max_seeds: args.max_seeds,
+        spacing: None,
+        keep: args.keep,
+    };
+    let doc = sdfc::ide::Document {
+        text: source.clone(),
+        analysis,
+    };
+    let (placement, edit) = match place_edit_with(&doc, &atlas, options, args.grid) {
+        Ok(x) => x,
         Err(e) => return usage(e),
     };
-    let placement = place(
-        def,
-        &shape,
-        &samples,
-        PlaceOptions {
-            target: args.target_coverage,
-            max_seeds: args.max_seeds,
-            spacing: None,
-        },
-    );
     let took = started.elapsed();
+    let (kept_seeds, kept_merges) = placement.kept;
     eprintln!(
-        "atlas `{}`: {} seeds, {} merges, coverage {:.2} % of the surface by area ({} samples, {} failing), in {:.2} s",
-        def.name,
+        "atlas `{atlas}`: {} seeds ({kept_seeds} kept), {} merges ({kept_merges} kept), coverage {:.2} % of the surface by area ({} failing samples), in {:.2} s",
         placement.seeds.len(),
         placement.merges.len(),
         100.0 * placement.coverage,
-        samples.len(),
         placement.failing.len(),
         took.as_secs_f64()
     );
@@ -123,16 +123,22 @@ pub fn run(args: SeedsArgs) -> ExitCode {
             100.0 * args.target_coverage
         );
     }
-    let text = statements(&placement);
     if !args.write {
+        // The statements: all of them, or with --keep the added ones.
+        let text = if args.keep {
+            edit.text.trim_start_matches('\n').to_string()
+        } else {
+            statements(&placement)
+        };
         print!("{text}");
         return ExitCode::SUCCESS;
     }
-    let (start, end) = (def.span.start, def.span.end);
-    let Some(item) = rewrite(&source[start..end], &text) else {
-        return usage(format!("cannot find the body of atlas `{}`", def.name));
-    };
-    let edited = format!("{}{item}{}", &source[..start], &source[end..]);
+    let edited = format!(
+        "{}{}{}",
+        &source[..edit.span.start],
+        edit.text,
+        &source[edit.span.end..]
+    );
     let formatted = sdfc::ide::format::format(&edited).unwrap_or(edited);
     let check = sdfc::driver::check(&formatted, Some(&base));
     if check.diagnostics.iter().any(|d| d.is_error()) {

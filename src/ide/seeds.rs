@@ -10,10 +10,11 @@ use crate::span::Span;
 use crate::uv::seeds::{place, PlaceOptions, Placement};
 use glam::DVec3;
 
-/// The title of the action.
+/// The titles of the actions: all seeds anew, or the seeds there kept and added to.
 pub const TITLE: &str = "Place seeds automatically";
+pub const TITLE_KEEP: &str = "Add seeds to cover the gaps";
 
-/// Surface samples: dual-contouring cells along the shape's longest side.
+/// Surface samples: dual-contouring cells along the shape's longest side (the default).
 pub const GRID: usize = 40;
 
 fn num(x: f64) -> String {
@@ -30,21 +31,32 @@ fn vec3(p: DVec3) -> String {
     format!("[{}, {}, {}]", num(p.x), num(p.y), num(p.z))
 }
 
-/// The placement as atlas statements, four spaces in.
+/// The placement as atlas statements, four spaces in: every seed and merge, named
+/// `s0`, `s1`, …
 pub fn statements(placement: &Placement) -> String {
+    let names: Vec<String> = (0..placement.seeds.len())
+        .map(|k| format!("s{k}"))
+        .collect();
+    added(placement, &names, 0, 0)
+}
+
+/// The statements of the seeds from `from_seed` on and the merges from `from_merge`
+/// on, with the seeds named by `names`.
+fn added(placement: &Placement, names: &[String], from_seed: usize, from_merge: usize) -> String {
     let mut out = String::new();
-    for (k, (p, t)) in placement.seeds.iter().enumerate() {
+    for (k, (p, t)) in placement.seeds.iter().enumerate().skip(from_seed) {
+        let name = &names[k];
         match t {
             Some(t) => out.push_str(&format!(
-                "    seed s{k} = {} tangent {};\n",
+                "    seed {name} = {} tangent {};\n",
                 vec3(*p),
                 vec3(*t)
             )),
-            None => out.push_str(&format!("    seed s{k} = {};\n", vec3(*p))),
+            None => out.push_str(&format!("    seed {name} = {};\n", vec3(*p))),
         }
     }
-    for (a, b) in &placement.merges {
-        out.push_str(&format!("    merge s{a} s{b};\n"));
+    for (a, b) in placement.merges.iter().skip(from_merge) {
+        out.push_str(&format!("    merge {} {};\n", names[*a], names[*b]));
     }
     out
 }
@@ -74,10 +86,10 @@ pub fn rewrite(item: &str, statements: &str) -> Option<String> {
     ))
 }
 
-/// The atlases whose item touches `range`, by name, with their item spans: where the
-/// action is offered. Only when the document has no errors besides atlases without
-/// seeds (what the action is for).
-pub fn offered(doc: &Document, range: Span) -> Vec<(String, Span)> {
+/// The atlases whose item touches `range`, by name, with whether they have seeds (to
+/// keep): where the actions are offered. Only when the document has no errors besides
+/// atlases without seeds (what the actions are for).
+pub fn offered(doc: &Document, range: Span) -> Vec<(String, bool)> {
     let blocking = doc
         .analysis
         .diagnostics
@@ -91,16 +103,36 @@ pub fn offered(doc: &Document, range: Span) -> Vec<(String, Span)> {
         .atlases
         .iter()
         .filter(|a| a.span.start <= range.end && range.start <= a.span.end)
-        .map(|a| (a.name.clone(), a.span))
+        .map(|a| (a.name.clone(), !a.seeds.is_empty()))
         .collect()
 }
 
-/// Places seeds and merges for atlas `name` and returns the placement with the edit
-/// that writes them into its block.
+/// Places seeds and merges for atlas `name` (surface samples on a `grid`-cell mesh)
+/// and returns the placement with the edit that writes them into its block: the whole
+/// block's seeds and merges replaced, or with `options.keep` the new ones added.
+pub fn place_edit_with(
+    doc: &Document,
+    name: &str,
+    options: PlaceOptions,
+    grid: usize,
+) -> Result<(Placement, Edit), String> {
+    place_edit_grid(doc, name, options, grid)
+}
+
+/// [`place_edit_with`] on the default grid.
 pub fn place_edit(
     doc: &Document,
     name: &str,
     options: PlaceOptions,
+) -> Result<(Placement, Edit), String> {
+    place_edit_grid(doc, name, options, GRID)
+}
+
+fn place_edit_grid(
+    doc: &Document,
+    name: &str,
+    options: PlaceOptions,
+    grid: usize,
 ) -> Result<(Placement, Edit), String> {
     let def = doc
         .analysis
@@ -111,13 +143,39 @@ pub fn place_edit(
         .ok_or_else(|| format!("no atlas `{name}`"))?;
     let shape = crate::ir::lower_shape(&def.shape)
         .ok_or_else(|| format!("the shape of atlas `{name}` cannot be lowered"))?;
-    let samples = surface_samples(&shape, GRID)?;
+    let samples = surface_samples(&shape, grid)?;
     let placement = place(def, &shape, &samples, options);
     let span = def.span;
     let item = doc
         .text
         .get(span.start..span.end)
         .ok_or_else(|| String::from("the atlas's span is outside the text"))?;
+    if options.keep {
+        // New statements before the block's closing brace; the seeds there keep their
+        // names, new ones are `autoK` (numbered past any name already taken).
+        let close = item
+            .rfind('}')
+            .ok_or_else(|| format!("cannot find the body of atlas `{name}`"))?;
+        let (seeds, merges) = placement.kept;
+        let mut names: Vec<String> = def.seeds.iter().map(|s| s.name.clone()).collect();
+        let mut k = 0;
+        while names.len() < placement.seeds.len() {
+            let candidate = format!("auto{k}");
+            k += 1;
+            if !names.contains(&candidate) {
+                names.push(candidate);
+            }
+        }
+        let text = added(&placement, &names, seeds, merges);
+        let at = span.start + close;
+        let before = item[..close].trim_end_matches([' ', '\t']);
+        let lead = if before.ends_with('\n') { "" } else { "\n" };
+        let edit = Edit {
+            span: Span::new(at, at),
+            text: format!("{lead}{text}"),
+        };
+        return Ok((placement, edit));
+    }
     let text = rewrite(item, &statements(&placement))
         .ok_or_else(|| format!("cannot find the body of atlas `{name}`"))?;
     Ok((placement, Edit { span, text }))

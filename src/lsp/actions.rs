@@ -67,13 +67,23 @@ pub(super) fn code_actions(
     // "Place seeds automatically" on the atlas under the range: offered cheaply, its
     // edit computed on `codeAction/resolve` (placement takes about a second).
     let mut actions = actions;
-    for (atlas, _) in seeds::offered(&o.doc, span_of(o, p.range)) {
-        actions.push(lsp::CodeActionOrCommand::CodeAction(lsp::CodeAction {
-            title: format!("{} in `{atlas}`", seeds::TITLE),
-            kind: Some(lsp::CodeActionKind::REFACTOR_REWRITE),
-            data: Some(serde_json::json!({ "uri": uri.as_str(), "atlas": atlas })),
-            ..Default::default()
-        }));
+    for (atlas, has_seeds) in seeds::offered(&o.doc, span_of(o, p.range)) {
+        let modes: &[bool] = if has_seeds { &[false, true] } else { &[false] };
+        for &keep in modes {
+            let title = if keep {
+                seeds::TITLE_KEEP
+            } else {
+                seeds::TITLE
+            };
+            actions.push(lsp::CodeActionOrCommand::CodeAction(lsp::CodeAction {
+                title: format!("{title} in `{atlas}`"),
+                kind: Some(lsp::CodeActionKind::REFACTOR_REWRITE),
+                data: Some(
+                    serde_json::json!({ "uri": uri.as_str(), "atlas": atlas, "keep": keep }),
+                ),
+                ..Default::default()
+            }));
+        }
     }
     Ok(Some(actions))
 }
@@ -93,7 +103,11 @@ pub(super) fn resolve(docs: &Docs, mut a: lsp::CodeAction) -> Result<lsp::CodeAc
             format!("{uri} is not open"),
         ));
     };
-    let (_, edit) = seeds::place_edit(&o.doc, atlas, Default::default())
+    let options = crate::uv::seeds::PlaceOptions {
+        keep: data["keep"].as_bool().unwrap_or(false),
+        ..Default::default()
+    };
+    let (_, edit) = seeds::place_edit(&o.doc, atlas, options)
         .map_err(|e| Failure::new(lsp_server::ErrorCode::RequestFailed, e))?;
     let uri: lsp::Uri = uri.parse().map_err(|_| {
         Failure::new(

@@ -30,6 +30,11 @@
 //! **Coverage** at the end is Alg. 2 itself (`Atlas::sample`) at every sample,
 //! weighted by area: what the renderer will do.
 //!
+//! **Keeping the seeds there** (`PlaceOptions::keep`): the atlas's own seeds (projected)
+//! and merges come first, as they are; placement only adds seeds where the surface is
+//! still uncovered, and the forest only adds merges that touch a new seed, joining the
+//! existing groups without closing a cycle.
+//!
 //! Everything is deterministic: samples are visited in order and ties go to the lower
 //! index.
 
@@ -60,6 +65,8 @@ pub struct PlaceOptions {
     /// this distance (default D/2): neighbouring seeds are then within reach of each
     /// other, so they can merge.
     pub spacing: Option<f64>,
+    /// Keep the atlas's own seeds and merges and add to them (see the module docs).
+    pub keep: bool,
 }
 
 impl Default for PlaceOptions {
@@ -68,13 +75,17 @@ impl Default for PlaceOptions {
             target: 0.995,
             max_seeds: 256,
             spacing: None,
+            keep: false,
         }
     }
 }
 
-/// The seeds and merges found, and how well they cover.
+/// The seeds and merges found, and how well they cover. With `keep`, the atlas's own
+/// seeds and merges come first ([`Placement::kept`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Placement {
+    /// How many of `seeds` and of `merges` are the atlas's own.
+    pub kept: (usize, usize),
     /// Seed positions (on the surface) and, for the first seed of each merge group and
     /// every unmerged seed, a tangent.
     pub seeds: Vec<(DVec3, Option<DVec3>)>,
@@ -129,7 +140,7 @@ fn tangent(n: DVec3) -> DVec3 {
 }
 
 /// Places seeds and merges on `shape` for the atlas `def` (its parameters; its own
-/// seeds and merges are ignored): see the module docs.
+/// seeds and merges are ignored unless `options.keep`): see the module docs.
 pub fn place(
     def: &AtlasDef,
     shape: &Shape,
@@ -143,6 +154,23 @@ pub fn place(
     let mut seeds: Vec<(DVec3, Option<DVec3>)> = Vec::new();
     // Per sample: the two nearest seeds whose walks reach it, (distance, seed).
     let mut best: Vec<[(f64, usize); 2]> = vec![[(f64::INFINITY, usize::MAX); 2]; samples.len()];
+    // The atlas's own seeds (projected, with their tangents) and merges, kept.
+    let mut kept_merges: Vec<(usize, usize)> = Vec::new();
+    if options.keep && !def.seeds.is_empty() {
+        if let Ok(atlas) = Atlas::prepare(def, shape) {
+            seeds = def
+                .seeds
+                .iter()
+                .zip(&atlas.seeds)
+                .map(|(sd, ps)| (ps.seed.p, sd.tangent.map(DVec3::from_array)))
+                .collect();
+            kept_merges = def.merges.iter().map(|m| (m.a, m.b)).collect();
+            for i in 0..seeds.len() {
+                cover(&atlas, i, samples, reach, &mut best, &mut None);
+            }
+        }
+    }
+    let kept = (seeds.len(), kept_merges.len());
     // Seeds to place until coverage is reached, with the final Alg. 2 check between
     // rounds (it can differ from the walks' union where a nearer seed's walk fails).
     let mut covered_by_alg2: Option<Vec<bool>> = None;
@@ -194,28 +222,7 @@ pub fn place(
                 covered_by_alg2 = None;
                 break;
             };
-            let p = atlas.seeds[i].seed.p;
-            let walks: Vec<(usize, f64)> = (0..samples.len())
-                .into_par_iter()
-                .filter(|&j| (samples[j].p - p).length() < reach)
-                .filter_map(|j| {
-                    let m = atlas.walk(samples[j].p, i, reach);
-                    (m.status == Status::Ok).then_some((j, m.distance))
-                })
-                .collect();
-            for (j, d) in walks {
-                // (Optimistic until the next Alg. 2 check.)
-                if let Some(c) = covered_by_alg2.as_mut() {
-                    c[j] = true;
-                }
-                let b = &mut best[j];
-                if d < b[0].0 {
-                    b[1] = b[0];
-                    b[0] = (d, i);
-                } else if d < b[1].0 {
-                    b[1] = (d, i);
-                }
-            }
+            cover(&atlas, i, samples, reach, &mut best, &mut covered_by_alg2);
             // The new seed's own sample is covered by construction (a walk of length 0).
             if best[k][0].0 > 0.0 {
                 best[k][1] = best[k][0];
@@ -226,7 +233,7 @@ pub fn place(
             }
         }
         // Merges, then Alg. 2 over every sample.
-        let (placed, merges) = merge_forest(def, shape, &seeds, &best);
+        let (placed, merges) = merge_forest(def, shape, &seeds, &best, kept, &kept_merges);
         let atlas = Atlas::prepare(&with_seeds(def, &placed, &merges), shape).ok();
         let statuses: Vec<Status> = match &atlas {
             Some(a) => samples.par_iter().map(|s| a.sample(s.p).status).collect(),
@@ -244,6 +251,7 @@ pub fn place(
             && (0..samples.len()).any(|k| eligible[k] && !ok[k]);
         if !more {
             return Placement {
+                kept,
                 seeds: placed,
                 merges,
                 coverage,
@@ -258,24 +266,64 @@ pub fn place(
     }
 }
 
+/// Walks from seed `i` of `atlas` to every sample within `reach`, and records it among
+/// the two nearest covering seeds of the samples it reaches (and, optimistically until
+/// the next Alg. 2 check, as covering them).
+fn cover(
+    atlas: &Atlas,
+    i: usize,
+    samples: &[SurfaceSample],
+    reach: f64,
+    best: &mut [[(f64, usize); 2]],
+    covered_by_alg2: &mut Option<Vec<bool>>,
+) {
+    let p = atlas.seeds[i].seed.p;
+    let walks: Vec<(usize, f64)> = (0..samples.len())
+        .into_par_iter()
+        .filter(|&j| (samples[j].p - p).length() < reach)
+        .filter_map(|j| {
+            let m = atlas.walk(samples[j].p, i, reach);
+            (m.status == Status::Ok).then_some((j, m.distance))
+        })
+        .collect();
+    for (j, d) in walks {
+        if let Some(c) = covered_by_alg2.as_mut() {
+            c[j] = true;
+        }
+        let b = &mut best[j];
+        if d < b[0].0 {
+            b[1] = b[0];
+            b[0] = (d, i);
+        } else if d < b[1].0 {
+            b[1] = (d, i);
+        }
+    }
+}
+
 /// The merge forest over the placed seeds (see the module docs), with tangents kept on
-/// the first seed of each group only.
+/// the first seed of each group only. The first `kept.0` seeds and `kept_merges` are the
+/// atlas's own: their merges stay, their tangents stay as written, and only pairs with a
+/// new seed are candidates.
 fn merge_forest(
     def: &AtlasDef,
     shape: &Shape,
     seeds: &[(DVec3, Option<DVec3>)],
     best: &[[(f64, usize); 2]],
+    kept: (usize, usize),
+    kept_merges: &[(usize, usize)],
 ) -> (Vec<(DVec3, Option<DVec3>)>, Vec<(usize, usize)>) {
     let n = seeds.len();
+    let fixed = kept.0;
     let mut pairs: Vec<(usize, usize)> = best
         .iter()
         .filter(|b| b[0].1 != usize::MAX && b[1].1 != usize::MAX)
         .map(|b| (b[0].1.min(b[1].1), b[0].1.max(b[1].1)))
+        .filter(|&(_, b)| b >= fixed)
         .collect();
     pairs.sort_unstable();
     pairs.dedup();
     let Ok(atlas) = Atlas::prepare(&with_seeds(def, seeds, &[]), shape) else {
-        return (seeds.to_vec(), Vec::new());
+        return (seeds.to_vec(), kept_merges.to_vec());
     };
     let reach = def.params.max_distance;
     // Both walks must succeed; the length is their mean.
@@ -303,11 +351,17 @@ fn merge_forest(
         }
         i
     }
-    let mut merges: Vec<(usize, usize)> = Vec::new();
-    // One fixed tangent per group: on its root seed.
+    let mut merges: Vec<(usize, usize)> = kept_merges.to_vec();
+    for &(a, b) in kept_merges {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    // One fixed tangent per group: on its root seed (the atlas's own seeds keep theirs).
     let with_tangents = |parent: &mut Vec<usize>| -> Vec<(DVec3, Option<DVec3>)> {
         let mut placed = seeds.to_vec();
-        for (k, s) in placed.iter_mut().enumerate() {
+        for (k, s) in placed.iter_mut().enumerate().skip(fixed) {
             if root(parent, k) != k {
                 s.1 = None;
             }

@@ -410,5 +410,27 @@ fn place_seeds_automatically_is_a_resolved_code_action() {
     assert!(a.diagnostics.is_empty(), "{edited}\n{:?}", a.diagnostics);
     p.send(did_change(super::URI, 2, &edited));
     assert_eq!(p.diagnostics()["diagnostics"], json!([]));
+    // With seeds there, "add seeds to cover the gaps" is offered too.
+    p.send(
+        json!({ "jsonrpc": "2.0", "id": 4, "method": "textDocument/codeAction", "params": {
+        "textDocument": { "uri": super::URI },
+        "range": { "start": { "line": 1, "character": 2 }, "end": { "line": 1, "character": 2 } },
+        "context": { "diagnostics": [] } } }),
+    );
+    let r = p.response(4);
+    let titles: Vec<&str> = r["result"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|a| a["title"].as_str())
+        .collect();
+    assert_eq!(
+        titles,
+        [
+            "Place seeds automatically in `skin`",
+            "Add seeds to cover the gaps in `skin`"
+        ],
+        "{r}"
+    );
     assert!(p.stop().success());
 }

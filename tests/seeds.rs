@@ -171,3 +171,28 @@ fn keep_adds_seeds_to_the_gaps_and_leaves_the_seeds_there() {
         "{out}{err}"
     );
 }
+
+/// The stretch report: 1 for an isometry (a flat slab's top, one seed), above 1 where
+/// the log map stretches (a sphere with one seed, far from it).
+#[test]
+fn stretch_is_one_on_a_plane_and_grows_on_a_sphere() {
+    let measure = |src: &str| {
+        let a = sdfc::driver::check(src, None);
+        assert!(!a.has_errors(), "{:?}", a.diagnostics);
+        let atlas = a.atlases[0].as_ref().unwrap();
+        let samples = sdfc::bake::mesh::surface_samples(&atlas.shape, 24).unwrap();
+        sdfc::uv::seeds::stretch(atlas, &samples)
+    };
+    let (mean, p95, n) = measure(
+        "let slab = box([4, 0.5, 4]);\natlas a on slab { seed o = [0, 0.25, 0] tangent [1, 0, 0]; }\nrender slab;",
+    );
+    assert!(n > 100, "{n}");
+    assert!(
+        (mean - 1.0).abs() < 1e-3 && (p95 - 1.0).abs() < 1e-3,
+        "{mean} {p95}"
+    );
+    let (mean, p95, _) = measure(
+        "let ball = sphere(1);\natlas a on ball { max_distance = 3.2; seed o = [0, 0, 1]; }\nrender ball;",
+    );
+    assert!(mean > 1.1 && p95 > mean, "{mean} {p95}");
+}

@@ -34,6 +34,38 @@ pub struct SeedsArgs {
     pub keep: bool,
 }
 
+/// "stretch (mean / 95th percentile): as written …, placed …" for the atlas `name`.
+fn distortion(
+    doc: &sdfc::ide::Document,
+    name: &str,
+    placement: &sdfc::uv::seeds::Placement,
+    grid: usize,
+) -> Option<String> {
+    let def = doc
+        .analysis
+        .program
+        .atlases
+        .iter()
+        .find(|a| a.name == name)?;
+    let shape = sdfc::ir::lower_shape(&def.shape)?;
+    let samples = sdfc::bake::mesh::surface_samples(&shape, grid).ok()?;
+    let measure = |d: &sdfc::sema::AtlasDef| {
+        let atlas = sdfc::uv::Atlas::prepare(d, &shape).ok()?;
+        let (mean, p95, n) = sdfc::uv::seeds::stretch(&atlas, &samples);
+        (n > 0).then(|| format!("{mean:.3} / {p95:.3} over {n} samples"))
+    };
+    let placed = sdfc::uv::seeds::with_seeds(def, &placement.seeds, &placement.merges);
+    let written = if def.seeds.is_empty() {
+        String::from("no seeds")
+    } else {
+        measure(def).unwrap_or_else(|| String::from("not measurable"))
+    };
+    Some(format!(
+        "stretch max(s1, 1/s2) (mean / 95th percentile): as written {written}; placed {}",
+        measure(&placed).unwrap_or_else(|| String::from("not measurable"))
+    ))
+}
+
 pub fn run(args: SeedsArgs) -> ExitCode {
     let usage = |m: String| {
         eprintln!("error: {m}");
@@ -122,6 +154,11 @@ pub fn run(args: SeedsArgs) -> ExitCode {
             "warning: the target coverage {:.2} % is not reached; failing samples by status: {by:?} (thin regions or islands too small for a seed's walk; try --grid or the atlas's steps)",
             100.0 * args.target_coverage
         );
+    }
+    // The local stretch (`--view distortion`'s measure) of the atlas as written and as
+    // placed, on the same samples.
+    if let Some(report) = distortion(&doc, &atlas, &placement, args.grid) {
+        eprintln!("{report}");
     }
     if !args.write {
         // The statements: all of them, or with --keep the added ones.

@@ -390,3 +390,41 @@ fn merge_forest(
     let placed = with_tangents(&mut parent);
     (placed, merges)
 }
+
+/// The local stretch of an atlas's uv over surface samples, as `--view distortion`
+/// measures it: the uv Jacobian from two tangent offsets of 1e-3 of the shape's size,
+/// its singular values s1 ≥ s2, and the stretch max(s1, 1/s2) (1 for an isometry).
+/// Samples whose three Alg. 2 queries do not all succeed with the same seed (edges of
+/// charts, frontiers) are left out. Returns (mean, 95th percentile, samples measured).
+pub fn stretch(atlas: &Atlas, samples: &[SurfaceSample]) -> (f64, f64, usize) {
+    let h = 1e-3 * super::atlas::scale(&atlas.shape);
+    let mut values: Vec<f64> = samples
+        .par_iter()
+        .filter_map(|s| {
+            let (t1, t2) = (tangent(s.n), s.n.cross(tangent(s.n)));
+            let a = atlas.sample(s.p);
+            let b = atlas.sample(s.p + t1 * h);
+            let c = atlas.sample(s.p + t2 * h);
+            let ok = [&a, &b, &c]
+                .iter()
+                .all(|x| x.status == Status::Ok && x.seed == a.seed);
+            if !ok {
+                return None;
+            }
+            let (ju, jv) = ((b.uv - a.uv) / h, (c.uv - a.uv) / h);
+            let ss = ju.length_squared() + jv.length_squared();
+            let det = (ju.x * jv.y - ju.y * jv.x).abs();
+            let root = (ss * ss - 4.0 * det * det).max(0.0).sqrt();
+            let s1 = (0.5 * (ss + root)).sqrt();
+            let s2 = (0.5 * (ss - root)).max(1e-24).sqrt();
+            Some(s1.max(1.0 / s2))
+        })
+        .collect();
+    if values.is_empty() {
+        return (f64::NAN, f64::NAN, 0);
+    }
+    values.sort_by(f64::total_cmp);
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    let p95 = values[((values.len() as f64 * 0.95) as usize).min(values.len() - 1)];
+    (mean, p95, values.len())
+}

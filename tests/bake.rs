@@ -35,6 +35,36 @@ fn bake_source(
     pipeline::bake(gpu, &compiled.module, base, shape, options, &Quiet)
 }
 
+/// Every level-0 texel of a bake with its surface point and footprint, in the bake's
+/// order (corners, edges, interiors).
+fn level0_texels(baked: &Baked) -> (Vec<[f32; 3]>, Vec<[f32; 11]>, Vec<f64>) {
+    let inputs = pipeline::sample_points(&baked.quads, &baked.table, baked.levels[0].n);
+    let footprints = inputs
+        .corners
+        .iter()
+        .chain(&inputs.edges)
+        .chain(&inputs.interiors)
+        .map(|p| p[3] as f64)
+        .collect();
+    let p = &baked.points;
+    let points = p
+        .corners
+        .iter()
+        .chain(&p.edges)
+        .chain(&p.interiors)
+        .copied()
+        .collect();
+    let l0 = &baked.levels[0];
+    let texels = l0
+        .corners
+        .iter()
+        .chain(&l0.edges)
+        .chain(&l0.interiors)
+        .copied()
+        .collect();
+    (points, texels, footprints)
+}
+
 fn small(grid: usize) -> Options {
     Options {
         size: 256,
@@ -320,28 +350,7 @@ fn baked_textured_texels_match_the_cpu_material_reference() {
     let analysis = sdfc::driver::check(&source, Some(base));
     let eval =
         sdfc::ir::material::MaterialEval::load(&analysis.program, &analysis.atlases).unwrap();
-    let inputs = pipeline::sample_points(&baked.quads, &baked.table, baked.levels[0].n);
-    let footprints: Vec<f64> = inputs
-        .corners
-        .iter()
-        .chain(&inputs.edges)
-        .chain(&inputs.interiors)
-        .map(|p| p[3] as f64)
-        .collect();
-    let p = &baked.points;
-    let points: Vec<&[f32; 3]> = p
-        .corners
-        .iter()
-        .chain(&p.edges)
-        .chain(&p.interiors)
-        .collect();
-    let l0 = &baked.levels[0];
-    let texels: Vec<&[f32; 11]> = l0
-        .corners
-        .iter()
-        .chain(&l0.edges)
-        .chain(&l0.interiors)
-        .collect();
+    let (points, texels, footprints) = level0_texels(&baked);
     let (mut within, mut compared) = (0, 0);
     for k in (0..texels.len()).step_by(11) {
         let t = texels[k];
@@ -583,28 +592,7 @@ fn baked_normals_carry_the_normal_map() {
     let shape = analysis.scene.as_ref().unwrap().render.clone().unwrap();
     let eval =
         sdfc::ir::material::MaterialEval::load(&analysis.program, &analysis.atlases).unwrap();
-    let inputs = pipeline::sample_points(&baked.quads, &baked.table, baked.levels[0].n);
-    let footprints: Vec<f64> = inputs
-        .corners
-        .iter()
-        .chain(&inputs.edges)
-        .chain(&inputs.interiors)
-        .map(|p| p[3] as f64)
-        .collect();
-    let p = &baked.points;
-    let points: Vec<&[f32; 3]> = p
-        .corners
-        .iter()
-        .chain(&p.edges)
-        .chain(&p.interiors)
-        .collect();
-    let l0 = &baked.levels[0];
-    let texels: Vec<&[f32; 11]> = l0
-        .corners
-        .iter()
-        .chain(&l0.edges)
-        .chain(&l0.interiors)
-        .collect();
+    let (points, texels, footprints) = level0_texels(&baked);
     let (mut within, mut compared, mut tilted) = (0, 0, 0);
     for k in (0..texels.len()).step_by(7) {
         let t = texels[k];

@@ -13,12 +13,10 @@ use glam::DVec3;
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
-use sdfc::ir::eval;
 use sdfc::ir::material::MaterialEval;
 use std::path::Path;
 
 mod common;
-use common::Rng;
 
 fn analyze(name: &str) -> Analysis {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
@@ -26,28 +24,6 @@ fn analyze(name: &str) -> Analysis {
     let a = check(&src, Some(&dir));
     assert!(!a.has_errors(), "{name}: {:?}", a.diagnostics);
     a
-}
-
-fn surface_points(a: &Analysis, n: usize, seed: u64) -> Vec<(DVec3, DVec3)> {
-    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
-    let b = shape.framing_bounds();
-    let mut rng = Rng(seed);
-    let mut out = Vec::new();
-    while out.len() < n {
-        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
-        let Some(x) = eval::project(&shape, b.min + (b.max - b.min) * r, 1e-9) else {
-            continue;
-        };
-        // Ground planes are left out: they are no part of §5.
-        if !b.is_finite() && x.y < -1.25 {
-            continue;
-        }
-        let g = eval::gradient(&shape, x);
-        if g.length() > 0.5 {
-            out.push((x, g.normalize()));
-        }
-    }
-    out
 }
 
 #[test]
@@ -62,7 +38,9 @@ fn section_5_examples_agree_with_the_cpu() {
         let a = analyze(name);
         let target = a.scene.as_ref().unwrap().render.clone().unwrap();
         let m = MaterialEval::load(&a.program, &a.atlases).unwrap();
-        let points = surface_points(&a, 150, 31);
+        // Ground planes are left out: they are no part of §5.
+        let unbounded = !target.framing_bounds().is_finite();
+        let points = common::surface_points(&target, 150, 31, |x| !(unbounded && x.y < -1.25));
         // Half a level-0 texel of the bricks at 1.5 repeats per unit.
         let footprint = 0.5 / (1.5 * 128.0);
         let samples: Vec<(DVec3, DVec3, f64)> =

@@ -362,25 +362,6 @@ fn module(a: &Analysis) -> sdfc::codegen::Module {
     sdfc::driver::compile(a, &options).unwrap().module
 }
 
-/// Surface points of the rendered shape with unit normals.
-fn surface_points(a: &Analysis, n: usize, seed: u64) -> Vec<(DVec3, DVec3)> {
-    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
-    let b = shape.framing_bounds();
-    let mut rng = Rng(seed);
-    let mut out = Vec::new();
-    while out.len() < n {
-        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
-        let Some(x) = eval::project(&shape, b.min + (b.max - b.min) * r, 1e-9) else {
-            continue;
-        };
-        let g = eval::gradient(&shape, x);
-        if g.length() > 0.5 {
-            out.push((x, g.normalize()));
-        }
-    }
-    out
-}
-
 fn v3(a: [f32; 3]) -> DVec3 {
     DVec3::from_array(a.map(|x| x as f64))
 }
@@ -406,7 +387,8 @@ fn gpu_normal_map_example_agrees_with_the_cpu() {
     let atlas = a.atlases[0].as_ref().unwrap();
     let scale = sdfc::uv::atlas::scale(&atlas.shape);
     let m = MaterialEval::load(&a.program, &a.atlases).unwrap();
-    let points = surface_points(&a, 300, 23);
+    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
+    let points = common::surface_points(&shape, 300, 23, |_| true);
     let xs: Vec<DVec3> = points.iter().map(|p| p.0).collect();
     let gpu_atlas = gpu::eval_atlas(&gpu, &module(&a).wgsl, &xs).unwrap();
     // Footprints of half a level-0 texel (1.5 repeats of 128 texels per unit of uv):

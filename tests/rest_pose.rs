@@ -47,19 +47,10 @@ material m { color = [skin.uv, 0]; }\n";
 
 /// Points on the rest shape where the atlas's sample succeeds.
 fn rest_points(shape: &sdfc::ir::Shape, atlas: &Atlas, n: usize, seed: u64) -> Vec<DVec3> {
-    let b = shape.framing_bounds();
-    let mut rng = Rng(seed);
-    let mut out = Vec::new();
-    while out.len() < n {
-        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
-        let Some(x) = eval::project(shape, b.min + (b.max - b.min) * r, 1e-10) else {
-            continue;
-        };
-        if atlas.sample(x).status == Status::Ok {
-            out.push(x);
-        }
-    }
-    out
+    common::surface_points(shape, n, seed, |x| atlas.sample(x).status == Status::Ok)
+        .into_iter()
+        .map(|(x, _)| x)
+        .collect()
 }
 
 /// A twisted, moved box: the uv at ω(x) equal the rest shape's uv at x (≤ 1e-5), and
@@ -202,21 +193,6 @@ fn mirrored_robot_has_fewer_seeds_and_covers_the_robot() {
 
 // ---- GPU against the CPU ----
 
-/// Surface points of the rendered shape.
-fn render_points(a: &Analysis, n: usize, seed: u64) -> Vec<DVec3> {
-    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
-    let b = shape.framing_bounds();
-    let mut rng = Rng(seed);
-    let mut out = Vec::new();
-    while out.len() < n {
-        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
-        if let Some(x) = eval::project(&shape, b.min + (b.max - b.min) * r, 1e-9) {
-            out.push(x);
-        }
-    }
-    out
-}
-
 fn v3(a: [f32; 3]) -> DVec3 {
     DVec3::from_array(a.map(|x| x as f64))
 }
@@ -239,7 +215,11 @@ fn gpu_rest_pose_and_mirror_agree_with_the_cpu() {
             ..Default::default()
         };
         let module = sdfc::driver::compile(&a, &options).unwrap().module;
-        let xs = render_points(&a, 200, 17);
+        let target = a.scene.as_ref().unwrap().render.clone().unwrap();
+        let xs: Vec<DVec3> = common::surface_points(&target, 200, 17, |_| true)
+            .into_iter()
+            .map(|(x, _)| x)
+            .collect();
         let got = gpu::eval_atlas(&gpu, &module.wgsl, &xs).unwrap();
         let (mut compared, mut uv_err, mut frame_err) = (0, 0.0f64, 0.0f64);
         for (x, g) in xs.iter().zip(&got) {

@@ -28,25 +28,6 @@ fn analyze(src: &str) -> Analysis {
     a
 }
 
-/// Surface points of the render target with unit normals.
-fn surface_points(a: &Analysis, n: usize, seed: u64) -> Vec<(DVec3, DVec3)> {
-    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
-    let b = shape.framing_bounds();
-    let mut rng = Rng(seed);
-    let mut out = Vec::new();
-    while out.len() < n {
-        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
-        let Some(x) = eval::project(&shape, b.min + (b.max - b.min) * r, 1e-9) else {
-            continue;
-        };
-        let g = eval::gradient(&shape, x);
-        if g.length() > 0.5 {
-            out.push((x, g.normalize()));
-        }
-    }
-    out
-}
-
 const K: f64 = 0.35;
 const SOFT: DVec3 = DVec3::new(1.1, 0.0, 0.0);
 
@@ -78,7 +59,7 @@ fn each_operand_keeps_its_material_away_from_the_band_and_blends_inside() {
     let slab = slab();
     let (brick, tile) = (1u32, 2u32);
     let (mut outside, mut inside) = (0, 0);
-    for (x, n) in surface_points(&a, 600, 7) {
+    for (x, n) in common::surface_points(&target, 600, 7, |_| true) {
         let (_, bl) = eval::eval_blend(&target, x);
         let got = m.eval_surface(&target, x, n, 1e-3);
         if x.x < 0.0 {
@@ -166,7 +147,7 @@ fn gpu_textured_csg_agrees_with_the_cpu() {
         let a = analyze(src);
         let target = a.scene.as_ref().unwrap().render.clone().unwrap();
         let m = MaterialEval::load(&a.program, &a.atlases).unwrap();
-        let points = surface_points(&a, 300, 13);
+        let points = common::surface_points(&target, 300, 13, |_| true);
         // Half a level-0 texel (1.5 repeats of the 128-texel bricks per unit of uv).
         let footprint = 0.5 / (1.5 * 128.0);
         let samples: Vec<(DVec3, DVec3, f64)> =

@@ -2,7 +2,7 @@
 //! as scene text or written into the scene file.
 
 use super::{exit, read_source};
-use sdfc::ide::seeds::{place_edit_with, statements};
+use sdfc::ide::seeds::{place_edit, statements};
 use sdfc::uv::seeds::PlaceOptions;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -131,7 +131,7 @@ pub fn run(args: SeedsArgs) -> ExitCode {
         text: source.clone(),
         analysis,
     };
-    let (placement, edit) = match place_edit_with(&doc, &atlas, options, args.grid) {
+    let (placement, edit) = match place_edit(&doc, &atlas, options, args.grid) {
         Ok(x) => x,
         Err(e) => return usage(e),
     };

@@ -107,28 +107,11 @@ pub fn offered(doc: &Document, range: Span) -> Vec<(String, bool)> {
         .collect()
 }
 
-/// Places seeds and merges for atlas `name` (surface samples on a `grid`-cell mesh)
-/// and returns the placement with the edit that writes them into its block: the whole
-/// block's seeds and merges replaced, or with `options.keep` the new ones added.
-pub fn place_edit_with(
-    doc: &Document,
-    name: &str,
-    options: PlaceOptions,
-    grid: usize,
-) -> Result<(Placement, Edit), String> {
-    place_edit_grid(doc, name, options, grid)
-}
-
-/// [`place_edit_with`] on the default grid.
+/// Places seeds and merges for atlas `name` (surface samples on a `grid`-cell mesh,
+/// [`GRID`] by default) and returns the placement with the edit that writes them into
+/// its block: the whole block's seeds and merges replaced, or with `options.keep` the
+/// new ones added.
 pub fn place_edit(
-    doc: &Document,
-    name: &str,
-    options: PlaceOptions,
-) -> Result<(Placement, Edit), String> {
-    place_edit_grid(doc, name, options, GRID)
-}
-
-fn place_edit_grid(
     doc: &Document,
     name: &str,
     options: PlaceOptions,

@@ -436,21 +436,7 @@ pub fn eval_scalar(
     atlas_count: usize,
     atlas: &mut dyn FnMut(AtlasId) -> AtlasValues,
 ) -> f64 {
-    let (tangent_u, tangent_v) = tangents(n);
-    let mut cx = Cx {
-        textures,
-        atlas,
-        samples: vec![None; atlas_count],
-        p,
-        n,
-        footprint: 0.0,
-        tangent_u,
-        tangent_v,
-        offset: None,
-        srgb: false,
-        margin: f64::INFINITY,
-    };
-    cx.value(value).x()
+    eval_data(value, p, n, textures, atlas_count, atlas)[0]
 }
 
 /// [`eval_scalar`] for a vec2 field (a shell map's uv): its first two components.
@@ -462,6 +448,20 @@ pub fn eval_vec2(
     atlas_count: usize,
     atlas: &mut dyn FnMut(AtlasId) -> AtlasValues,
 ) -> DVec2 {
+    let c = eval_data(value, p, n, textures, atlas_count, atlas);
+    DVec2::new(c[0], c[1])
+}
+
+/// A surface field's components as data at level 0 (see [`eval_scalar`]); zero for a
+/// boolean.
+fn eval_data(
+    value: &Value,
+    p: DVec3,
+    n: DVec3,
+    textures: &Textures,
+    atlas_count: usize,
+    atlas: &mut dyn FnMut(AtlasId) -> AtlasValues,
+) -> [f64; 4] {
     let (tangent_u, tangent_v) = tangents(n);
     let mut cx = Cx {
         textures,
@@ -477,7 +477,7 @@ pub fn eval_vec2(
         margin: f64::INFINITY,
     };
     match cx.value(value) {
-        V::Num(c, _) => DVec2::new(c[0], c[1]),
-        V::Bool(_) => DVec2::ZERO,
+        V::Num(c, _) => c,
+        V::Bool(_) => [0.0; 4],
     }
 }

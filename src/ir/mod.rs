@@ -184,12 +184,22 @@ pub enum Op {
 }
 
 impl Op {
-    /// The nodes this one evaluates.
+    /// The nodes this one evaluates (compile-time passes; the evaluators match on
+    /// the ops themselves).
     pub fn children(&self) -> Vec<NodeId> {
+        self.clone()
+            .children_mut()
+            .into_iter()
+            .map(|c| *c)
+            .collect()
+    }
+
+    /// The child slots of this node, to rewrite them.
+    pub fn children_mut(&mut self) -> Vec<&mut NodeId> {
         match self {
             Op::Prim(_) => Vec::new(),
-            Op::Csg { a, b, .. } => vec![*a, *b],
-            Op::ShellMap { base, tile, .. } => vec![*base, *tile],
+            Op::Csg { a, b, .. } => vec![a, b],
+            Op::ShellMap { base, tile, .. } => vec![base, tile],
             Op::Translate { child, .. }
             | Op::Rotate { child, .. }
             | Op::Scale { child, .. }
@@ -201,7 +211,7 @@ impl Op {
             | Op::Round { child, .. }
             | Op::Shell { child, .. }
             | Op::Paint { child, .. }
-            | Op::Displace { child, .. } => vec![*child],
+            | Op::Displace { child, .. } => vec![child],
         }
     }
 }

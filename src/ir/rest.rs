@@ -215,10 +215,6 @@ struct Found<'a> {
 type Memo = std::collections::HashMap<(NodeId, NodeId), bool>;
 
 /// Whether subtree `x` of `a` and subtree `y` of `b` are the same shape.
-pub fn same(a: &Shape, x: NodeId, b: &Shape, y: NodeId) -> bool {
-    same_memo(a, x, b, y, &mut Memo::default())
-}
-
 fn same_memo(a: &Shape, x: NodeId, b: &Shape, y: NodeId, memo: &mut Memo) -> bool {
     if let Some(&r) = memo.get(&(x, y)) {
         return r;
@@ -238,30 +234,9 @@ fn same_memo(a: &Shape, x: NodeId, b: &Shape, y: NodeId, memo: &mut Memo) -> boo
 
 /// The op with its children's ids zeroed, to compare the op's own parameters.
 fn strip(op: &Op) -> Op {
-    let z = NodeId::new(0);
     let mut o = op.clone();
-    match &mut o {
-        Op::Prim(_) => {}
-        Op::Csg { a, b, .. } => {
-            *a = z;
-            *b = z;
-        }
-        Op::ShellMap { base, tile, .. } => {
-            *base = z;
-            *tile = z;
-        }
-        Op::Translate { child, .. }
-        | Op::Rotate { child, .. }
-        | Op::Scale { child, .. }
-        | Op::Twist { child, .. }
-        | Op::Bend { child, .. }
-        | Op::Repeat { child, .. }
-        | Op::Mirror { child, .. }
-        | Op::Elongate { child, .. }
-        | Op::Round { child, .. }
-        | Op::Shell { child, .. }
-        | Op::Paint { child, .. }
-        | Op::Displace { child, .. } => *child = z,
+    for c in o.children_mut() {
+        *c = NodeId::new(0);
     }
     o
 }

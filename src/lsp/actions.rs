@@ -107,7 +107,7 @@ pub(super) fn resolve(docs: &Docs, mut a: lsp::CodeAction) -> Result<lsp::CodeAc
         keep: data["keep"].as_bool().unwrap_or(false),
         ..Default::default()
     };
-    let (_, edit) = seeds::place_edit(&o.doc, atlas, options)
+    let (_, edit) = seeds::place_edit(&o.doc, atlas, options, seeds::GRID)
         .map_err(|e| Failure::new(lsp_server::ErrorCode::RequestFailed, e))?;
     let uri: lsp::Uri = uri.parse().map_err(|_| {
         Failure::new(

@@ -174,3 +174,29 @@ pub fn assert_borders_identical(
     }
     (sides, corners)
 }
+
+/// `n` points on the surface of `shape` with their unit normals: random points of its
+/// framing box projected onto the zero set (to 1e-9), where the gradient is not
+/// degenerate and `keep` accepts the point. Deterministic for a `seed`.
+pub fn surface_points(
+    shape: &sdfc::ir::Shape,
+    n: usize,
+    seed: u64,
+    keep: impl Fn(glam::DVec3) -> bool,
+) -> Vec<(glam::DVec3, glam::DVec3)> {
+    use glam::DVec3;
+    let b = shape.framing_bounds();
+    let mut rng = Rng(seed);
+    let mut out = Vec::new();
+    while out.len() < n {
+        let r = DVec3::new(rng.unit(), rng.unit(), rng.unit());
+        let Some(x) = sdfc::ir::eval::project(shape, b.min + (b.max - b.min) * r, 1e-9) else {
+            continue;
+        };
+        let g = sdfc::ir::eval::gradient(shape, x);
+        if g.length() > 0.5 && keep(x) {
+            out.push((x, g.normalize()));
+        }
+    }
+    out
+}

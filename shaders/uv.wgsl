@@ -2,7 +2,7 @@
 //
 // These are the scene-independent pieces of the geodesic walk; the generator
 // emits, per atlas, a step function that evaluates the atlas's field and calls
-// these, and a walk that calls the step exactly N times with 1/(N - i) folded.
+// these, and a walk that calls the step exactly N times with N - i folded.
 // Each function mirrors one in src/uv/logmap.rs. Validates on its own with naga.
 
 // Status codes, as ATLAS.status gives them.
@@ -23,6 +23,28 @@ struct WalkState {
     // Accumulated parallel transport.
     rot: mat3x3<f32>,
     status: u32,
+    // The last step's turn of the normal, |kappa| at its start and tau, for the sharp
+    // test once the curvature at its end is known (0: no step yet).
+    turn: f32,
+    kappa: f32,
+    tau: f32,
+    // The last step's direction and chord.
+    vh: vec3<f32>,
+    s: f32,
+}
+
+// Where a geodesic shot from a seed lands (the refinement, uv/refine.rs).
+struct Shot {
+    end: vec3<f32>,
+    normal: vec3<f32>,
+    // Parallel transport along the shot.
+    rot: mat3x3<f32>,
+}
+
+// A refined walk: the log map as a tangent at the seed, and the transport.
+struct Refined {
+    t: vec3<f32>,
+    rot: mat3x3<f32>,
 }
 
 // What an atlas gives a material at a point.
@@ -44,6 +66,26 @@ struct AtlasSample {
 // Notes, item 2: the step whose parabolic chord is s; stable as alpha -> 0.
 fn uv_time_step(s: f32, alpha: f32) -> f32 {
     return s * sqrt(2.0 / (1.0 + sqrt(1.0 + s * s * alpha * alpha)));
+}
+
+// The chord of the next step: the remaining arc split evenly, on the osculating
+// circle of curvature kappa (uv/logmap.rs: step_chord).
+fn uv_step_chord(chord: f32, kappa: f32, remaining: f32) -> f32 {
+    let a = min(0.5 * abs(kappa) * chord, 1.0);
+    if (a < 1e-4) {
+        return chord / remaining;
+    }
+    return chord / remaining * max(remaining * sin(asin(a) / remaining) / a, 1.0);
+}
+
+// The smooth model's allowance for the normal's turn, as a multiple of kappa * tau
+// (uv/logmap.rs: TURN_SLACK).
+const UV_TURN_SLACK: f32 = 1.5;
+
+// Whether a step's normal turned more than the curvature at its ends explains
+// (uv/logmap.rs: sharp_turn); theta0 = acos(1 - sharp_tolerance).
+fn uv_sharp_turn(turn: f32, kappa: f32, tau: f32, theta0: f32) -> bool {
+    return turn > min(theta0 + UV_TURN_SLACK * kappa * tau, 3.0 * theta0);
 }
 
 // Notes, item 1: Simpson's rule (1-4-1) for the length of one parabolic step.

@@ -107,6 +107,30 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
+    // Every atlas refined (`refine = 1`, `2`), loop walk: what the log map's Newton
+    // corrections cost against the scene as written.
+    let mut refined = Vec::new();
+    if analysis
+        .atlases
+        .iter()
+        .flatten()
+        .any(|a| a.params.refine == 0)
+    {
+        for k in [1, 2] {
+            let mut with = analysis.clone();
+            for a in with.atlases.iter_mut().flatten() {
+                a.params.refine = k;
+            }
+            let options = Options {
+                walk: WalkForm::Loop,
+                ..base.clone()
+            };
+            match sdfc::driver::compile(&with, &options) {
+                Ok(c) => refined.push(c.module),
+                Err(e) => return compile::report(&name, &source, e),
+            }
+        }
+    }
     let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
@@ -160,6 +184,12 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ));
         rows.push(("shaded, no normal maps, loop", rolled, ViewMode::Color));
     }
+    let mut refined_rows = None;
+    if let [one, two] = &refined[..] {
+        refined_rows = Some((rows.len(), rows.len() + 1));
+        rows.push(("shaded, loop walk, refine = 1", one, ViewMode::Color));
+        rows.push(("shaded, loop walk, refine = 2", two, ViewMode::Color));
+    }
     let mut results = Vec::new();
     let mut renderers = Vec::new();
     for (name, module, mode) in rows {
@@ -195,6 +225,19 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
+    // Refined against the scene's own, loop walk, with frames alternated.
+    let mut refine_ratios = Vec::new();
+    if let Some((one, two)) = refined_rows {
+        for k in [one, two] {
+            match paired(&renderers[k], &renderers[2]) {
+                Ok(r) => refine_ratios.push(r),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(super::exit::gpu(&e));
+                }
+            }
+        }
+    }
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!("scene:     {}", scene.display());
     println!("adapter:   {}", gpu.describe());
@@ -216,35 +259,80 @@ pub fn run(args: BenchArgs) -> ExitCode {
         );
     }
     let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
-    println!(
-        "ratio shaded ÷ plain, unrolled:      {:.2}",
-        ms(unrolled_r.1) / ms(plain.1)
-    );
-    println!(
-        "ratio shaded ÷ plain, loop:          {:.2}",
-        ms(loop_r.1) / ms(plain.1)
-    );
-    println!(
-        "ratio unrolled ÷ loop, frame:        {:.2}",
-        ms(unrolled_r.1) / ms(loop_r.1)
-    );
-    println!(
-        "ratio unrolled ÷ loop, pipeline:     {:.2}",
-        ms(unrolled_r.0) / ms(loop_r.0)
-    );
-    println!("ratio warm ÷ cold start, loop:       {warm_ratio:.2} (frames alternated)");
+    // (label, value, how it was measured)
+    let mut ratios: Vec<(&str, f64, &str)> = vec![
+        (
+            "shaded ÷ plain, unrolled",
+            ms(unrolled_r.1) / ms(plain.1),
+            "",
+        ),
+        ("shaded ÷ plain, loop", ms(loop_r.1) / ms(plain.1), ""),
+        (
+            "unrolled ÷ loop, frame",
+            ms(unrolled_r.1) / ms(loop_r.1),
+            "",
+        ),
+        (
+            "unrolled ÷ loop, pipeline",
+            ms(unrolled_r.0) / ms(loop_r.0),
+            "",
+        ),
+        ("warm ÷ cold start, loop", warm_ratio, "frames alternated"),
+    ];
     if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
         // Displacements and shell maps alike are replaced by their base.
-        println!(
-            "ratio displaced ÷ undisplaced, loop: {:.2}",
-            ms(loop_r.1) / ms(undisplaced.1)
-        );
+        ratios.push((
+            "displaced ÷ undisplaced, loop",
+            ms(loop_r.1) / ms(undisplaced.1),
+            "",
+        ));
+    }
+    if let [one, two] = refine_ratios[..] {
+        ratios.push(("refine = 1 ÷ 0, loop", one, "frames alternated"));
+        ratios.push(("refine = 2 ÷ 0, loop", two, "frames alternated"));
     }
     if let [unrolled_ratio, loop_ratio] = normal_map_ratios[..] {
         // From frames alternated with the same scene's without normal maps (not the
         // rows above, which were measured one after the other).
-        println!("ratio normal maps ÷ none, unrolled:  {unrolled_ratio:.2} (frames alternated)");
-        println!("ratio normal maps ÷ none, loop:      {loop_ratio:.2} (frames alternated)");
+        ratios.push((
+            "normal maps ÷ none, unrolled",
+            unrolled_ratio,
+            "frames alternated",
+        ));
+        ratios.push(("normal maps ÷ none, loop", loop_ratio, "frames alternated"));
+    }
+    for (label, value, how) in &ratios {
+        let how = if how.is_empty() {
+            String::new()
+        } else {
+            format!(" ({how})")
+        };
+        println!("ratio {:31} {value:.2}{how}", format!("{label}:"));
+    }
+    if let Some(path) = &args.json {
+        let json = serde_json::json!({
+            "scene": scene.display().to_string(),
+            "adapter": gpu.describe(),
+            "size": [view.width, view.height],
+            "frames": args.frames.max(1),
+            "compile_ms": ms(compile_time),
+            "rows": results.iter().map(|(name, (pipeline, frame))| serde_json::json!({
+                "name": name,
+                "pipeline_ms": ms(*pipeline),
+                "frame_ms": ms(*frame),
+            })).collect::<Vec<_>>(),
+            "ratios": ratios.iter().map(|(label, value, how)| serde_json::json!({
+                "name": label,
+                "value": value,
+                "measured": if how.is_empty() { "one after the other" } else { how },
+            })).collect::<Vec<_>>(),
+        });
+        let text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
+        if let Err(e) = sdfc::fsutil::write_output(path, text.as_bytes()) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(super::exit::USAGE);
+        }
+        eprintln!("wrote {}", path.display());
     }
     ExitCode::SUCCESS
 }

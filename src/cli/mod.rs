@@ -224,6 +224,10 @@ pub struct BenchArgs {
     /// The graphics API.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
+    /// Also write the scene benchmark's figures (rows and ratios) to this file as JSON,
+    /// for tracking across commits.
+    #[arg(long, value_name = "PATH")]
+    pub json: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]

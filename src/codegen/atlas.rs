@@ -1,5 +1,5 @@
 //! Atlas code: per atlas, its field, gradient, one Alg. 1 step, the walk (unrolled
-//! to exactly N steps with 1/(N − i) folded, or a rolled loop), the search for the
+//! to exactly N steps with N − i folded, or a rolled loop), the search for the
 //! geodesic-nearest seed over the seed grid, and Alg. 2's blend with the merged
 //! neighbours. Seeds (projected positions, solved frames and offsets), the merge
 //! graph, σ and the grid are constants. The scene-independent pieces are in
@@ -30,13 +30,14 @@ impl SeedGridChoice {
 use super::emit::{lit, point_expr, vec3, Writer};
 use super::template;
 use crate::uv::grid::SeedGrid;
+use crate::uv::logmap::sharp_angle;
 use crate::uv::Atlas;
 use glam::DVec3;
 
 /// How the walk's N steps are emitted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum WalkForm {
-    /// N calls of the step, each with its constant 1/(N − i) (the default).
+    /// N calls of the step, each with its constant N − i (the default).
     #[default]
     Unrolled,
     /// A loop of N iterations.
@@ -59,13 +60,32 @@ pub fn emit(
     let walk_steps = match form {
         WalkForm::Unrolled => (0..n)
             .map(|i| {
-                let inv = lit(1.0 / (n - i) as f64);
-                format!("    st = atlas_{k}_step(st, p, dmax, {inv});\n")
+                let remaining = lit((n - i) as f64);
+                format!("    st = atlas_{k}_step(st, p, dmax, {remaining}, hmin);\n")
             })
             .collect::<String>(),
         WalkForm::Loop => format!(
-            "    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, 1.0 / f32({n}u - i));\n    }}\n"
+            "    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, f32({n}u - i), hmin);\n    }}\n"
         ),
+    };
+    // The refinement's functions and call, only where the atlas asks for it.
+    let (refine_fns, refine_call) = if p.refine == 0 {
+        (String::new(), String::new())
+    } else {
+        let fns = template::fill(
+            template::REFINE,
+            &[
+                ("k", k.to_string()),
+                ("shots", (2 * n).to_string()),
+                ("refine", p.refine.to_string()),
+                ("fd_gradient", lit(p.fd_gradient)),
+                ("fd_curvature", lit(p.fd_curvature)),
+            ],
+        )?;
+        let call = format!(
+            "    let refined = atlas_{k}_refine(x, p, np, tv, rot, hmin);\n    tv = refined.t;\n    rot = refined.rot;\n    dist = length(tv);\n"
+        );
+        (fns, call)
     };
     let cells = grid.cells();
     // Outside the grid (or without one) the list is the full one; the grid's constants
@@ -87,8 +107,10 @@ pub fn emit(
         ("onto_tolerance", lit(atlas.onto_tolerance())),
         ("reproject", p.reproject.to_string()),
         ("heuristic_tolerance", lit(p.heuristic_tolerance)),
-        ("h_curvature", lit(p.h_curvature)),
-        ("one_minus_sharp_tolerance", lit(1.0 - p.sharp_tolerance)),
+        ("fd_gradient", lit(p.fd_gradient)),
+        ("fd_curvature", lit(p.fd_curvature)),
+        ("fd_floor", lit(p.fd_floor)),
+        ("theta0", lit(sharp_angle(p.sharp_tolerance))),
         ("cells", cells.to_string()),
         ("tables", tables(k, atlas, grid)),
         (
@@ -99,6 +121,8 @@ pub fn emit(
             }),
         ),
         ("walk_steps", walk_steps),
+        ("refine_fns", refine_fns),
+        ("refine_call", refine_call),
         ("min_reach", lit(p.min_reach)),
         ("grid_cells", cells.to_string()),
         ("grid_min", vec3(grid_min)),

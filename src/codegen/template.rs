@@ -5,6 +5,8 @@
 
 /// The code of one atlas (its field, walk, Alg. 2): `shaders/atlas.wgsl.in`.
 pub const ATLAS: &str = include_str!("../../shaders/atlas.wgsl.in");
+/// An atlas's refinement (`refine` > 0): `shaders/refine.wgsl.in`.
+pub const REFINE: &str = include_str!("../../shaders/refine.wgsl.in");
 /// The scene-independent tail of every module (tracing, normals, entry points).
 pub const ENTRY: &str = include_str!("../../shaders/entry.wgsl.in");
 /// A baked mesh's renderer, with the flat layout's constants.

@@ -441,19 +441,25 @@ impl Checker<'_> {
             })
             .collect();
         let mut values = self.settings("atlas", ATLAS_SETTINGS, &settings);
-        if let Some((Value::Float(n), vspan)) = values.get("steps") {
-            let (n, vspan) = (*n, *vspan);
-            if n.fract() != 0.0 || !(1.0..=64.0).contains(&n) {
-                self.error(
-                    Diagnostic::error(
-                        codes::E_OUT_OF_RANGE,
-                        "`steps` must be a whole number from 1 to 64",
-                        vspan,
-                        format!("this is {}", fmt_num(n)),
-                    )
-                    .with_note("N is unrolled into the shader; the paper uses 5 to 40"),
-                );
-                values.remove("steps");
+        for (name, max, note) in [
+            ("steps", 64.0, "N is unrolled into the shader; the paper uses 5 to 40"),
+            ("refine", 8.0, "each correction costs about one more walk; 2 reach 1e-3 of the distance on a cylinder"),
+        ] {
+            let min = if name == "steps" { 1.0 } else { 0.0 };
+            if let Some((Value::Float(n), vspan)) = values.get(name) {
+                let (n, vspan) = (*n, *vspan);
+                if n.fract() != 0.0 || !(min..=max).contains(&n) {
+                    self.error(
+                        Diagnostic::error(
+                            codes::E_OUT_OF_RANGE,
+                            format!("`{name}` must be a whole number from {min} to {max}"),
+                            vspan,
+                            format!("this is {}", fmt_num(n)),
+                        )
+                        .with_note(note),
+                    );
+                    values.remove(name);
+                }
             }
         }
         let params = AtlasParams::new(&Settings::new(ATLAS_SETTINGS, &values));

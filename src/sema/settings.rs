@@ -47,6 +47,8 @@ impl<'a> Settings<'a> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct AtlasParams {
     pub steps: u32,
+    /// K: Newton corrections of the walk's uv (0: the paper's walk alone).
+    pub refine: u32,
     pub max_distance: f64,
     pub heuristic_tolerance: f64,
     pub sharp_tolerance: f64,
@@ -62,6 +64,7 @@ impl AtlasParams {
     pub fn new(s: &Settings) -> AtlasParams {
         AtlasParams {
             steps: s.float("steps") as u32,
+            refine: s.float("refine") as u32,
             max_distance: s.float("max_distance"),
             heuristic_tolerance: s.float("heuristic_tolerance"),
             sharp_tolerance: s.float("sharp_tolerance"),

@@ -78,6 +78,13 @@ pub enum PrepareError {
     SeedOffSurface { seed: usize },
 }
 
+/// The walk's finite-difference steps in f32 (the generated WGSL): the gradient's and
+/// the second difference's as fractions of the step length, and their floor as a
+/// fraction of the coordinates' magnitude ([`Params`]).
+pub const FD_GRADIENT: f64 = 0.05;
+pub const FD_CURVATURE: f64 = 0.25;
+pub const FD_FLOOR: f64 = 1e-4;
+
 /// The scale of a shape for finite-difference steps: its framing size.
 pub fn scale(shape: &Shape) -> f64 {
     let b = shape.framing_bounds();
@@ -136,13 +143,16 @@ impl Atlas {
         let a = &def.params;
         let params = Params {
             steps: a.steps,
+            refine: a.refine,
             max_distance: a.max_distance,
             heuristic_tolerance: a.heuristic_tolerance,
             sharp_tolerance: a.sharp_tolerance,
             min_reach: a.min_reach,
             reproject: a.reproject,
             h_gradient: 1e-3 * s,
-            h_curvature: 1e-2 * s,
+            fd_gradient: FD_GRADIENT,
+            fd_curvature: FD_CURVATURE,
+            fd_floor: FD_FLOOR,
         };
         // The merge graph, walked in f64 with the reference's fine difference steps.
         let pairs: Vec<(usize, usize)> = def
@@ -156,8 +166,7 @@ impl Atlas {
         let f = |q: DVec3| eval::distance(shape, q);
         let fine = Params {
             h_gradient: 1e-6 * s,
-            h_curvature: 1e-4 * s,
-            ..params
+            ..params.reference()
         };
         let (graph, offsets) = merge::solve(&f, &mut plain, &pairs, &fixed, &fine);
         for ((ps, seed), offset) in seeds.iter_mut().zip(plain).zip(offsets) {
@@ -192,8 +201,10 @@ impl Atlas {
     /// are then the algorithm's own.
     pub fn with_reference_steps(mut self) -> Atlas {
         let s = scale(&self.shape);
-        self.params.h_gradient = 1e-6 * s;
-        self.params.h_curvature = 1e-4 * s;
+        self.params = Params {
+            h_gradient: 1e-6 * s,
+            ..self.params.reference()
+        };
         self
     }
 

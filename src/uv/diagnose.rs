@@ -3,11 +3,11 @@
 //! cannot reach each other; cycles of merges with a topological obstruction.
 
 use super::atlas::{scale, Atlas, PrepareError};
-use super::merge::{HOLONOMY_LIMIT_DEG, RESIDUAL_LIMIT};
+use super::merge::{self, Remedy, Unreachable, HOLONOMY_LIMIT_DEG, RESIDUAL_LIMIT};
 use super::Status;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
-use crate::ir;
+use crate::ir::{self, eval};
 use crate::sema::{AtlasDef, Program};
 use glam::DVec3;
 
@@ -277,16 +277,36 @@ fn unreachable_merges(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) 
                 format!("Alg. 1 from `{b}` to `{a}` fails ({})", u.status.name()),
             )
             .with_note("merged seeds need a geodesic walk between them, in at least one direction")
-            .with_help(match u.status {
-                Status::TooFar => {
-                    String::from("raise `max_distance`, or merge through a seed in between")
-                }
-                Status::SharpFeature => String::from(
-                    "merge seeds on the same side of the edge, or raise `sharp_tolerance`",
-                ),
-                _ => String::from("merge through a seed in between"),
-            }),
+            .with_help(help(atlas, u)),
         );
+    }
+}
+
+/// What fixes an unreachable merge: a setting under which the walk succeeds, tried at
+/// compile time ([`merge::remedy`]), or else how to place the merge.
+fn help(atlas: &Atlas, u: &Unreachable) -> String {
+    let f = |q: DVec3| eval::distance(&atlas.shape, q);
+    let seeds: Vec<_> = atlas.seeds.iter().map(|s| s.seed).collect();
+    let params = atlas.params.reference();
+    match merge::remedy(&f, &seeds, u.a, u.b, u.status, &params) {
+        Some(Remedy::Steps(n)) => format!(
+            "with `steps = {n}` this merge is reachable: shorter steps follow the surface between the seeds"
+        ),
+        Some(Remedy::MaxDistance(d)) => {
+            let d = format!("{d:.6}");
+            let d = d.trim_end_matches('0').trim_end_matches('.');
+            format!("with `max_distance = {d}` this merge is reachable")
+        }
+        Some(Remedy::SharpTolerance(t)) => format!(
+            "with `sharp_tolerance = {t}` this merge is reachable, but walks then cross creases of that angle too; or merge seeds on the same side of the edge"
+        ),
+        None if u.status == Status::SharpFeature => String::from(
+            "merge seeds on the same side of the edge: no number of steps up to 64 gets across",
+        ),
+        None if u.status == Status::TooFar => String::from("merge through a seed in between"),
+        None => String::from(
+            "merge through a seed in between: no number of steps up to 64 gets across",
+        ),
     }
 }
 

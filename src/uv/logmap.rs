@@ -66,6 +66,8 @@ pub struct Seed {
 pub struct Params {
     /// N
     pub steps: u32,
+    /// K: Newton corrections towards the exact log map ([`super::refine`]).
+    pub refine: u32,
     /// D
     pub max_distance: f64,
     /// ε1
@@ -75,10 +77,30 @@ pub struct Params {
     /// r_min
     pub min_reach: f64,
     pub reproject: bool,
-    /// Finite-difference step for gradients (about 1e-3 · scale in f32).
+    /// Finite-difference step for gradients off the walk (normals, projection onto the
+    /// surface): about 1e-3 · scale in f32.
     pub h_gradient: f64,
-    /// Finite-difference step for the second directional difference (Eq. 17).
-    pub h_curvature: f64,
+    /// The walk's gradient step, as a fraction of the step length.
+    pub fd_gradient: f64,
+    /// The walk's step for the second directional difference (Eq. 17), as a fraction of
+    /// the step length.
+    pub fd_curvature: f64,
+    /// The floor of both, as a fraction of |p|∞ + |x − p| (the coordinates' magnitude,
+    /// which sets the rounding error).
+    pub fd_floor: f64,
+}
+
+impl Params {
+    /// The same walk with the f64 reference's fine difference steps (far below what f32
+    /// allows): the errors left are then the algorithm's own.
+    pub fn reference(self) -> Params {
+        Params {
+            fd_gradient: 1e-4,
+            fd_curvature: 1e-2,
+            fd_floor: 1e-10,
+            ..self
+        }
+    }
 }
 
 /// The result of one walk.
@@ -145,6 +167,22 @@ pub fn time_step(s: f64, alpha: f64) -> f64 {
     s * (2.0 / (1.0 + (1.0 + s * s * alpha * alpha).sqrt())).sqrt()
 }
 
+/// The chord of the next step: the remaining arc split evenly. Where the path ahead
+/// curves like the osculating circle of curvature κ, the remaining chord c spans the
+/// angle 2·asin(κc/2), and each of the `remaining` steps should span an equal part of
+/// it: (2/κ)·sin(asin(κc/2)/remaining). The paper's c/remaining splits the chord
+/// evenly instead, which leaves the longest steps (and the largest turns of the
+/// normal) for last on a curved tube. The two agree as κ → 0 and on the last step; it
+/// is never shorter than c/remaining.
+pub fn step_chord(chord: f64, kappa: f64, remaining: u32) -> f64 {
+    let m = remaining as f64;
+    let a = (0.5 * kappa.abs() * chord).min(1.0);
+    if a < 1e-4 {
+        return chord / m;
+    }
+    (chord / m) * (m * (a.asin() / m).sin() / a).max(1.0)
+}
+
 /// Notes, item 1: Simpson's rule (1-4-1) for the length of γ(t) = x + t v + t²/2 κ n.
 pub fn arc_length(tau: f64, kappa: f64) -> f64 {
     let k2 = kappa * kappa * tau * tau;
@@ -162,7 +200,69 @@ pub fn reproject(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DVec3 {
     }
 }
 
+/// The smooth model's allowance for the normal's turn over a step, as a multiple of
+/// κ·τ (the turn of a normal section of curvature κ over a step τ): the excess covers
+/// the geodesic torsion of directions off the principal ones (at most κτ/6 beyond 1.5κτ
+/// on a cylinder) and the change of curvature along the step.
+pub const TURN_SLACK: f64 = 1.5;
+
+/// ε2 as an angle: acos(1 − ε2), the turn per step that no smooth model has to explain.
+pub fn sharp_angle(sharp_tolerance: f64) -> f64 {
+    (1.0 - sharp_tolerance).clamp(-1.0, 1.0).acos()
+}
+
+/// Whether a step's normal turned more than a smooth surface explains: more than
+/// θ0 = acos(1 − ε2) plus [`TURN_SLACK`]·κ·τ, κ the smaller |normal curvature| at the
+/// step's two ends, or more than 3·θ0 whatever the curvature. A crease turns the normal
+/// over one step while the faces on either side are flat (κ ≈ 0 at one end at least); a
+/// smooth tube turns it by κτ, however long the step.
+pub fn sharp_turn(turn: f64, kappa: f64, tau: f64, theta0: f64) -> bool {
+    turn > (theta0 + TURN_SLACK * kappa * tau).min(3.0 * theta0)
+}
+
+/// The finite-difference steps of a walk: fractions of the step length, so that they
+/// follow the geometry the walk crosses and not the size of the scene, floored at
+/// `fd_floor` of the magnitude of the coordinates (where rounding sets the limit).
+#[derive(Debug, Clone, Copy)]
+pub struct FdSteps {
+    gradient: f64,
+    curvature: f64,
+    floor: f64,
+}
+
+impl FdSteps {
+    /// The steps of a walk from `x` to seed `p` under `params`.
+    pub fn new(params: &Params, p: DVec3, x: DVec3) -> FdSteps {
+        FdSteps {
+            gradient: params.fd_gradient,
+            curvature: params.fd_curvature,
+            floor: params.fd_floor * (p.abs().max_element() + (x - p).length()),
+        }
+    }
+    /// The gradient's step for a step of length `s`.
+    pub fn gradient(&self, s: f64) -> f64 {
+        (self.gradient * s).max(self.floor)
+    }
+    /// The second difference's step for a step of length `s`.
+    pub fn curvature(&self, s: f64) -> f64 {
+        (self.curvature * s).max(self.floor)
+    }
+}
+
+/// The normal curvature along unit tangent `vh` at `x` by the three-point second
+/// difference (Eq. 17).
+pub fn normal_curvature(f: &dyn Fn(DVec3) -> f64, x: DVec3, vh: DVec3, g: DVec3, h: f64) -> f64 {
+    let second = (f(x - vh * h) - 2.0 * f(x) + f(x + vh * h)) / (h * h);
+    -second / g.length().max(1e-12)
+}
+
 /// Alg. 1: the log map of `x` (on the surface of `f`) around `seed`.
+///
+/// Two departures from the paper, both in `shared/notes`' spirit: each step spans an
+/// equal part of the remaining arc ([`step_chord`]), and the sharp-feature test compares
+/// the normal's turn with what the curvature at the step's ends explains
+/// ([`sharp_turn`]); a step's test waits for the curvature at its end, which the next
+/// step measures anyway (after the last step, one more second difference).
 pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params) -> LogMap {
     let n_steps = params.steps.max(1);
     let p = seed.p;
@@ -183,14 +283,21 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
             at: p,
         };
     }
+    let fd = FdSteps::new(params, p, x);
+    let theta0 = sharp_angle(params.sharp_tolerance);
     let mut xi = x;
     let mut prev = x;
     let mut r = 0.0;
     let mut rot = DMat3::IDENTITY;
-    let mut gi = gradient(f, xi, params.h_gradient);
+    let mut s = d0 / n_steps as f64;
+    let mut gi = gradient(f, xi, fd.gradient(s));
     let mut ni = gi.normalize_or_zero();
+    // The last step's turn, |κ| at its start, τ and end, until its end's κ is known.
+    let mut pending: Option<(f64, f64, f64, DVec3)> = None;
+    let mut vh = DVec3::ZERO;
     for i in 0..n_steps {
-        let s = (xi - p).length() / (n_steps - i) as f64;
+        let remaining = n_steps - i;
+        let chord = (xi - p).length();
         // Direction: the tangent projection of p − x_i.
         let to_p = p - xi;
         let v = to_p - ni * ni.dot(to_p);
@@ -201,22 +308,28 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         if vl < params.heuristic_tolerance * to_p.length() {
             return LogMap::fail(Status::HeuristicFailed, xi);
         }
-        let vh = v / vl;
-        // Normal curvature along v̂ by the three-point second difference (Eq. 17).
-        let h = params.h_curvature;
-        let second = (f(xi - vh * h) - 2.0 * f(xi) + f(xi + vh * h)) / (h * h);
-        let kappa = -second / gi.length().max(1e-12);
+        vh = v / vl;
+        let kappa = normal_curvature(f, xi, vh, gi, fd.curvature(chord / remaining as f64));
+        if let Some((turn, k0, tau, at)) = pending.take() {
+            if sharp_turn(turn, k0.min(kappa.abs()), tau, theta0) {
+                return LogMap::fail(Status::SharpFeature, at);
+            }
+        }
+        s = step_chord(chord, kappa, remaining);
         let tau = time_step(s, kappa);
         // Second-order exponential-map step (Eq. 16).
         let mut next = xi + vh * tau + ni * (0.5 * tau * tau * kappa);
         if params.reproject {
-            next = reproject(f, next, params.h_gradient);
+            next = reproject(f, next, fd.gradient(s));
         }
-        let g_next = gradient(f, next, params.h_gradient);
+        let g_next = gradient(f, next, fd.gradient(s));
         let n_next = g_next.normalize_or_zero();
-        if n_next.dot(ni) < 1.0 - params.sharp_tolerance {
+        let turn = n_next.dot(ni).clamp(-1.0, 1.0).acos();
+        // Beyond 3·θ0 no curvature at the far end can excuse the turn.
+        if turn > 3.0 * theta0 {
             return LogMap::fail(Status::SharpFeature, next);
         }
+        pending = Some((turn, kappa.abs(), tau, next));
         rot *= rotation_between(n_next, ni);
         r += arc_length(tau, kappa);
         prev = xi;
@@ -225,6 +338,13 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         ni = n_next;
         if r + (xi - p).length() > params.max_distance {
             return LogMap::fail(Status::TooFar, xi);
+        }
+    }
+    if let Some((turn, k0, tau, at)) = pending {
+        let vh = (vh - ni * ni.dot(vh)).normalize_or_zero();
+        let kappa = normal_curvature(f, xi, vh, gi, fd.curvature(s));
+        if sharp_turn(turn, k0.min(kappa.abs()), tau, theta0) {
+            return LogMap::fail(Status::SharpFeature, at);
         }
     }
     let rest = (xi - p).length();
@@ -236,11 +356,15 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
     let d = prev - p;
     let t = d - seed.n * seed.n.dot(d);
     let t = t.normalize_or_zero();
-    LogMap {
+    let mut m = LogMap {
         status: Status::Ok,
         uv: DVec2::new(t.dot(seed.e1), t.dot(seed.e2)) * r,
         distance: r,
         transport: rot * rotation_between(seed.n, ni),
         at: p,
+    };
+    if params.refine > 0 {
+        super::refine::correct(f, x, seed, &mut m, params.refine, n_steps, &fd);
     }
+    m
 }

@@ -42,6 +42,65 @@ pub struct Unreachable {
     pub distance_limit: f64,
 }
 
+/// A setting under which an unreachable merge's walk succeeds ([`remedy`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Remedy {
+    Steps(u32),
+    SharpTolerance(f64),
+    MaxDistance(f64),
+}
+
+/// The first of the settings a user would try that makes seeds `a` and `b` reachable
+/// (Alg. 1 succeeds in one direction at least): for a walk that went too far, the
+/// `max_distance` it needs (rounded up); otherwise more `steps` (32, 48, 64), then,
+/// for a sharp feature, a larger `sharp_tolerance` (0.03, 0.06, 0.1).
+pub fn remedy(
+    f: &dyn Fn(DVec3) -> f64,
+    seeds: &[Seed],
+    a: usize,
+    b: usize,
+    status: Status,
+    params: &Params,
+) -> Option<Remedy> {
+    let walk = |p: &Params| {
+        [
+            log_map(f, seeds[b].p, &seeds[a], p),
+            log_map(f, seeds[a].p, &seeds[b], p),
+        ]
+        .into_iter()
+        .find(|m| m.status == Status::Ok)
+    };
+    if status == Status::TooFar {
+        let m = walk(&Params {
+            max_distance: f64::INFINITY,
+            ..*params
+        })?;
+        // Two significant digits, rounded up, with 5 % to spare.
+        let d = m.distance * 1.05;
+        let unit = 10f64.powf(d.log10().floor() - 1.0);
+        return Some(Remedy::MaxDistance((d / unit).ceil() * unit));
+    }
+    for steps in [32, 48, 64].into_iter().filter(|&n| n > params.steps) {
+        if walk(&Params { steps, ..*params }).is_some() {
+            return Some(Remedy::Steps(steps));
+        }
+    }
+    if status != Status::SharpFeature {
+        return None;
+    }
+    [0.03, 0.06, 0.1]
+        .into_iter()
+        .filter(|&t| t > params.sharp_tolerance)
+        .find(|&t| {
+            walk(&Params {
+                sharp_tolerance: t,
+                ..*params
+            })
+            .is_some()
+        })
+        .map(Remedy::SharpTolerance)
+}
+
 /// A cycle of a cycle basis of the merge graph with its obstruction measures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cycle {

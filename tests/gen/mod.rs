@@ -317,6 +317,7 @@ impl Gen {
                 }
                 let v = match spec.name {
                     "steps" => (4 + self.rng.below(29)).to_string(),
+                    "refine" => self.rng.pick(&["0", "1", "2"]).to_string(),
                     "max_distance" => self.rng.pick(&["3", "4.5", "2.5 * 2", "1e30"]).to_string(),
                     "heuristic_tolerance" => self.rng.pick(&["1e-3", "0.002", "1e-4"]).to_string(),
                     "sharp_tolerance" => self.rng.pick(&["0.015", "0.05", "0.2"]).to_string(),

@@ -147,23 +147,6 @@ fn shares(
     (idx.len() - fails.len(), idx.len(), fails)
 }
 
-fn report(name: &str, a: &Atlas, g: &Grid, src: usize, bands: &[f64]) {
-    let d = g.distances(src);
-    for w in bands.windows(2) {
-        let (ok, n, fails) = shares(a, g, &d, w[0], w[1], 200);
-        let sharp = fails.iter().filter(|s| **s == Status::SharpFeature).count();
-        eprintln!(
-            "{name} [{:.2}, {:.2}): {ok}/{n} ok, {sharp} sharp, others {:?}",
-            w[0],
-            w[1],
-            fails
-                .iter()
-                .filter(|s| **s != Status::SharpFeature)
-                .collect::<Vec<_>>()
-        );
-    }
-}
-
 fn torus_grid() -> Grid {
     Grid::new(720, 360, true, |u, v| {
         let (t, p) = (u * 2.0 * PI, v * 2.0 * PI);
@@ -254,19 +237,6 @@ fn true_creases_are_still_caught() {
     let a = atlas(round);
     let x = sdfc::ir::eval::project(&a.shape, DVec3::new(-1.0, 0.0, 0.0), 1e-10).unwrap();
     assert_eq!(a.walk(x, 0, 10.0).status, Status::Ok, "rounded ridge");
-}
-
-#[test]
-#[ignore]
-fn explore() {
-    let a = atlas("let t = torus(1, 0.35);\natlas a on t { max_distance = 10; seed s = [1.35, 0, 0] tangent [0, 1, 0]; }\nrender t;");
-    let g = torus_grid();
-    report("torus", &a, &g, 0, &[0.0, 0.4, 0.88, 1.2, 1.6, 2.0]);
-    let a = atlas("let e = ellipsoid([1.5, 1, 0.6]);\natlas a on e { max_distance = 10; seed s = [0, 0, 0.6] tangent [1, 0, 0]; }\nrender e;");
-    let g = ellipsoid_grid();
-    let src = 180 * 720 + 180;
-    eprintln!("ellipsoid source {}", g.points[src]);
-    report("ellipsoid", &a, &g, src, &[0.0, 0.6, 1.0, 1.6, 2.0, 2.5]);
 }
 
 /// The seed's and points' atlas on a radius 0.5 cylinder of `height`, in `scene` (a

@@ -441,11 +441,10 @@ impl Checker<'_> {
             })
             .collect();
         let mut values = self.settings("atlas", ATLAS_SETTINGS, &settings);
-        for (name, max, note) in [
-            ("steps", 64.0, "N is unrolled into the shader; the paper uses 5 to 40"),
-            ("refine", 8.0, "each correction costs about one more walk; 2 reach 1e-3 of the distance on a cylinder"),
+        for (name, min, max, note) in [
+            ("steps", 1.0, 64.0, "N is unrolled into the shader; the paper uses 5 to 40"),
+            ("refine", 0.0, 8.0, "each correction costs about two more walks; 2 reach 2e-4 of the distance on a cylinder"),
         ] {
-            let min = if name == "steps" { 1.0 } else { 0.0 };
             if let Some((Value::Float(n), vspan)) = values.get(name) {
                 let (n, vspan) = (*n, *vspan);
                 if n.fract() != 0.0 || !(min..=max).contains(&n) {

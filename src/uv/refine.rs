@@ -33,7 +33,7 @@ pub fn shoot(f: &dyn Fn(DVec3) -> f64, seed: &Seed, t: DVec3, steps: u32, fd: &F
     let steps = steps.max(1);
     let tau = len / steps as f64;
     let mut x = seed.p;
-    let mut g = gradient(f, x, fd.gradient(tau));
+    let g = gradient(f, x, fd.gradient(tau));
     let mut n = g.normalize_or_zero();
     let mut v = (t - n * n.dot(t)).normalize_or_zero();
     let mut transport = DMat3::IDENTITY;
@@ -55,10 +55,8 @@ pub fn shoot(f: &dyn Fn(DVec3) -> f64, seed: &Seed, t: DVec3, steps: u32, fd: &F
         kappa = normal_curvature(f, next, v, g_next, fd.curvature(tau));
         transport = rotation_between(n, n_next) * transport;
         x = next;
-        g = g_next;
         n = n_next;
     }
-    let _ = g;
     Shot {
         end: x,
         normal: n,

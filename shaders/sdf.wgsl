@@ -5,6 +5,10 @@
 // scene's constants folded in. Distances are in world units; `p` is the point
 // in the primitive's local frame. This file validates on its own with naga.
 
+// The SDF evaluations this invocation has made: the render target's (scene_map) and
+// the atlases' fields (atlas_K_f), for the evals view.
+var<private> sdf_evals: u32 = 0u;
+
 fn sd_box_core(p: vec3<f32>, half: vec3<f32>) -> f32 {
     let q = abs(p) - half;
     return length(max(q, vec3<f32>(0.0))) + min(max(q.x, max(q.y, q.z)), 0.0);

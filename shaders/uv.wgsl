@@ -23,14 +23,20 @@ struct WalkState {
     // Accumulated parallel transport.
     rot: mat3x3<f32>,
     status: u32,
-    // The last step's turn of the normal, |kappa| at its start and tau, for the sharp
-    // test once the curvature at its end is known (0: no step yet).
+    // The last step's turn of the normal, the normal's rate of turn before it and its
+    // tau, for the sharp test once the rate after it is known (0: no step yet).
     turn: f32,
-    kappa: f32,
+    before: f32,
     tau: f32,
+    // The normal's rate of turn over the last step (|kappa| of Eq. 17 before the first).
+    rate: f32,
+    // kappa for the next step: Eq. 17 before the first, then uv_turn_curvature.
+    kappa: f32,
     // The last step's direction and chord.
     vh: vec3<f32>,
     s: f32,
+    // f at the walk's start: each step ends back on this level set.
+    level: f32,
 }
 
 // Where a geodesic shot from a seed lands (the refinement, uv/refine.rs).
@@ -82,8 +88,17 @@ fn uv_step_chord(chord: f32, kappa: f32, remaining: f32) -> f32 {
 // (uv/logmap.rs: TURN_SLACK).
 const UV_TURN_SLACK: f32 = 1.5;
 
-// Whether a step's normal turned more than the curvature at its ends explains
-// (uv/logmap.rs: sharp_turn); theta0 = acos(1 - sharp_tolerance).
+// The normal curvature along vh over a step of arc length `arc` that ends at unit normal
+// n_next (uv/logmap.rs: turn_curvature).
+fn uv_turn_curvature(n_next: vec3<f32>, vh: vec3<f32>, arc: f32) -> f32 {
+    if (arc <= 0.0) {
+        return 0.0;
+    }
+    return -asin(clamp(dot(n_next, vh), -1.0, 1.0)) / arc;
+}
+
+// Whether a step's normal turned more than the normal's rate of turn on either side of
+// it explains (uv/logmap.rs: sharp_turn); theta0 = acos(1 - sharp_tolerance).
 fn uv_sharp_turn(turn: f32, kappa: f32, tau: f32, theta0: f32) -> bool {
     return turn > min(theta0 + UV_TURN_SLACK * kappa * tau, 3.0 * theta0);
 }

@@ -551,3 +551,50 @@ fn texture_level_follows_the_pixel_footprint() {
     // Sampling level 0 instead measures about 17 here; mip-mapped it is about 0.
     assert!(far < 5.0, "far texels alias: contrast {far}");
 }
+
+#[test]
+fn evals_view_counts_six_evaluations_per_walk_step() {
+    // The same textured sphere with N = 10 and N = 20: every pixel whose walk runs to
+    // its end makes exactly 6 · 10 more SDF evaluations with N = 20 (the trace, normal,
+    // shadow and material are the same); a miss makes one per trace step (one more than
+    // the steps counted when the ray leaves the far plane).
+    let Some(gpu) = gpu_for_tests() else { return };
+    let frame = |steps: u32, mode: ViewMode| {
+        let src = format!("let ball = sphere(1);\natlas skin on ball {{ steps = {steps}; max_distance = 10; seed s = [0, 0, 1] tangent [1, 0, 0]; }}\nmaterial m {{ color = mix([0.1, 0.1, 0.1], [0.9, 0.9, 0.9], checker(skin.uv, 4)); }}\nrender ball.paint(m) {{ camera = orbit(distance: 4, yaw: 0deg, pitch: 0deg, fov: 50deg); size = [32, 24]; }}");
+        let c = compile(&src, (32, 24));
+        let a = sdfc::driver::check(&src, None);
+        let options = codegen::Options {
+            walk: codegen::WalkForm::Loop,
+            ..Default::default()
+        };
+        let module = sdfc::driver::compile(&a, &options).unwrap().module;
+        gpu::render(&gpu, &module, &c.view, mode, Path::new(".")).unwrap()
+    };
+    let (short, long, steps) = (
+        frame(10, ViewMode::Evals),
+        frame(20, ViewMode::Evals),
+        frame(10, ViewMode::Steps),
+    );
+    let (mut hits, mut sixty, mut misses) = (0, 0, 0);
+    for i in 0..short.normal.len() {
+        let (a, b, s) = (short.normal[i][3], long.normal[i][3], steps.normal[i][3]);
+        if short.position[i][3] < 0.0 {
+            misses += 1;
+            assert!(
+                a == s + 1.0 || a == s,
+                "miss {i}: {a} evaluations, {s} steps"
+            );
+            assert_eq!(a, b, "miss {i}");
+        } else {
+            hits += 1;
+            assert!(a > s + 4.0, "hit {i}: {a} evaluations, {s} steps");
+            if b - a == 60.0 {
+                sixty += 1;
+            }
+        }
+    }
+    let (mean, p95, max) = gpu::eval_stats(&long);
+    eprintln!("{hits} hits, {misses} misses; N = 20: mean {mean:.1}, p95 {p95}, max {max}; {sixty} hits with exactly 60 more");
+    assert!(hits > 100 && misses > 100, "{hits} {misses}");
+    assert!(sixty as f64 >= 0.9 * hits as f64, "{sixty} of {hits}");
+}

@@ -221,6 +221,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         atlas: None,
         plain: false,
         cold: false,
+        constant_uv: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,
@@ -397,5 +398,23 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         100.0 * slowest / total.max(1e-9),
         1e6 * slowest / r.samples.max(1) as f64
     );
+    if let Some(path) = &args.json {
+        let json = serde_json::json!({
+            "bench": "bake",
+            "scene": scene.display().to_string(),
+            "adapter": gpu.describe(),
+            "atlas": [baked.atlas.width(), baked.atlas.height()],
+            "levels": baked.atlas.levels(),
+            "samples": r.samples,
+            "total_s": total,
+            "stages": r.stages.iter().map(|(n, d)| serde_json::json!({
+                "name": n,
+                "s": d.as_secs_f64(),
+            })).collect::<Vec<_>>(),
+        });
+        if let Err(code) = super::bench::write_json(path, &json) {
+            return code;
+        }
+    }
     ExitCode::SUCCESS
 }

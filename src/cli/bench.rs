@@ -6,6 +6,15 @@ use sdfc::gpu::{self, Gpu, ViewMode};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+/// One bench row: pipeline creation, median frame, SDF evaluations per pixel.
+#[derive(Debug, Clone, Copy)]
+struct Row {
+    pipeline: Duration,
+    frame: Duration,
+    evals_mean: f64,
+    evals_p95: f64,
+}
+
 fn median(mut v: Vec<Duration>) -> Duration {
     v.sort();
     v[v.len() / 2]
@@ -13,7 +22,9 @@ fn median(mut v: Vec<Duration>) -> Duration {
 
 pub fn run(args: BenchArgs) -> ExitCode {
     let scene = match &args.scene {
-        Some(s) if args.lsp_latency => return super::latency::run(s, args.edits),
+        Some(s) if args.lsp_latency => {
+            return super::latency::run(s, args.edits, args.json.as_deref())
+        }
         Some(s) if args.bake => return super::bake::bench(s, &args),
         Some(s) if !args.seed_sweep => s.clone(),
         _ => return super::sweep::run(&args),
@@ -44,6 +55,16 @@ pub fn run(args: BenchArgs) -> ExitCode {
     };
     let plain = match variant(Options {
         plain: true,
+        ..base.clone()
+    }) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    // Every atlas a constant sample: the same shading, shadows and texture reads
+    // without the walks (what the atlases cost).
+    let constant = match variant(Options {
+        walk: WalkForm::Loop,
+        constant_uv: true,
         ..base.clone()
     }) {
         Ok(x) => x,
@@ -146,11 +167,20 @@ pub fn run(args: BenchArgs) -> ExitCode {
     let dir = super::base_dir(&scene);
     let measure = |module: &sdfc::codegen::Module,
                    mode: ViewMode|
-     -> Result<((Duration, Duration), gpu::Renderer), gpu::GpuError> {
-        // One pipeline per module; a warm-up frame, then the measured ones.
+     -> Result<(Row, gpu::Renderer), gpu::GpuError> {
+        // One pipeline per module; a warm-up frame, then the measured ones; then one
+        // frame of the evals view for the evaluations per pixel.
         let renderer = gpu::Renderer::new(&gpu, module, &dir)?;
         let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
-        Ok(((renderer.pipeline_time, median(frames)), renderer))
+        let (evals, _) = renderer.frames(&gpu, &view, ViewMode::Evals, 0, 1)?;
+        let (evals_mean, evals_p95, _) = gpu::eval_stats(&evals);
+        let row = Row {
+            pipeline: renderer.pipeline_time,
+            frame: median(frames),
+            evals_mean,
+            evals_p95,
+        };
+        Ok((row, renderer))
     };
     // Two pipelines' frames alternated one by one, so that a load that drifts during
     // the run (a shared machine, a software adapter) weighs on both alike: the
@@ -168,6 +198,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("shaded, unrolled walk", &unrolled, ViewMode::Color),
         ("shaded, loop walk", &rolled, ViewMode::Color),
         ("shaded, loop walk, cold start", &cold, ViewMode::Color),
+        ("shaded, constant uv (no walks)", &constant, ViewMode::Color),
     ];
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
@@ -212,6 +243,18 @@ pub fn run(args: BenchArgs) -> ExitCode {
             return ExitCode::from(super::exit::gpu(&e));
         }
     };
+    // The scene against its constant-uv twin (row 4), unrolled then loop, frames
+    // alternated: what the atlases cost with everything else equal.
+    let mut atlas_ratios = Vec::new();
+    for with in [1, 2] {
+        match paired(&renderers[with], &renderers[4]) {
+            Ok(r) => atlas_ratios.push(r),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(super::exit::gpu(&e));
+            }
+        }
+    }
     // Normal maps against none, unrolled then loop, with frames alternated.
     let mut normal_map_ratios = Vec::new();
     if let Some((no_unrolled, no_loop)) = unmapped_rows {
@@ -251,30 +294,46 @@ pub fn run(args: BenchArgs) -> ExitCode {
         "compile:   {:.2} ms (parse → validated WGSL)",
         ms(compile_time)
     );
-    for (name, (pipeline, frame)) in &results {
+    for (name, r) in &results {
         println!(
-            "{name:34} pipeline {:9.2} ms   frame {:9.2} ms",
-            ms(*pipeline),
-            ms(*frame)
+            "{name:34} pipeline {:9.2} ms   frame {:9.2} ms   evals/px {:7.1} (p95 {:.0})",
+            ms(r.pipeline),
+            ms(r.frame),
+            r.evals_mean,
+            r.evals_p95
         );
     }
     let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
     // (label, value, how it was measured)
     let mut ratios: Vec<(&str, f64, &str)> = vec![
         (
+            "textured ÷ constant uv, unrolled",
+            atlas_ratios[0],
+            "frames alternated",
+        ),
+        (
+            "textured ÷ constant uv, loop",
+            atlas_ratios[1],
+            "frames alternated",
+        ),
+        (
             "shaded ÷ plain, unrolled",
-            ms(unrolled_r.1) / ms(plain.1),
+            ms(unrolled_r.frame) / ms(plain.frame),
             "",
         ),
-        ("shaded ÷ plain, loop", ms(loop_r.1) / ms(plain.1), ""),
+        (
+            "shaded ÷ plain, loop",
+            ms(loop_r.frame) / ms(plain.frame),
+            "",
+        ),
         (
             "unrolled ÷ loop, frame",
-            ms(unrolled_r.1) / ms(loop_r.1),
+            ms(unrolled_r.frame) / ms(loop_r.frame),
             "",
         ),
         (
             "unrolled ÷ loop, pipeline",
-            ms(unrolled_r.0) / ms(loop_r.0),
+            ms(unrolled_r.pipeline) / ms(loop_r.pipeline),
             "",
         ),
         ("warm ÷ cold start, loop", warm_ratio, "frames alternated"),
@@ -283,7 +342,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         // Displacements and shell maps alike are replaced by their base.
         ratios.push((
             "displaced ÷ undisplaced, loop",
-            ms(loop_r.1) / ms(undisplaced.1),
+            ms(loop_r.frame) / ms(undisplaced.frame),
             "",
         ));
     }
@@ -316,10 +375,12 @@ pub fn run(args: BenchArgs) -> ExitCode {
             "size": [view.width, view.height],
             "frames": args.frames.max(1),
             "compile_ms": ms(compile_time),
-            "rows": results.iter().map(|(name, (pipeline, frame))| serde_json::json!({
+            "rows": results.iter().map(|(name, r)| serde_json::json!({
                 "name": name,
-                "pipeline_ms": ms(*pipeline),
-                "frame_ms": ms(*frame),
+                "pipeline_ms": ms(r.pipeline),
+                "frame_ms": ms(r.frame),
+                "evals_per_pixel_mean": r.evals_mean,
+                "evals_per_pixel_p95": r.evals_p95,
             })).collect::<Vec<_>>(),
             "ratios": ratios.iter().map(|(label, value, how)| serde_json::json!({
                 "name": label,
@@ -327,12 +388,20 @@ pub fn run(args: BenchArgs) -> ExitCode {
                 "measured": if how.is_empty() { "one after the other" } else { how },
             })).collect::<Vec<_>>(),
         });
-        let text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
-        if let Err(e) = sdfc::fsutil::write_output(path, text.as_bytes()) {
-            eprintln!("error: cannot write {}: {e}", path.display());
-            return ExitCode::from(super::exit::USAGE);
+        if let Err(code) = write_json(path, &json) {
+            return code;
         }
-        eprintln!("wrote {}", path.display());
     }
     ExitCode::SUCCESS
+}
+
+/// Writes a bench's `--json` report atomically.
+pub fn write_json(path: &std::path::Path, json: &serde_json::Value) -> Result<(), ExitCode> {
+    let text = serde_json::to_string_pretty(json).unwrap_or_default() + "\n";
+    if let Err(e) = sdfc::fsutil::write_output(path, text.as_bytes()) {
+        eprintln!("error: cannot write {}: {e}", path.display());
+        return Err(ExitCode::from(super::exit::USAGE));
+    }
+    eprintln!("wrote {}", path.display());
+    Ok(())
 }

@@ -89,6 +89,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         atlas: args.atlas.clone(),
         plain: false,
         cold: false,
+        constant_uv: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

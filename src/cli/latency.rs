@@ -82,7 +82,7 @@ fn measure(path: &Path, text: &str, edits: u32) -> Result<(Vec<Duration>, usize)
     Ok((times, count))
 }
 
-pub fn run(path: &Path, edits: u32) -> ExitCode {
+pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
     let text = match read_source(path) {
         Ok(t) => t.text,
         Err(e) => {
@@ -117,5 +117,20 @@ pub fn run(path: &Path, edits: u32) -> ExitCode {
         ms(times[0]),
         ms(times[times.len() - 1])
     );
+    if let Some(out) = json {
+        let report = serde_json::json!({
+            "bench": "lsp latency",
+            "scene": path.display().to_string(),
+            "edits": times.len(),
+            "diagnostics": count,
+            "p50_ms": ms(pick(0.5)),
+            "p95_ms": ms(pick(0.95)),
+            "min_ms": ms(times[0]),
+            "max_ms": ms(times[times.len() - 1]),
+        });
+        if let Err(code) = super::bench::write_json(out, &report) {
+            return code;
+        }
+    }
     ExitCode::SUCCESS
 }

@@ -224,8 +224,8 @@ pub struct BenchArgs {
     /// The graphics API.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
-    /// Also write the scene benchmark's figures (rows and ratios) to this file as JSON,
-    /// for tracking across commits.
+    /// Also write the figures to this file as JSON, for tracking across commits (every
+    /// bench: the scene's rows and ratios, the seed sweep, --bake and --lsp-latency).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
 }

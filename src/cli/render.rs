@@ -2,7 +2,7 @@
 
 use super::{compile, RenderArgs};
 use sdfc::fsutil::write_output;
-use sdfc::gpu::{self, Frame, Gpu};
+use sdfc::gpu::{self, Frame, Gpu, ViewMode};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -100,6 +100,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         atlas: args.atlas.clone(),
         plain: false,
         cold: false,
+        constant_uv: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,
@@ -137,11 +138,18 @@ pub fn run(args: RenderArgs) -> ExitCode {
         }
     };
     let timings = args.timings.then(|| {
-        format!(
+        let mut t = format!(
             "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL)\n",
             gpu.describe(),
             compile_time.as_secs_f64() * 1e3
-        )
+        );
+        if args.view == ViewMode::Evals {
+            let (mean, p95, max) = gpu::eval_stats(&frame);
+            t.push_str(&format!(
+                "evals:     {mean:.1} per pixel (mean), {p95:.0} (95th percentile), {max:.0} (max)\n"
+            ));
+        }
+        t
     });
     write_frame(&args, &frame, timings)
 }

@@ -1,6 +1,7 @@
 //! `sdfc bench --seed-sweep`: per-pixel cost against the number of seeds (the paper's
-//! Fig. 15), as frame-time ratios against an untextured render, measured in one run on
-//! one adapter; and the merge-graph solve time of each merged plate.
+//! Fig. 15), as frame-time ratios against the same plate with its atlas answering a
+//! constant uv (same shading, no walks) and against a bare sphere trace, measured in one
+//! run on one adapter; and the merge-graph solve time of each merged plate.
 
 use super::{compile, BenchArgs};
 use sdfc::bench::{layout, plate, SEED_COUNTS};
@@ -17,7 +18,17 @@ struct Row {
     steps: u32,
     merged: bool,
     grid: bool,
+    pipeline: Duration,
     frame: Duration,
+}
+
+/// The baselines, each measured before every seed count and at the end.
+#[derive(Default)]
+struct Baselines {
+    /// A bare sphere trace of the plate (no materials).
+    plain: Vec<Duration>,
+    /// The plate with its atlas a constant sample: the same material and shading.
+    constant: Vec<Duration>,
 }
 
 fn ms(d: Duration) -> f64 {
@@ -84,13 +95,23 @@ impl Bench<'_> {
         Ok((frame.timings.pipeline, frame.timings.frame))
     }
 
-    /// The untextured baseline's frame time.
-    fn measure_plain(&self) -> Result<Duration, ExitCode> {
-        let options = Options {
+    /// Both baselines' frame times, into `b`.
+    fn measure_baselines(&self, b: &mut Baselines) -> Result<(), ExitCode> {
+        let plain = Options {
             plain: true,
             ..Default::default()
         };
-        Ok(self.measure("plain", &plate(1, 10, false), &options)?.1)
+        b.plain
+            .push(self.measure("plain", &plate(1, 10, false), &plain)?.1);
+        let constant = Options {
+            constant_uv: true,
+            ..Default::default()
+        };
+        b.constant.push(
+            self.measure("constant uv", &plate(1, 10, false), &constant)?
+                .1,
+        );
+        Ok(())
     }
 }
 
@@ -119,19 +140,51 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
         "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}",
         bench.frames, args.walk
     );
-    let (rows, plain) = measure_rows(&bench, args)?;
-    let base = print_plain(plain);
-    print_ratios(&rows, base);
+    let (rows, baselines) = measure_rows(&bench, args)?;
+    println!();
+    let plain = print_baseline("bare sphere trace (no materials)", baselines.plain);
+    let constant = print_baseline(
+        "constant uv (same material and shading, no walks)",
+        baselines.constant,
+    );
+    print_ratios(&rows, constant, "constant uv");
+    print_ratios(&rows, plain, "bare trace");
     print_speedups(&rows);
-    print_solve_times();
+    let solves = print_solve_times();
+    if let Some(path) = &args.json {
+        let json = serde_json::json!({
+            "bench": "seed sweep",
+            "adapter": gpu.describe(),
+            "size": [width, height],
+            "frames": bench.frames,
+            "walk": format!("{:?}", args.walk),
+            "constant_uv_ms": ms(constant),
+            "plain_ms": ms(plain),
+            "rows": rows.iter().map(|r| serde_json::json!({
+                "seeds": r.seeds,
+                "steps": r.steps,
+                "merged": r.merged,
+                "grid": r.grid,
+                "pipeline_ms": ms(r.pipeline),
+                "frame_ms": ms(r.frame),
+                "over_constant_uv": ms(r.frame) / ms(constant),
+                "over_plain": ms(r.frame) / ms(plain),
+            })).collect::<Vec<_>>(),
+            "solve_ms": solves.iter().map(|(seeds, t)| serde_json::json!({
+                "seeds": seeds,
+                "ms": ms(*t),
+            })).collect::<Vec<_>>(),
+        });
+        super::bench::write_json(path, &json)?;
+    }
     Ok(())
 }
 
 /// Measures every configuration, printing a line for each. The untextured baseline is
 /// measured before each seed count and at the end; the ratios use the median of those
 /// measurements, and the spread is reported.
-fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Vec<Duration>), ExitCode> {
-    let mut plain = Vec::new();
+fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Baselines), ExitCode> {
+    let mut baselines = Baselines::default();
     println!();
     println!(
         "{:>5} {:>3} {:>6} {:>4} {:>12} {:>10}",
@@ -139,7 +192,7 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Vec<Durati
     );
     let mut rows = Vec::new();
     for seeds in SEED_COUNTS {
-        plain.push(bench.measure_plain()?);
+        bench.measure_baselines(&mut baselines)?;
         for steps in [10, 20] {
             // One seed has nothing to merge with: its merged row would repeat the other.
             for merged in [false, true].into_iter().filter(|&m| !m || seeds > 1) {
@@ -168,14 +221,15 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Vec<Durati
                         steps,
                         merged,
                         grid,
+                        pipeline,
                         frame,
                     });
                 }
             }
         }
     }
-    plain.push(bench.measure_plain()?);
-    Ok((rows, plain))
+    bench.measure_baselines(&mut baselines)?;
+    Ok((rows, baselines))
 }
 
 /// The row of one configuration.
@@ -184,24 +238,23 @@ fn find(rows: &[Row], seeds: u32, steps: u32, merged: bool, grid: bool) -> Optio
         .find(|r| (r.seeds, r.steps, r.merged, r.grid) == (seeds, steps, merged, grid))
 }
 
-/// Prints the untextured baseline's spread; returns its median.
-fn print_plain(mut plain: Vec<Duration>) -> Duration {
-    plain.sort();
-    let base = plain[plain.len() / 2];
-    println!();
+/// Prints a baseline's spread; returns its median.
+fn print_baseline(name: &str, mut times: Vec<Duration>) -> Duration {
+    times.sort();
+    let base = times[times.len() / 2];
     println!(
-        "untextured (plain sphere trace): median {:.2} ms of {} measurements through the run (min {:.2}, max {:.2})",
+        "{name}: median {:.2} ms of {} measurements through the run (min {:.2}, max {:.2})",
         ms(base),
-        plain.len(),
-        ms(plain[0]),
-        ms(plain[plain.len() - 1])
+        times.len(),
+        ms(times[0]),
+        ms(times[times.len() - 1])
     );
     base
 }
 
-fn print_ratios(rows: &[Row], base: Duration) {
+fn print_ratios(rows: &[Row], base: Duration, name: &str) {
     println!();
-    println!("frame time ÷ untextured:");
+    println!("frame time ÷ {name}:");
     println!(
         "{:>5} {:>3}   {:>14} {:>14} {:>14} {:>14}",
         "seeds", "N", "unmerged, off", "unmerged, grid", "merged, off", "merged, grid"
@@ -245,7 +298,9 @@ fn print_speedups(rows: &[Row]) {
     }
 }
 
-fn print_solve_times() {
+/// Prints the merge-graph solve times; returns them (seeds, median).
+fn print_solve_times() -> Vec<(u32, Duration)> {
+    let mut out = Vec::new();
     println!();
     println!("merge-graph solve (frames, Eq. 45/48, and offsets, Eq. 47), median of 21 checks:");
     for seeds in SEED_COUNTS.into_iter().filter(|&s| s > 1) {
@@ -256,5 +311,7 @@ fn print_solve_times() {
             "{seeds:>5} seeds, {edges:>3} merges: {:.3} ms",
             t.as_secs_f64() * 1e3
         );
+        out.push((seeds, t));
     }
+    out
 }

@@ -49,10 +49,10 @@ pub enum WalkForm {
 pub fn emit(
     k: usize,
     atlas: &Atlas,
-    form: WalkForm,
     grid: &SeedGrid,
-    warm: bool,
+    options: &super::Options,
 ) -> Result<String, template::Mismatch> {
+    let (form, warm) = (options.walk, !options.cold);
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
     let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
@@ -135,7 +135,14 @@ pub fn emit(
             ),
         ),
         ("sigma", lit(atlas.sigma)),
-        ("entry", entry(k, atlas)),
+        (
+            "entry",
+            if options.constant_uv {
+                String::from("    // Constant (sdfc bench's baseline without walks).\n    return AtlasSample(vec2<f32>(0.5, 0.5), 0.5, 0.0, vec4<f32>(0.0, 0.0, 0.0, 1.0), 0.0, 1.0, vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0));\n")
+            } else {
+                entry(k, atlas)
+            },
+        ),
         ("warm", warm.to_string()),
         ("max_distance", lit(p.max_distance)),
     ];

@@ -172,6 +172,10 @@ pub struct Options {
     /// Leave out the warm start of Alg. 2's search (the previous query's nearest seed
     /// walked first): the baseline `sdfc bench` measures the warm start against.
     pub cold: bool,
+    /// Every atlas answers one constant sample (no walk): the same scene, shading,
+    /// shadows and texture reads with the uv-dependent inputs constant, the baseline
+    /// `sdfc bench` measures the atlases against.
+    pub constant_uv: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.
@@ -367,13 +371,7 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(
-                k,
-                a,
-                options.walk,
-                &options.seed_grid.grid(a),
-                !options.cold,
-            )?;
+            let code = atlas::emit(k, a, &options.seed_grid.grid(a), options)?;
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
@@ -627,9 +625,15 @@ fn emits(named: &ir::NamedShape, rendered: &[usize]) -> bool {
 fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) -> Vec<std::sync::Arc<ir::Height>> {
     let mut w = Writer::new(name);
     let d = w.shape(shape, shape.root(), "p");
+    // The evals view counts the render target's evaluations.
+    let count = if name == "scene_map" {
+        "    sdf_evals = sdf_evals + 1u;\n"
+    } else {
+        ""
+    };
     let _ = writeln!(
         out,
-        "{}fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{}    return {d};\n}}\n",
+        "{}fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{count}{}    return {d};\n}}\n",
         w.helpers, w.out
     );
     w.heights

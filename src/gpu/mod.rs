@@ -11,7 +11,7 @@ pub use compute::{
     eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
 };
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
-pub use render::{render, render_timed, Frame, Renderer, Timings, ViewMode};
+pub use render::{eval_stats, render, render_timed, Frame, Renderer, Timings, ViewMode};
 
 use std::fmt;
 use std::sync::Arc;

@@ -39,6 +39,10 @@ pub enum ViewMode {
     /// Baked meshes only: the flat atlas's level chosen per fragment (Eq. 2 of the
     /// seamless-atlas paper), blue (level 0) to red (the last level).
     Level,
+    /// SDF evaluations per pixel (the render target's and the atlases' fields) while
+    /// shading as the colour view does, as a heat map: black (1) through red to yellow
+    /// (4096 and more), on a log scale. The normal AOV's w holds the count.
+    Evals,
 }
 
 impl ViewMode {
@@ -58,6 +62,7 @@ impl ViewMode {
             ViewMode::Seams => 11.0,
             ViewMode::Albedo => 12.0,
             ViewMode::Level => 13.0,
+            ViewMode::Evals => 14.0,
         }
     }
 
@@ -88,6 +93,19 @@ pub struct Timings {
     pub frame: Duration,
     pub frame_from_timestamps: bool,
     pub readback: Duration,
+}
+
+/// SDF evaluations per pixel of a frame rendered in [`ViewMode::Evals`]: mean, 95th
+/// percentile and maximum (from the normal AOV's w).
+pub fn eval_stats(frame: &Frame) -> (f64, f64, f64) {
+    let mut v: Vec<f64> = frame.normal.iter().map(|n| n[3] as f64).collect();
+    if v.is_empty() {
+        return (0.0, 0.0, 0.0);
+    }
+    v.sort_by(f64::total_cmp);
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    let p95 = v[((v.len() - 1) as f64 * 0.95).round() as usize];
+    (mean, p95, v[v.len() - 1])
 }
 
 /// A rendered frame: sRGB colour and float AOVs, row-major from the top-left.

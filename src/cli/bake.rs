@@ -222,7 +222,6 @@ pub fn run(args: BakeArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
-        const_tables: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

@@ -70,15 +70,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    // The seed tables as `const` arrays rather than `var<private>` ones.
-    let const_tables = match variant(Options {
-        walk: WalkForm::Loop,
-        const_tables: true,
-        ..base.clone()
-    }) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
     // Without the warm start of Alg. 2's search, to measure what it saves.
     let cold = match variant(Options {
         walk: WalkForm::Loop,
@@ -208,11 +199,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("shaded, loop walk", &rolled, ViewMode::Color),
         ("shaded, loop walk, cold start", &cold, ViewMode::Color),
         ("shaded, constant uv (no walks)", &constant, ViewMode::Color),
-        (
-            "shaded, loop walk, const tables",
-            &const_tables,
-            ViewMode::Color,
-        ),
     ];
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
@@ -269,14 +255,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
-    // `const` seed tables against `var<private>` ones (row 5), loop walk.
-    let const_ratio = match paired(&renderers[5], &renderers[2]) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
-    };
     // Normal maps against none, unrolled then loop, with frames alternated.
     let mut normal_map_ratios = Vec::new();
     if let Some((no_unrolled, no_loop)) = unmapped_rows {
@@ -359,11 +337,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
             "",
         ),
         ("warm ÷ cold start, loop", warm_ratio, "frames alternated"),
-        (
-            "const ÷ private seed tables, loop",
-            const_ratio,
-            "frames alternated",
-        ),
     ];
     if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
         // Displacements and shell maps alike are replaced by their base.

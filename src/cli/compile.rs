@@ -90,7 +90,6 @@ pub fn run(args: CompileArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
-        const_tables: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

@@ -101,7 +101,6 @@ pub fn run(args: RenderArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
-        const_tables: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

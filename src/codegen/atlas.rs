@@ -112,7 +112,7 @@ pub fn emit(
         ("fd_floor", lit(p.fd_floor)),
         ("theta0", lit(sharp_angle(p.sharp_tolerance))),
         ("cells", cells.to_string()),
-        ("tables", tables(k, atlas, grid, options.const_tables)),
+        ("tables", tables(k, atlas, grid)),
         (
             "walk_form",
             String::from(match form {
@@ -233,9 +233,8 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
 
 /// The atlas's constants: seeds (position, normal, e1, offset), the merge graph's
 /// adjacency (CSR, with edge lengths) and the seed grid's lists.
-fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, constant: bool) -> String {
+fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid) -> String {
     let n = atlas.seeds.len();
-    let storage = if constant { "const" } else { "var<private>" };
     let arr = |name: &str, ty: &str, items: Vec<String>| {
         // WGSL has no empty arrays: pad with one unused element.
         let items = if items.is_empty() {
@@ -248,7 +247,7 @@ fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, constant: bool) -> String {
             items
         };
         format!(
-            "{storage} {name}: array<{ty}, {}> = array<{ty}, {}>({});\n",
+            "var<private> {name}: array<{ty}, {}> = array<{ty}, {}>({});\n",
             items.len(),
             items.len(),
             items.join(", ")

@@ -176,9 +176,6 @@ pub struct Options {
     /// shadows and texture reads with the uv-dependent inputs constant, the baseline
     /// `sdfc bench` measures the atlases against.
     pub constant_uv: bool,
-    /// The seed tables (positions, frames, offsets, merge graph, grid) as `const`
-    /// arrays instead of `var<private>` ones: the alternative `sdfc bench` measures.
-    pub const_tables: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.

@@ -292,9 +292,10 @@ pub fn turn_curvature(n_next: DVec3, vh: DVec3, arc: f64) -> f64 {
 ///   the next step (after the last step, one more second difference gives the rate);
 /// - κ comes from Eq. 17 for the first step only; every later step takes it from the
 ///   normal's turn over the step before ([`turn_curvature`]), and each step ends with a
-///   Newton step back onto the surface whose f(x) is the mean of the gradient's six
-///   taps ([`gradient_value`]). A step costs 6 evaluations instead of 9, and the walk
-///   stays on the surface (the sphere's distance error drops from 3.5e-5 to 2.7e-7).
+///   Newton step back onto the level set of f through x (the surface, for x on it),
+///   whose f is the mean of the gradient's six taps ([`gradient_value`]). A step costs
+///   6 evaluations instead of 9, and the walk does not drift off its level set (the
+///   sphere's distance error drops from 3.5e-5 to 2.7e-7).
 pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params) -> LogMap {
     let n_steps = params.steps.max(1);
     let p = seed.p;

@@ -235,49 +235,30 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
-    // The warm start against none, loop walk, frames alternated.
-    let warm_ratio = match paired(&renderers[2], &renderers[3]) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
-    };
-    // The scene against its constant-uv twin (row 4), unrolled then loop, frames
-    // alternated: what the atlases cost with everything else equal.
-    let mut atlas_ratios = Vec::new();
-    for with in [1, 2] {
-        match paired(&renderers[with], &renderers[4]) {
-            Ok(r) => atlas_ratios.push(r),
+    // The comparisons whose frames are alternated one by one (with, without): the warm
+    // start against none; the scene against its constant-uv twin (row 4), unrolled and
+    // loop, which is what the atlases cost with everything else equal; refined against
+    // the scene's own; normal maps against none.
+    let mut pairs = vec![
+        ("warm ÷ cold start, loop", 2, 3),
+        ("textured ÷ constant uv, unrolled", 1, 4),
+        ("textured ÷ constant uv, loop", 2, 4),
+    ];
+    if let Some((one, two)) = refined_rows {
+        pairs.push(("refine = 1 ÷ 0, loop", one, 2));
+        pairs.push(("refine = 2 ÷ 0, loop", two, 2));
+    }
+    if let Some((no_unrolled, no_loop)) = unmapped_rows {
+        pairs.push(("normal maps ÷ none, unrolled", 1, no_unrolled));
+        pairs.push(("normal maps ÷ none, loop", 2, no_loop));
+    }
+    let mut alternated = Vec::new();
+    for (label, with, without) in pairs {
+        match paired(&renderers[with], &renderers[without]) {
+            Ok(r) => alternated.push((label, r, "frames alternated")),
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::from(super::exit::gpu(&e));
-            }
-        }
-    }
-    // Normal maps against none, unrolled then loop, with frames alternated.
-    let mut normal_map_ratios = Vec::new();
-    if let Some((no_unrolled, no_loop)) = unmapped_rows {
-        for (with, without) in [(1, no_unrolled), (2, no_loop)] {
-            match paired(&renderers[with], &renderers[without]) {
-                Ok(r) => normal_map_ratios.push(r),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(super::exit::gpu(&e));
-                }
-            }
-        }
-    }
-    // Refined against the scene's own, loop walk, with frames alternated.
-    let mut refine_ratios = Vec::new();
-    if let Some((one, two)) = refined_rows {
-        for k in [one, two] {
-            match paired(&renderers[k], &renderers[2]) {
-                Ok(r) => refine_ratios.push(r),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(super::exit::gpu(&e));
-                }
             }
         }
     }
@@ -307,16 +288,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
     // (label, value, how it was measured)
     let mut ratios: Vec<(&str, f64, &str)> = vec![
         (
-            "textured ÷ constant uv, unrolled",
-            atlas_ratios[0],
-            "frames alternated",
-        ),
-        (
-            "textured ÷ constant uv, loop",
-            atlas_ratios[1],
-            "frames alternated",
-        ),
-        (
             "shaded ÷ plain, unrolled",
             ms(unrolled_r.frame) / ms(plain.frame),
             "",
@@ -336,7 +307,6 @@ pub fn run(args: BenchArgs) -> ExitCode {
             ms(unrolled_r.pipeline) / ms(loop_r.pipeline),
             "",
         ),
-        ("warm ÷ cold start, loop", warm_ratio, "frames alternated"),
     ];
     if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
         // Displacements and shell maps alike are replaced by their base.
@@ -346,27 +316,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
             "",
         ));
     }
-    if let [one, two] = refine_ratios[..] {
-        ratios.push(("refine = 1 ÷ 0, loop", one, "frames alternated"));
-        ratios.push(("refine = 2 ÷ 0, loop", two, "frames alternated"));
-    }
-    if let [unrolled_ratio, loop_ratio] = normal_map_ratios[..] {
-        // From frames alternated with the same scene's without normal maps (not the
-        // rows above, which were measured one after the other).
-        ratios.push((
-            "normal maps ÷ none, unrolled",
-            unrolled_ratio,
-            "frames alternated",
-        ));
-        ratios.push(("normal maps ÷ none, loop", loop_ratio, "frames alternated"));
-    }
+    ratios.extend(alternated);
     for (label, value, how) in &ratios {
         let how = if how.is_empty() {
             String::new()
         } else {
             format!(" ({how})")
         };
-        println!("ratio {:31} {value:.2}{how}", format!("{label}:"));
+        println!("ratio {:34} {value:.2}{how}", format!("{label}:"));
     }
     if let Some(path) = &args.json {
         let json = serde_json::json!({

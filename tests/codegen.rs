@@ -191,6 +191,88 @@ fn manifest_describes_bindings_and_textures() {
     assert_eq!(m.manifest.globals_layout.len(), 9);
 }
 
+/// The words after `const NAME: u32 = OFFSET` in the module's tables.
+fn table_at(m: &codegen::Module, name: &str) -> usize {
+    let line = m
+        .wgsl
+        .lines()
+        .find(|l| l.starts_with(&format!("const {name}: u32 = ")))
+        .unwrap_or_else(|| panic!("no {name}"));
+    line.split(" = ")
+        .nth(1)
+        .unwrap()
+        .trim_end_matches("u;")
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn seed_grids_live_in_the_tables_buffer() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
+    let a = driver::check(&src, Some(&dir));
+    let atlas = a.atlases[0].as_ref().unwrap();
+    let options = codegen::Options {
+        seed_grid: codegen::SeedGridChoice::On,
+        walk: codegen::WalkForm::Loop,
+        ..Default::default()
+    };
+    let m = driver::generate(&a, &options).unwrap();
+    // The grid's lists, word for word, at the offsets the module bakes in.
+    let grid = atlas.seed_grid();
+    let words = &m.manifest.tables;
+    let at = |name: &str, len: usize| {
+        let k = table_at(&m, name);
+        words[k..k + len].to_vec()
+    };
+    assert_eq!(at("ATLAS_0_START_AT", grid.start.len()), grid.start);
+    assert_eq!(at("ATLAS_0_ITEMS_AT", grid.items.len()), grid.items);
+    let bound: Vec<u32> = grid.bound.iter().map(|&b| (b as f32).to_bits()).collect();
+    assert_eq!(at("ATLAS_0_BOUND_AT", bound.len()), bound);
+    assert_eq!(words.len(), grid.start.len() + 2 * grid.items.len());
+    assert!(grid.items.len() > 1000, "{}", grid.items.len());
+    // One read-only storage binding in the render group, declared and documented.
+    let tables: Vec<_> = m
+        .manifest
+        .bindings
+        .iter()
+        .filter(|b| b.name == "tables")
+        .collect();
+    assert_eq!(tables.len(), 1);
+    assert_eq!(
+        (tables[0].group, tables[0].kind),
+        (0, codegen::bindings::Kind::StorageRead)
+    );
+    assert!(m.wgsl.contains(&format!(
+        "@group(0) @binding({}) var<storage, read> tables: array<u32>;",
+        tables[0].binding
+    )));
+    // No baked array grows with seeds × cells: the largest is per seed (or per edge).
+    let longest = m
+        .wgsl
+        .lines()
+        .filter(|l| l.starts_with("var<private> ATLAS_"))
+        .map(|l| {
+            let ty = l.split(" = ").next().unwrap();
+            ty.rsplit(", ")
+                .next()
+                .unwrap()
+                .trim_end_matches('>')
+                .parse::<usize>()
+                .unwrap()
+        })
+        .max()
+        .unwrap();
+    assert!(longest <= 2 * atlas.seeds.len(), "{longest}");
+    // The manifest JSON carries the words; a module without an atlas has no tables.
+    let json = serde_json::to_value(&m.manifest).unwrap();
+    assert_eq!(json["tables"].as_array().unwrap().len(), words.len());
+    let plain = generate("render sphere(1);", None).unwrap();
+    assert!(plain.manifest.tables.is_empty());
+    assert!(plain.manifest.bindings.iter().all(|b| b.name != "tables"));
+    assert!(!plain.wgsl.contains("tables"));
+}
+
 #[test]
 fn lipschitz_bound_reaches_the_shader() {
     let m = generate("render box(1).twist(rate: 2);", None).unwrap();

@@ -362,7 +362,7 @@ fn an_atlas_on_a_displaced_shape_walks_the_displaced_surface() {
         ..Default::default()
     };
     let m = sdfc::driver::compile(&a, &options).unwrap().module;
-    let got = sdfc::gpu::eval_atlas(&gpu, &m.wgsl, &points[..20]).unwrap();
+    let got = sdfc::gpu::eval_atlas(&gpu, &m, &points[..20]).unwrap();
     for (x, g) in points.iter().zip(&got) {
         let c = outer.sample(*x);
         let guv = glam::DVec2::new(g.uv[0] as f64, g.uv[1] as f64);

@@ -410,8 +410,8 @@ fn gpu_log_map_agrees_with_the_cpu_reference() {
     for src in scenes {
         let (c, atlas, loop_module) = prepared(src);
         let points = surface_points(&atlas, 1500, 1.5);
-        let unrolled = gpu::eval_atlas(&gpu, &c.module.wgsl, &points).unwrap();
-        let rolled = gpu::eval_atlas(&gpu, &loop_module.wgsl, &points).unwrap();
+        let unrolled = gpu::eval_atlas(&gpu, &c.module, &points).unwrap();
+        let rolled = gpu::eval_atlas(&gpu, &loop_module, &points).unwrap();
         let (mut same_status, mut worst) = (0, 0.0f64);
         for ((x, g), l) in points.iter().zip(&unrolled).zip(&rolled) {
             assert_eq!(g.status, l.status, "unrolled and loop walks differ at {x}");

@@ -83,7 +83,7 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                     ..Default::default()
                 };
                 let module = sdfc::driver::compile(&analysis, &options).unwrap().module;
-                results.push(gpu::eval_atlas(&gpu, &module.wgsl, &points).unwrap());
+                results.push(gpu::eval_atlas(&gpu, &module, &points).unwrap());
             }
             let (mut compared, mut worst) = (0usize, 0.0f64);
             for (i, x) in points.iter().enumerate() {

@@ -85,7 +85,7 @@ fn displaced_sphere_gpu_agrees_with_the_cpu_reference() {
     let on = surface_points(s, 200);
     let atlas = a.atlas("skin").unwrap();
     let base: Vec<DVec3> = on.iter().map(|&x| atlas.onto(x)).collect();
-    let gpu_uv = gpu::eval_atlas(&gpu, &m.wgsl, &base).unwrap();
+    let gpu_uv = gpu::eval_atlas(&gpu, &m, &base).unwrap();
     let (mut worst_uv, mut compared) = (0.0f64, 0);
     for (x, g) in base.iter().zip(&gpu_uv) {
         let c = atlas.sample(*x);

@@ -272,7 +272,7 @@ fn gpu_atlases(gpu: &gpu::Gpu, a: &Analysis, points: &[DVec3]) -> Vec<Vec<AtlasV
         .iter()
         .map(|def| {
             let m = module(a, Some(&def.name));
-            gpu::eval_atlas(gpu, &m.wgsl, points)
+            gpu::eval_atlas(gpu, &m, points)
                 .unwrap()
                 .into_iter()
                 .map(|g| AtlasValues {

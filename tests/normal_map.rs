@@ -390,7 +390,7 @@ fn gpu_normal_map_example_agrees_with_the_cpu() {
     let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
     let points = common::surface_points(&shape, 300, 23, |_| true);
     let xs: Vec<DVec3> = points.iter().map(|p| p.0).collect();
-    let gpu_atlas = gpu::eval_atlas(&gpu, &module(&a).wgsl, &xs).unwrap();
+    let gpu_atlas = gpu::eval_atlas(&gpu, &module(&a), &xs).unwrap();
     // Footprints of half a level-0 texel (1.5 repeats of 128 texels per unit of uv):
     // the sampler magnifies, so mip selection plays no part.
     let footprint = 0.5 / (1.5 * 128.0);

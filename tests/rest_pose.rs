@@ -220,7 +220,7 @@ fn gpu_rest_pose_and_mirror_agree_with_the_cpu() {
             .into_iter()
             .map(|(x, _)| x)
             .collect();
-        let got = gpu::eval_atlas(&gpu, &module.wgsl, &xs).unwrap();
+        let got = gpu::eval_atlas(&gpu, &module, &xs).unwrap();
         let (mut compared, mut uv_err, mut frame_err) = (0, 0.0f64, 0.0f64);
         for (x, g) in xs.iter().zip(&got) {
             let cpu = at.sample_at(*x);

@@ -2,9 +2,10 @@
 //! sample point onto the surface and shades it with the scene's material, the same
 //! `scene_material` code as `fs_main`, validated by naga with the rest of the module.
 
-use crate::codegen::bindings::{Resource, COMPUTE_GROUP, RENDER_GROUP};
+use crate::codegen::bindings::{COMPUTE_GROUP, RENDER_GROUP};
 use crate::codegen::Module;
 use crate::gpu::compute::MAX_POINTS_PER_DISPATCH;
+use crate::gpu::scene_group::{self, Resources, Stage};
 use crate::gpu::texture::{load_texture, sampler};
 use crate::gpu::{Gpu, GpuError};
 use std::path::Path;
@@ -26,10 +27,12 @@ pub struct Shaded {
     pub material: u32,
 }
 
-/// The `cs_bake` pipeline with the scene's textures bound.
+/// The `cs_bake` pipeline with the scene's textures and tables bound.
 pub struct BakePass {
     pipeline: wgpu::ComputePipeline,
     textures: wgpu::BindGroup,
+    /// Bound in `textures`.
+    _tables: Option<wgpu::Buffer>,
 }
 
 impl BakePass {
@@ -47,47 +50,56 @@ impl BakePass {
                 ))
             })
             .collect::<Result<Vec<_>, GpuError>>()?;
-        let pipeline = gpu.scoped(|| {
+        let tables = scene_group::tables(gpu, module)?;
+        let bindings = &module.manifest.bindings;
+        let stage = Stage::Compute { textured: true };
+        let (pipeline, layout0) = gpu.scoped(|| {
             let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("scene"),
                 source: wgpu::ShaderSource::Wgsl(module.wgsl.as_str().into()),
             });
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            let layout0 = scene_group::layout(d, bindings, stage);
+            let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            // cs_bake reads `points` (binding 1) and writes `results` (binding 2).
+            let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("bake queries"),
+                entries: &[storage(1, true), storage(2, false)],
+            });
+            let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("bake"),
+                bind_group_layouts: &[Some(&layout0), Some(&layout1)],
+                immediate_size: 0,
+            });
+            let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("cs_bake"),
-                layout: None,
+                layout: Some(&layout),
                 module: &shader,
                 entry_point: Some("cs_bake"),
                 compilation_options: Default::default(),
                 cache: None,
-            })
+            });
+            (pipeline, layout0)
         })?;
-        let textures = gpu.scoped(|| {
-            let entries: Vec<wgpu::BindGroupEntry> = module
-                .manifest
-                .bindings
-                .iter()
-                .filter(|b| b.group == RENDER_GROUP)
-                .filter_map(|b| {
-                    let resource = match b.resource {
-                        Resource::Texture(i) => {
-                            wgpu::BindingResource::TextureView(&loaded.get(i)?.0)
-                        }
-                        Resource::Sampler(i) => wgpu::BindingResource::Sampler(&loaded.get(i)?.1),
-                        _ => return None,
-                    };
-                    Some(wgpu::BindGroupEntry {
-                        binding: b.binding,
-                        resource,
-                    })
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("bake textures"),
-                layout: &pipeline.get_bind_group_layout(RENDER_GROUP),
-                entries: &entries,
-            })
-        })?;
-        Ok(BakePass { pipeline, textures })
+        let with = Resources {
+            images: &loaded,
+            tables: tables.as_ref(),
+            globals: None,
+        };
+        let textures = gpu.scoped(|| scene_group::group(d, bindings, stage, &layout0, &with))??;
+        Ok(BakePass {
+            pipeline,
+            textures,
+            _tables: tables,
+        })
     }
 
     /// Shades points `(x, y, z, footprint)`, in dispatches of bounded size; `progress`

@@ -131,14 +131,7 @@ fn eval(args: &EvalArgs) -> Result<(), Failed> {
         })?;
         gpu_distances(&gpu, &module, &analysis.program, &points, &mut results)?;
         if let Some(a) = atlas {
-            gpu_atlas_lines(
-                &gpu,
-                &module.wgsl,
-                a,
-                &atlas_points,
-                args,
-                &mut atlas_results,
-            )?;
+            gpu_atlas_lines(&gpu, &module, a, &atlas_points, args, &mut atlas_results)?;
         }
     }
     print_lines(results, atlas.is_some().then_some(atlas_results))
@@ -214,7 +207,7 @@ fn gpu_distances(
 /// Replaces the CPU atlas lines with the GPU's, at the same projections.
 fn gpu_atlas_lines(
     gpu: &sdfc::gpu::Gpu,
-    wgsl: &str,
+    module: &sdfc::codegen::Module,
     a: &sdfc::uv::Atlas,
     atlas_points: &[Option<DVec3>],
     args: &EvalArgs,
@@ -224,7 +217,7 @@ fn gpu_atlas_lines(
         .iter()
         .map(|x| x.unwrap_or(DVec3::ZERO))
         .collect();
-    let values = sdfc::gpu::eval_atlas(gpu, wgsl, &on_surface).map_err(|e| {
+    let values = sdfc::gpu::eval_atlas(gpu, module, &on_surface).map_err(|e| {
         let code = exit::gpu(&e);
         fail(e, code)
     })?;

@@ -51,6 +51,7 @@ pub fn emit(
     atlas: &Atlas,
     grid: &SeedGrid,
     options: &super::Options,
+    words: &mut Vec<u32>,
 ) -> Result<String, template::Mismatch> {
     let (form, warm) = (options.walk, !options.cold);
     let p = &atlas.params;
@@ -112,7 +113,7 @@ pub fn emit(
         ("fd_floor", lit(p.fd_floor)),
         ("theta0", lit(sharp_angle(p.sharp_tolerance))),
         ("cells", cells.to_string()),
-        ("tables", tables(k, atlas, grid)),
+        ("tables", tables(k, atlas, grid, words)),
         (
             "walk_form",
             String::from(match form {
@@ -231,9 +232,13 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     out
 }
 
-/// The atlas's constants: seeds (position, normal, e1, offset), the merge graph's
-/// adjacency (CSR, with edge lengths) and the seed grid's lists.
-fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid) -> String {
+/// The atlas's constants: seeds (position, normal, e1, offset) and the merge graph's
+/// adjacency (CSR, with edge lengths), baked in as arrays; and the seed grid's lists,
+/// whose size grows with seeds × cells, appended to `words` (the module's `tables`
+/// storage buffer) with their offsets baked in. Large baked arrays compile super-linearly
+/// on some drivers (Mesa's lavapipe: the robot's 1,788-entry grid took 111 s to a
+/// pipeline, 2 s without it) and are copied into every invocation's private memory.
+fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, words: &mut Vec<u32>) -> String {
     let n = atlas.seeds.len();
     let arr = |name: &str, ty: &str, items: Vec<String>| {
         // WGSL has no empty arrays: pad with one unused element.
@@ -294,20 +299,15 @@ fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid) -> String {
     );
     text += &arr(&format!("ATLAS_{k}_ADJ"), "u32", adj);
     text += &arr(&format!("ATLAS_{k}_ADJ_D"), "f32", adj_d);
-    text += &arr(
-        &format!("ATLAS_{k}_START"),
-        "u32",
-        grid.start.iter().map(|v| format!("{v}u")).collect(),
-    );
-    text += &arr(
-        &format!("ATLAS_{k}_ITEMS"),
-        "u32",
-        grid.items.iter().map(|v| format!("{v}u")).collect(),
-    );
-    text += &arr(
-        &format!("ATLAS_{k}_BOUND"),
-        "f32",
-        grid.bound.iter().map(|&v| lit(v)).collect(),
+    let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
+        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
+        words.extend(values);
+    };
+    put("START", &mut grid.start.iter().copied());
+    put("ITEMS", &mut grid.items.iter().copied());
+    put(
+        "BOUND",
+        &mut grid.bound.iter().map(|&v| (v as f32).to_bits()),
     );
     text
 }

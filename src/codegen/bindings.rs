@@ -36,6 +36,8 @@ pub enum Resource {
     Results,
     /// The unit normal at each compute point (`cs_material`), read.
     Normals,
+    /// The module's constant tables (`Manifest::tables`), read.
+    Tables,
 }
 
 /// A resource binding of the generated module.
@@ -56,8 +58,9 @@ pub struct Binding {
 pub const RENDER_GROUP: u32 = 0;
 pub const COMPUTE_GROUP: u32 = 1;
 
-/// The table for a module that samples `textures`.
-pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
+/// The table for a module that samples `textures` and, with `tables`, reads the
+/// `tables` storage buffer (`Manifest::tables`).
+pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -87,6 +90,17 @@ pub fn table(textures: &[TextureUse]) -> Vec<Binding> {
             detail: t.wrap.clone(),
             used_by: fragment(),
             resource: Resource::Sampler(i),
+        });
+    }
+    if tables {
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: out.len() as u32,
+            name: "tables".into(),
+            kind: Kind::StorageRead,
+            detail: "array<u32>".into(),
+            used_by: vec!["fs_main", "cs_atlas", "cs_material", "cs_bake"],
+            resource: Resource::Tables,
         });
     }
     let compute = [

@@ -132,6 +132,11 @@ pub struct Manifest {
     /// Names of the shapes with an `sdf_NAME` function.
     pub shapes: Vec<String>,
     pub textures: Vec<TextureUse>,
+    /// The contents of the `tables` storage buffer (the seed grids' lists; f32 values as
+    /// their bits), which the runtime uploads as they are; empty, with no binding, when
+    /// the module has no atlas.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub tables: Vec<u32>,
 }
 
 pub const GLOBALS_LAYOUT: &[&str] = &[
@@ -237,6 +242,7 @@ pub fn generate(
         out: String::new(),
         source_map: Vec::new(),
         heights: Vec::new(),
+        tables: Vec::new(),
     };
     g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
@@ -255,7 +261,7 @@ pub fn generate(
     }
     g.atlas_choice(options, plain)?;
     let textures = g.materials(if plain { &[] } else { &program.materials }, uses)?;
-    let table = bindings::table(&textures);
+    let table = bindings::table(&textures, !g.tables.is_empty());
     let entry = template::fill(
         template::ENTRY,
         &[("bindings", bindings::declarations(&table))],
@@ -272,6 +278,8 @@ struct Generator<'a> {
     source_map: Vec<SourceRegion>,
     /// The displacements' heights the shapes call, once each.
     heights: Vec<std::sync::Arc<ir::Height>>,
+    /// The words of the `tables` storage buffer (`Manifest::tables`).
+    tables: Vec<u32>,
 }
 
 impl Generator<'_> {
@@ -371,7 +379,7 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(k, a, &options.seed_grid.grid(a), options)?;
+            let code = atlas::emit(k, a, &options.seed_grid.grid(a), options, &mut self.tables)?;
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
@@ -602,6 +610,7 @@ impl Generator<'_> {
                 .map(|s| s.name.clone())
                 .collect(),
             textures,
+            tables: self.tables,
         };
         Module {
             wgsl,

@@ -1,6 +1,7 @@
 //! GPU queries through the generated compute entry points (`cs_points`, `cs_atlas`,
 //! `cs_material`).
 
+use super::scene_group::{self, Images, Resources, Stage};
 use super::texture::{sampler, upload};
 use super::{Gpu, GpuError};
 use crate::codegen::bindings::{Resource, COMPUTE_GROUP, RENDER_GROUP};
@@ -14,6 +15,13 @@ pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 
     run(gpu, wgsl, None, "cs_points", points, 1)
 }
 
+/// The module whose render group a query binds: its tables, and its textures when given.
+#[derive(Clone, Copy)]
+struct Group0<'a> {
+    module: &'a Module,
+    textures: Option<&'a Textures>,
+}
+
 /// [`eval_points`] for a module whose field samples textures (a displacement's height):
 /// its textures (`Textures::load` of the program) are bound as `fs_main` binds them.
 pub fn eval_points_textured(
@@ -22,14 +30,11 @@ pub fn eval_points_textured(
     textures: &Textures,
     points: &[DVec3],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    run(
-        gpu,
-        &module.wgsl,
-        Some((module, textures)),
-        "cs_points",
-        points,
-        1,
-    )
+    let group0 = Group0 {
+        module,
+        textures: Some(textures),
+    };
+    run(gpu, &module.wgsl, Some(group0), "cs_points", points, 1)
 }
 
 /// An atlas evaluated on the GPU (`cs_atlas`).
@@ -50,8 +55,16 @@ pub struct AtlasValue {
 }
 
 /// The scene's atlas (the module's `scene_atlas`) at each point.
-pub fn eval_atlas(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<AtlasValue>, GpuError> {
-    let raw = run(gpu, wgsl, None, "cs_atlas", points, 5)?;
+pub fn eval_atlas(
+    gpu: &Gpu,
+    module: &Module,
+    points: &[DVec3],
+) -> Result<Vec<AtlasValue>, GpuError> {
+    let group0 = Group0 {
+        module,
+        textures: None,
+    };
+    let raw = run(gpu, &module.wgsl, Some(group0), "cs_atlas", points, 5)?;
     Ok(raw
         .chunks(5)
         .map(|c| AtlasValue {
@@ -78,9 +91,6 @@ struct Queries {
     readback: wgpu::Buffer,
 }
 
-/// The textures and samplers of a module's render group, uploaded.
-type Images = Vec<(wgpu::TextureView, wgpu::Sampler)>;
-
 fn upload_all(gpu: &Gpu, module: &Module, textures: &Textures) -> Result<Images, GpuError> {
     module
         .manifest
@@ -99,67 +109,22 @@ fn upload_all(gpu: &Gpu, module: &Module, textures: &Textures) -> Result<Images,
         .collect()
 }
 
-/// The render group's texture and sampler entries of a module's binding table.
-fn texture_layout_entries(
-    module: &Module,
-    visibility: wgpu::ShaderStages,
-) -> Vec<wgpu::BindGroupLayoutEntry> {
-    module
-        .manifest
-        .bindings
-        .iter()
-        .filter(|b| b.group == RENDER_GROUP)
-        .filter_map(|b| {
-            let ty = match b.resource {
-                Resource::Texture(_) => wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                Resource::Sampler(_) => {
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering)
-                }
-                _ => return None,
-            };
-            Some(wgpu::BindGroupLayoutEntry {
-                binding: b.binding,
-                visibility,
-                ty,
-                count: None,
-            })
-        })
-        .collect()
-}
-
-/// The render group's texture and sampler bindings of a module, to `images`.
-fn texture_group_entries<'a>(module: &Module, images: &'a Images) -> Vec<wgpu::BindGroupEntry<'a>> {
-    module
-        .manifest
-        .bindings
-        .iter()
-        .filter(|b| b.group == RENDER_GROUP)
-        .filter_map(|b| {
-            let resource = match b.resource {
-                Resource::Texture(i) => wgpu::BindingResource::TextureView(&images.get(i)?.0),
-                Resource::Sampler(i) => wgpu::BindingResource::Sampler(&images.get(i)?.1),
-                _ => return None,
-            };
-            Some(wgpu::BindGroupEntry {
-                binding: b.binding,
-                resource,
-            })
-        })
-        .collect()
+/// What a query binds in the render group: the module's binding table, and the
+/// resources of the slots that `stage` binds.
+struct Bound<'a> {
+    bindings: &'a [crate::codegen::Binding],
+    stage: Stage,
+    with: Resources<'a>,
 }
 
 fn create_queries(
     d: &wgpu::Device,
     wgsl: &str,
-    textured: Option<(&Module, &Images)>,
+    group0: &Bound,
     entry_name: &str,
     data: &[[f32; 4]],
     size: u64,
-) -> Queries {
+) -> Result<Queries, GpuError> {
     use wgpu::util::DeviceExt;
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("scene"),
@@ -181,13 +146,7 @@ fn create_queries(
         has_dynamic_offset: false,
         min_binding_size: None,
     };
-    let group0_entries = textured
-        .map(|(m, _)| texture_layout_entries(m, wgpu::ShaderStages::COMPUTE))
-        .unwrap_or_default();
-    let empty = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("textures"),
-        entries: &group0_entries,
-    });
+    let empty = scene_group::layout(d, group0.bindings, group0.stage);
     let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("queries"),
         entries: &[
@@ -231,14 +190,7 @@ fn create_queries(
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let group0_entries = textured
-        .map(|(m, images)| texture_group_entries(m, images))
-        .unwrap_or_default();
-    let group0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("textures"),
-        layout: &empty,
-        entries: &group0_entries,
-    });
+    let group0 = scene_group::group(d, group0.bindings, group0.stage, &empty, &group0.with)?;
     let group1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("queries"),
         layout: &layout1,
@@ -257,21 +209,21 @@ fn create_queries(
             },
         ],
     });
-    Queries {
+    Ok(Queries {
         pipeline,
         group0,
         group1,
         _input: input,
         output,
         readback,
-    }
+    })
 }
 
 /// Runs a compute entry point over points; it writes `per_point` vec4s per point.
 fn run(
     gpu: &Gpu,
     wgsl: &str,
-    textured: Option<(&Module, &Textures)>,
+    group0: Option<Group0>,
     entry_name: &str,
     points: &[DVec3],
     per_point: usize,
@@ -280,12 +232,29 @@ fn run(
         .iter()
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
-    let images = match textured {
-        Some((m, t)) => Some((m, upload_all(gpu, m, t)?)),
-        None => None,
+    let (images, tables) = match group0 {
+        Some(Group0 {
+            module,
+            textures: Some(t),
+        }) => (
+            upload_all(gpu, module, t)?,
+            scene_group::tables(gpu, module)?,
+        ),
+        Some(Group0 { module, .. }) => (Vec::new(), scene_group::tables(gpu, module)?),
+        None => (Vec::new(), None),
     };
-    let textured = images.as_ref().map(|(m, i)| (*m, i));
-    run_raw(gpu, wgsl, textured, entry_name, &data, per_point)
+    let bound = Bound {
+        bindings: group0.map_or(&[][..], |g| &g.module.manifest.bindings[..]),
+        stage: Stage::Compute {
+            textured: group0.is_some_and(|g| g.textures.is_some()),
+        },
+        with: Resources {
+            images: &images,
+            tables: tables.as_ref(),
+            globals: None,
+        },
+    };
+    run_raw(gpu, wgsl, &bound, entry_name, &data, per_point)
 }
 
 /// The most points one dispatch takes (a dispatch has at most 65,535 workgroups of 64).
@@ -294,7 +263,7 @@ pub const MAX_POINTS_PER_DISPATCH: usize = 1 << 20;
 fn run_raw(
     gpu: &Gpu,
     wgsl: &str,
-    textured: Option<(&Module, &Images)>,
+    group0: &Bound,
     entry_name: &str,
     data: &[[f32; 4]],
     per_point: usize,
@@ -304,7 +273,7 @@ fn run_raw(
     }
     let d = &gpu.device;
     let size = (data.len() * 16 * per_point) as u64;
-    let q = gpu.scoped(|| create_queries(d, wgsl, textured, entry_name, data, size))?;
+    let q = gpu.scoped(|| create_queries(d, wgsl, group0, entry_name, data, size))??;
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("queries"),
@@ -372,16 +341,17 @@ pub fn eval_materials(
         slot(Resource::Normals)?,
         slot(Resource::Results)?,
     );
+    let tables = scene_group::tables(gpu, module)?;
     let (pipeline, layout0, layout1) =
         gpu.scoped(|| material_pipeline(d, module, [points_at, normals_at, results_at]))?;
-    let group0 = gpu.scoped(|| {
-        let entries = texture_group_entries(module, &images);
-        d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("material textures"),
-            layout: &layout0,
-            entries: &entries,
-        })
-    })?;
+    let with = Resources {
+        images: &images,
+        tables: tables.as_ref(),
+        globals: None,
+    };
+    let stage = Stage::Compute { textured: true };
+    let bindings = &module.manifest.bindings;
+    let group0 = gpu.scoped(|| scene_group::group(d, bindings, stage, &layout0, &with))??;
     // Results take 48 bytes a point: a chunk stays within the binding size limit.
     let max_binding = d.limits().max_storage_buffer_binding_size as usize;
     let chunk = MATERIAL_CHUNK.min(max_binding / 48).max(1);
@@ -466,8 +436,8 @@ pub fn eval_materials(
     Ok(out)
 }
 
-/// The `cs_material` pipeline with explicit layouts: the module's textures and samplers
-/// in the render group, and points, normals and results (at `slots`) in the compute group.
+/// The `cs_material` pipeline with explicit layouts: the module's textures, samplers and
+/// tables in the render group, and points, normals and results (at `slots`) in the compute group.
 fn material_pipeline(
     d: &wgpu::Device,
     module: &Module,
@@ -487,36 +457,16 @@ fn material_pipeline(
         ty,
         count: None,
     };
-    let textures: Vec<wgpu::BindGroupLayoutEntry> = module
-        .manifest
-        .bindings
-        .iter()
-        .filter(|b| b.group == RENDER_GROUP)
-        .filter_map(|b| match b.resource {
-            Resource::Texture(_) => Some(entry(
-                b.binding,
-                wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-            )),
-            Resource::Sampler(_) => Some(entry(
-                b.binding,
-                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            )),
-            _ => None,
-        })
-        .collect();
     let storage = |read_only| wgpu::BindingType::Buffer {
         ty: wgpu::BufferBindingType::Storage { read_only },
         has_dynamic_offset: false,
         min_binding_size: None,
     };
-    let layout0 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("material textures"),
-        entries: &textures,
-    });
+    let layout0 = scene_group::layout(
+        d,
+        &module.manifest.bindings,
+        Stage::Compute { textured: true },
+    );
     let layout1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("material points"),
         entries: &[

@@ -5,6 +5,7 @@
 pub mod compute;
 mod mesh;
 mod render;
+pub mod scene_group;
 pub mod texture;
 
 pub use compute::{

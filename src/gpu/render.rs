@@ -1,9 +1,10 @@
 //! Headless rendering: the generated fragment shader into an offscreen target,
 //! read back with its AOVs (position + depth, normal + steps).
 
+use super::scene_group::{self, Stage};
 use super::texture::{load_texture, sampler};
 use super::{Gpu, GpuError};
-use crate::codegen::bindings::{Resource, RENDER_GROUP};
+use crate::codegen::bindings::RENDER_GROUP;
 use crate::codegen::Module;
 use crate::view::View;
 use std::path::Path;
@@ -210,7 +211,11 @@ pub struct Renderer {
     pipeline: wgpu::RenderPipeline,
     /// What the binding table of the manifest binds, slot by slot.
     bindings: Vec<crate::codegen::Binding>,
+    /// The render group's layout, from the binding table.
+    layout: wgpu::BindGroupLayout,
     textures: Vec<(wgpu::TextureView, wgpu::Sampler)>,
+    /// The module's `tables` storage buffer, when it has one.
+    tables: Option<wgpu::Buffer>,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create.
     pub pipeline_time: Duration,
@@ -249,49 +254,40 @@ impl Renderer {
                 ))
             })
             .collect::<Result<_, GpuError>>()?;
+        let tables = scene_group::tables(gpu, module)?;
+        let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
-        let pipeline = gpu.scoped(|| pipeline(&gpu.device, &module.wgsl, &formats))?;
+        let (pipeline, layout) = gpu.scoped(|| {
+            let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
+            let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats);
+            (pipeline, layout)
+        })?;
         gpu.wait()?;
         Ok(Renderer {
             pipeline,
-            bindings: module.manifest.bindings.clone(),
+            bindings,
+            layout,
             textures,
+            tables,
             formats,
             pipeline_time: started.elapsed(),
         })
     }
 
     /// The render group's bind group, built from the binding table.
-    fn bind_group(&self, gpu: &Gpu, globals: &wgpu::Buffer) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = self
-            .bindings
-            .iter()
-            .filter(|b| b.group == RENDER_GROUP)
-            .filter_map(|b| {
-                let resource = match b.resource {
-                    Resource::Globals => globals.as_entire_binding(),
-                    Resource::Texture(i) => {
-                        wgpu::BindingResource::TextureView(&self.textures.get(i)?.0)
-                    }
-                    Resource::Sampler(i) => {
-                        wgpu::BindingResource::Sampler(&self.textures.get(i)?.1)
-                    }
-                    Resource::GridParams
-                    | Resource::Points
-                    | Resource::Results
-                    | Resource::Normals => return None,
-                };
-                Some(wgpu::BindGroupEntry {
-                    binding: b.binding,
-                    resource,
-                })
-            })
-            .collect();
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("render group"),
-            layout: &self.pipeline.get_bind_group_layout(RENDER_GROUP),
-            entries: &entries,
-        })
+    fn bind_group(&self, gpu: &Gpu, globals: &wgpu::Buffer) -> Result<wgpu::BindGroup, GpuError> {
+        let with = scene_group::Resources {
+            images: &self.textures,
+            tables: self.tables.as_ref(),
+            globals: Some(globals),
+        };
+        scene_group::group(
+            &gpu.device,
+            &self.bindings,
+            Stage::Render,
+            &self.layout,
+            &with,
+        )
     }
 
     fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Targets {
@@ -360,6 +356,7 @@ impl Renderer {
             let bind_group = self.bind_group(gpu, &buffer);
             (self.targets(gpu, w, h), bind_group, queries(gpu), buffer)
         })?;
+        let bind_group = bind_group?;
         for _ in 0..warmup {
             gpu.scoped(|| {
                 let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -432,6 +429,7 @@ pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
 fn pipeline(
     d: &wgpu::Device,
     wgsl: &str,
+    group0: &wgpu::BindGroupLayout,
     formats: &[wgpu::TextureFormat; 4],
 ) -> wgpu::RenderPipeline {
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -448,9 +446,14 @@ fn pipeline(
             })
         })
         .collect();
+    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("scene"),
+        bind_group_layouts: &[Some(group0)],
+        immediate_size: 0,
+    });
     d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("scene"),
-        layout: None,
+        layout: Some(&layout),
         vertex: wgpu::VertexState {
             module: &module,
             entry_point: Some("vs_main"),

@@ -1,0 +1,158 @@
+//! The render group (`@group(0)`) of a generated module, built from its binding table
+//! for every pipeline that uses the module: the render pipeline (`fs_main`), the compute
+//! queries (`cs_atlas`, `cs_points`, `cs_material`) and the bake pass (`cs_bake`). The
+//! layouts are explicit, from the manifest, so a binding an entry point does not reach
+//! (the `tables` of an atlas that only `cs_atlas` reads) is never an error.
+
+use super::{Gpu, GpuError};
+use crate::codegen::bindings::{Binding, Resource, RENDER_GROUP};
+use crate::codegen::Module;
+
+/// The textures and samplers of a module's texture bindings, in `Manifest::textures`
+/// order.
+pub type Images = Vec<(wgpu::TextureView, wgpu::Sampler)>;
+
+/// Which pipeline the group is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// `vs_main` and `fs_main`: the globals, the textures and the tables.
+    Render,
+    /// A compute entry point, with the module's textures (`textured`) or without them
+    /// (the entry points that sample none: `cs_points` and `cs_atlas` of most scenes).
+    Compute { textured: bool },
+}
+
+/// The bindings of group 0 (of a module's `Manifest::bindings`) a pipeline of `stage`
+/// binds.
+fn slots(bindings: &[Binding], stage: Stage) -> impl Iterator<Item = &Binding> {
+    bindings
+        .iter()
+        .filter(|b| b.group == RENDER_GROUP)
+        .filter(move |b| match (b.resource, stage) {
+            (Resource::Globals, Stage::Render) => true,
+            (Resource::Texture(_) | Resource::Sampler(_), Stage::Render) => true,
+            (Resource::Texture(_) | Resource::Sampler(_), Stage::Compute { textured }) => textured,
+            (Resource::Tables, _) => true,
+            _ => false,
+        })
+}
+
+/// The layout of group 0 for `stage`.
+pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::BindGroupLayout {
+    let shaders = match stage {
+        Stage::Render => wgpu::ShaderStages::FRAGMENT,
+        Stage::Compute { .. } => wgpu::ShaderStages::COMPUTE,
+    };
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = slots(bindings, stage)
+        .map(|b| {
+            let (visibility, ty) = match b.resource {
+                Resource::Globals => (
+                    wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                Resource::Sampler(_) => (
+                    shaders,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+                Resource::Tables => (
+                    shaders,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                _ => (
+                    shaders,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+            };
+            wgpu::BindGroupLayoutEntry {
+                binding: b.binding,
+                visibility,
+                ty,
+                count: None,
+            }
+        })
+        .collect();
+    d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("render group"),
+        entries: &entries,
+    })
+}
+
+/// The `tables` storage buffer of a module, with its words; `None` when it has none.
+pub fn tables(gpu: &Gpu, module: &Module) -> Result<Option<wgpu::Buffer>, GpuError> {
+    if module.manifest.tables.is_empty() {
+        return Ok(None);
+    }
+    gpu.scoped(|| {
+        use wgpu::util::DeviceExt;
+        Some(
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("tables"),
+                    contents: bytemuck::cast_slice(&module.manifest.tables),
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+        )
+    })
+}
+
+/// What group 0 binds: the module's images, its tables buffer and, for rendering, the
+/// globals.
+pub struct Resources<'a> {
+    pub images: &'a [(wgpu::TextureView, wgpu::Sampler)],
+    pub tables: Option<&'a wgpu::Buffer>,
+    pub globals: Option<&'a wgpu::Buffer>,
+}
+
+/// The bind group of `layout` (made by [`layout`] for the same `stage`); an error when a
+/// resource the table names is missing.
+pub fn group(
+    d: &wgpu::Device,
+    bindings: &[Binding],
+    stage: Stage,
+    layout: &wgpu::BindGroupLayout,
+    with: &Resources,
+) -> Result<wgpu::BindGroup, GpuError> {
+    let missing = |what: &str| GpuError::Validation(format!("no {what} to bind for the module"));
+    let entries = slots(bindings, stage)
+        .map(|b| {
+            let resource = match b.resource {
+                Resource::Globals => with
+                    .globals
+                    .ok_or_else(|| missing("globals"))?
+                    .as_entire_binding(),
+                Resource::Texture(i) => wgpu::BindingResource::TextureView(
+                    &with.images.get(i).ok_or_else(|| missing("texture"))?.0,
+                ),
+                Resource::Sampler(i) => wgpu::BindingResource::Sampler(
+                    &with.images.get(i).ok_or_else(|| missing("sampler"))?.1,
+                ),
+                Resource::Tables => with
+                    .tables
+                    .ok_or_else(|| missing("tables"))?
+                    .as_entire_binding(),
+                _ => return Err(missing("compute buffer in the render group")),
+            };
+            Ok(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource,
+            })
+        })
+        .collect::<Result<Vec<_>, GpuError>>()?;
+    Ok(d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("render group"),
+        layout,
+        entries: &entries,
+    }))
+}

@@ -75,7 +75,7 @@ fn gpu_eval_agrees_with_cpu() {
     for src in scenes {
         let c = compile(src, (16, 16));
         let points = random_points(4000, 1.5, 0x1234_5678_9ABC_DEF1);
-        let gpu_values = gpu::eval_points(&gpu, &c.module.wgsl, &points).unwrap();
+        let gpu_values = gpu::eval_points(&gpu, &c.module, &points).unwrap();
         assert_eq!(gpu_values.len(), points.len());
         let mut worst = 0.0f64;
         let b = c.shape.framing_bounds();

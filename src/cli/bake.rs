@@ -222,6 +222,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
+        unions_as_code: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

@@ -21,6 +21,9 @@ fn median(mut v: Vec<Duration>) -> Duration {
 }
 
 pub fn run(args: BenchArgs) -> ExitCode {
+    if args.scale {
+        return super::scale::run(&args);
+    }
     let scene = match &args.scene {
         Some(s) if args.lsp_latency => {
             return super::latency::run(s, args.edits, args.json.as_deref())

@@ -90,6 +90,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
+        unions_as_code: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

@@ -187,7 +187,7 @@ fn gpu_distances(
     results: &mut [eval::Query],
 ) -> Result<(), Failed> {
     let values = if module.manifest.textures.is_empty() {
-        sdfc::gpu::eval_points(gpu, &module.wgsl, points)
+        sdfc::gpu::eval_points(gpu, module, points)
     } else {
         // A displacement's height samples textures in the field itself.
         let textures = sdfc::ir::material::Textures::load(program).map_err(|e| fail(e, 2))?;

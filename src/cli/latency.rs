@@ -34,7 +34,11 @@ fn wait_diagnostics(conn: &Connection, version: i32) -> Result<usize, Error> {
     }
 }
 
-fn measure(path: &Path, text: &str, edits: u32) -> Result<(Vec<Duration>, usize), Error> {
+pub(super) fn measure(
+    path: &Path,
+    text: &str,
+    edits: u32,
+) -> Result<(Vec<Duration>, usize), Error> {
     let (server, client) = Connection::memory();
     let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
     let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());

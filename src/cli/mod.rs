@@ -10,6 +10,7 @@ pub mod fmt;
 pub mod latency;
 pub mod render;
 pub mod render_mesh;
+pub mod scale;
 pub mod seeds;
 pub mod sweep;
 
@@ -184,8 +185,8 @@ pub struct FitHeightArgs {
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// The scene file (not with --seed-sweep, which generates its scenes).
-    #[arg(required_unless_present = "seed_sweep")]
+    /// The scene file (not with --seed-sweep or --scale, which generate their scenes).
+    #[arg(required_unless_present_any = ["seed_sweep", "scale"])]
     pub scene: Option<PathBuf>,
     /// Image size, WIDTHxHEIGHT (default 1920x1080; 320x240 for --seed-sweep).
     #[arg(long, value_parser = render::parse_size)]
@@ -195,6 +196,16 @@ pub struct BenchArgs {
     /// with and without the seed grid; and the merge-graph solve time.
     #[arg(long, conflicts_with_all = ["scene", "shape"])]
     pub seed_sweep: bool,
+    /// How cost grows with the scene: generated cities of 10 to 10,000 spheres, then
+    /// 1,200 spheres with 0 to 200 seeds; compile time, WGSL lines, pipeline and frame
+    /// time (default size 160x120) and the language server's latency of each, and up to
+    /// 1,200 spheres the same against the scene with its unions as code.
+    #[arg(long, conflicts_with_all = ["scene", "shape", "seed_sweep"])]
+    pub scale: bool,
+    /// With --scale: also draw the figures against the number of primitives, log-log,
+    /// as SVG to this file (written atomically).
+    #[arg(long, value_name = "PATH", requires = "scale")]
+    pub plot: Option<PathBuf>,
     /// The language server's didChange → publishDiagnostics latency on the scene
     /// (p50/p95 over --edits edits), instead of frame times.
     #[arg(long, requires = "scene")]

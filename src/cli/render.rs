@@ -101,6 +101,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
+        unions_as_code: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

@@ -52,11 +52,14 @@ pub fn emit(
     grid: &SeedGrid,
     options: &super::Options,
     words: &mut Vec<u32>,
+    groups: &mut Vec<std::sync::Arc<crate::ir::group::Group>>,
 ) -> Result<String, template::Mismatch> {
     let (form, warm) = (options.walk, !options.cold);
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
+    w.unions_as_code = options.unions_as_code;
     let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+    groups.append(&mut w.groups);
     let n = p.steps.max(1);
     let walk_steps = match form {
         WalkForm::Unrolled => (0..n)

@@ -58,9 +58,18 @@ pub struct Binding {
 pub const RENDER_GROUP: u32 = 0;
 pub const COMPUTE_GROUP: u32 = 1;
 
-/// The table for a module that samples `textures` and, with `tables`, reads the
-/// `tables` storage buffer (`Manifest::tables`).
-pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
+/// Which entry points read the `tables` storage buffer (`Manifest::tables`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Tables {
+    None,
+    /// The atlases' seed grids: what reads an atlas.
+    Atlases,
+    /// Also groups in the shapes' code: every entry point that evaluates the scene.
+    Scene,
+}
+
+/// The table for a module that samples `textures` and reads `tables`.
+pub fn table(textures: &[TextureUse], tables: Tables) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -92,14 +101,26 @@ pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
             resource: Resource::Sampler(i),
         });
     }
-    if tables {
+    let readers = match tables {
+        Tables::None => None,
+        Tables::Atlases => Some(vec!["fs_main", "cs_atlas", "cs_material", "cs_bake"]),
+        Tables::Scene => Some(vec![
+            "fs_main",
+            "cs_points",
+            "cs_grid",
+            "cs_atlas",
+            "cs_material",
+            "cs_bake",
+        ]),
+    };
+    if let Some(used_by) = readers {
         out.push(Binding {
             group: RENDER_GROUP,
             binding: out.len() as u32,
             name: "tables".into(),
             kind: Kind::StorageRead,
             detail: "array<u32>".into(),
-            used_by: vec!["fs_main", "cs_atlas", "cs_material", "cs_bake"],
+            used_by,
             resource: Resource::Tables,
         });
     }

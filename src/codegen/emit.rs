@@ -66,10 +66,15 @@ pub struct Writer {
     own: Option<NodeId>,
     /// The displacements' heights the code calls (`height_ID`), once each.
     pub heights: Vec<std::sync::Arc<crate::ir::Height>>,
+    /// The groups the code calls (`group_KEY`), once each: their functions and tables
+    /// are the module's (`codegen::group`).
+    pub groups: Vec<std::sync::Arc<crate::ir::group::Group>>,
     /// Material blend mode (`scene_blend`): every node is a `vec4<f32>` (distance,
     /// material a, material b, b's weight) instead of (distance, material), and smooth
     /// unions blend their operands' materials with the distance blend's weight.
     pub blend: bool,
+    /// Large unions as code, not as groups (`Options::unions_as_code`).
+    pub unions_as_code: bool,
 }
 
 impl Writer {
@@ -85,7 +90,9 @@ impl Writer {
             emitted: std::collections::HashSet::new(),
             own: None,
             heights: Vec::new(),
+            groups: Vec::new(),
             blend: false,
+            unions_as_code: false,
         }
     }
 
@@ -93,6 +100,7 @@ impl Writer {
     fn sub(&self, name: &str) -> Writer {
         let mut w = Writer::new(name);
         w.blend = self.blend;
+        w.unions_as_code = self.unions_as_code;
         w
     }
 
@@ -168,6 +176,28 @@ impl Writer {
 
     fn shape_inner(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
         let d = self.fresh("d");
+        if let Some(g) = shape.group(id).filter(|_| !self.unions_as_code) {
+            // A large union: its leaves as data, then its other operands as code.
+            if !self.groups.iter().any(|x| x.key == g.key) {
+                self.groups.push(g.clone());
+            }
+            let call = super::group::call(g, p);
+            let v = if self.blend {
+                format!("{call}.xyyy * vec4<f32>(1.0, 1.0, 1.0, 0.0)")
+            } else {
+                call
+            };
+            self.line(&format!("let {d} = {v};"));
+            let mode = if self.blend { "_blend" } else { "" };
+            let mut acc = d;
+            for &o in &g.others {
+                let dd = self.shape(shape, o, p);
+                let next = self.fresh("d");
+                self.line(&format!("let {next} = op_union{mode}({acc}, {dd}, 0.0);"));
+                acc = next;
+            }
+            return acc;
+        }
         match &shape[id].op {
             Op::Prim(pr) => {
                 let call = match pr {
@@ -390,10 +420,16 @@ impl Writer {
         (q, g)
     }
 
+    /// Takes the heights and groups a helper's writer calls.
     fn take_heights(&mut self, w: &mut Writer) {
         for h in std::mem::take(&mut w.heights) {
             if !self.heights.iter().any(|x| x.id == h.id) {
                 self.heights.push(h);
+            }
+        }
+        for g in std::mem::take(&mut w.groups) {
+            if !self.groups.iter().any(|x| x.key == g.key) {
+                self.groups.push(g);
             }
         }
     }

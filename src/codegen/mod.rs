@@ -12,6 +12,7 @@
 mod atlas;
 pub mod bindings;
 mod emit;
+mod group;
 pub mod mesh;
 pub mod targets;
 pub mod template;
@@ -181,6 +182,10 @@ pub struct Options {
     /// shadows and texture reads with the uv-dependent inputs constant, the baseline
     /// `sdfc bench` measures the atlases against.
     pub constant_uv: bool,
+    /// Large unions as code, one call per operand, instead of data with a bounding-volume
+    /// hierarchy (`ir::group`): the baseline `sdfc bench --scale` measures groups against.
+    /// The CPU reference always uses the groups.
+    pub unions_as_code: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.
@@ -243,6 +248,8 @@ pub fn generate(
         source_map: Vec::new(),
         heights: Vec::new(),
         tables: Vec::new(),
+        groups: Vec::new(),
+        unions_as_code: options.unions_as_code,
     };
     g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
@@ -261,7 +268,18 @@ pub fn generate(
     }
     g.atlas_choice(options, plain)?;
     let textures = g.materials(if plain { &[] } else { &program.materials }, uses)?;
-    let table = bindings::table(&textures, !g.tables.is_empty());
+    let tables = if !g.groups.is_empty() {
+        bindings::Tables::Scene
+    } else if !g.tables.is_empty() {
+        bindings::Tables::Atlases
+    } else {
+        bindings::Tables::None
+    };
+    g.groups();
+    if tables == bindings::Tables::Scene {
+        g.out.push_str(group::READERS);
+    }
+    let table = bindings::table(&textures, tables);
     let entry = template::fill(
         template::ENTRY,
         &[("bindings", bindings::declarations(&table))],
@@ -280,6 +298,10 @@ struct Generator<'a> {
     heights: Vec<std::sync::Arc<ir::Height>>,
     /// The words of the `tables` storage buffer (`Manifest::tables`).
     tables: Vec<u32>,
+    /// The groups (large unions as data) the shapes call, once each by key.
+    groups: Vec<std::sync::Arc<ir::group::Group>>,
+    /// `Options::unions_as_code`.
+    unions_as_code: bool,
 }
 
 impl Generator<'_> {
@@ -321,8 +343,14 @@ impl Generator<'_> {
         let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
         for named in scene.shapes.iter().filter(|n| emits(n, &rendered)) {
             let start = self.out.len();
-            let h = map_fn(&mut self.out, &format!("map_{}", named.name), &named.shape);
+            let (h, groups) = map_fn(
+                &mut self.out,
+                &format!("map_{}", named.name),
+                &named.shape,
+                self.unions_as_code,
+            );
             self.add_heights(h);
+            self.groups.extend(groups);
             let _ = writeln!(
                 self.out,
                 "fn sdf_{0}(p: vec3<f32>) -> f32 {{\n    return map_{0}(p).x;\n}}\n",
@@ -336,8 +364,9 @@ impl Generator<'_> {
     /// `scene_map`: the render target.
     fn render_target(&mut self, scene: &Scene, target: &ir::Shape, options: &Options) {
         let start = self.out.len();
-        let h = map_fn(&mut self.out, "scene_map", target);
+        let (h, groups) = map_fn(&mut self.out, "scene_map", target, self.unions_as_code);
         self.add_heights(h);
+        self.groups.extend(groups);
         self.surface(target);
         let span = match (options.shape.as_deref(), &self.program.render) {
             (Some(n), _) => self.let_span(n),
@@ -359,6 +388,7 @@ impl Generator<'_> {
         }
         let mut w = emit::Writer::new("scene_blend");
         w.blend = true;
+        w.unions_as_code = self.unions_as_code;
         let d = w.shape(target, target.root(), "p");
         let _ = writeln!(
             self.out,
@@ -367,7 +397,35 @@ impl Generator<'_> {
         );
         let heights = std::mem::take(&mut w.heights);
         self.add_heights(heights);
+        self.groups.append(&mut w.groups);
         self.out.push_str("fn scene_surface(id: i32, p: vec3<f32>, n: vec3<f32>, footprint: f32) -> Material {\n    let bl = scene_blend(p);\n    var m = scene_material(i32(bl.y + 0.5), p, n, footprint);\n    if (bl.w > 0.0) {\n        let o = scene_material(i32(bl.z + 0.5), p, n, footprint);\n        m.color = mix(m.color, o.color, bl.w);\n        m.roughness = mix(m.roughness, o.roughness, bl.w);\n        m.metallic = mix(m.metallic, o.metallic, bl.w);\n        m.emission = mix(m.emission, o.emission, bl.w);\n        m.normal = sdfc_normalize_or(mix(m.normal, o.normal, bl.w), n);\n    }\n    return m;\n}\n\n");
+    }
+
+    /// Every group's table and offset, once each by key, and a walker per set of
+    /// primitive kinds (after the code that calls them).
+    fn groups(&mut self) {
+        let groups = std::mem::take(&mut self.groups);
+        if groups.is_empty() {
+            return;
+        }
+        let (mut keys, mut masks) = (
+            std::collections::HashSet::new(),
+            std::collections::BTreeSet::new(),
+        );
+        for g in groups.iter().filter(|g| keys.insert(g.key.clone())) {
+            let _ = writeln!(
+                self.out,
+                "const GROUP_{}_AT: u32 = {}u;",
+                g.key,
+                self.tables.len()
+            );
+            self.tables.extend_from_slice(&g.words);
+            masks.insert(group::mask(g));
+        }
+        self.out.push('\n');
+        for m in masks {
+            self.out.push_str(&group::walker(m));
+        }
     }
 
     /// Every prepared atlas's code, from the atlas template.
@@ -379,7 +437,14 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(k, a, &options.seed_grid.grid(a), options, &mut self.tables)?;
+            let code = atlas::emit(
+                k,
+                a,
+                &options.seed_grid.grid(a),
+                options,
+                &mut self.tables,
+                &mut self.groups,
+            )?;
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
@@ -630,9 +695,17 @@ fn emits(named: &ir::NamedShape, rendered: &[usize]) -> bool {
         .all(|h| rendered.contains(&h.id))
 }
 
-/// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights it calls.
-fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) -> Vec<std::sync::Arc<ir::Height>> {
+/// The heights and groups a function calls.
+type Calls = (
+    Vec<std::sync::Arc<ir::Height>>,
+    Vec<std::sync::Arc<ir::group::Group>>,
+);
+
+/// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights and
+/// groups it calls.
+fn map_fn(out: &mut String, name: &str, shape: &ir::Shape, unions_as_code: bool) -> Calls {
     let mut w = Writer::new(name);
+    w.unions_as_code = unions_as_code;
     let d = w.shape(shape, shape.root(), "p");
     // The evals view counts the render target's evaluations.
     let count = if name == "scene_map" {
@@ -645,5 +718,5 @@ fn map_fn(out: &mut String, name: &str, shape: &ir::Shape) -> Vec<std::sync::Arc
         "{}fn {name}(p: vec3<f32>) -> vec2<f32> {{\n{count}{}    return {d};\n}}\n",
         w.helpers, w.out
     );
-    w.heights
+    (w.heights, w.groups)
 }

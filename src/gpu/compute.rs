@@ -11,8 +11,16 @@ use glam::DVec3;
 
 /// Distance and gradient at each point, from the generated compute shader:
 /// `(distance, gradient.x, gradient.y, gradient.z)` per point.
-pub fn eval_points(gpu: &Gpu, wgsl: &str, points: &[DVec3]) -> Result<Vec<[f32; 4]>, GpuError> {
-    run(gpu, wgsl, None, "cs_points", points, 1)
+pub fn eval_points(
+    gpu: &Gpu,
+    module: &Module,
+    points: &[DVec3],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    let group0 = Group0 {
+        module,
+        textures: None,
+    };
+    run(gpu, &module.wgsl, Some(group0), "cs_points", points, 1)
 }
 
 /// The module whose render group a query binds: its tables, and its textures when given.

@@ -206,6 +206,18 @@ fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
 }
 
 fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
+    if let Some(g) = shape.group(id) {
+        // union(leaves…, others…) with a hard union's blends: the nearer, ties first.
+        let (mut d, m) = g.eval(p);
+        let mut blend = Blend::single(m);
+        for &o in &g.others {
+            let (dd, mm) = eval_node(shape, o, p);
+            if dd < d {
+                (d, blend) = (dd, mm);
+            }
+        }
+        return (d, blend);
+    }
     match &shape[id].op {
         Op::Prim(pr) => (prim(p, pr), Blend::single(0)),
         Op::Csg { op, k, a, b } => {

@@ -10,6 +10,7 @@
 
 pub mod displace;
 pub mod eval;
+pub mod group;
 mod lower;
 pub mod material;
 pub mod rest;
@@ -278,6 +279,14 @@ impl Shape {
         })
     }
 
+    /// The group (a large hard union as data) rooted at node `id`, if any.
+    pub fn group(&self, id: NodeId) -> Option<&std::sync::Arc<group::Group>> {
+        self.groups
+            .get_or_init(|| group::groups(self))
+            .get(id.index())?
+            .as_ref()
+    }
+
     /// Whether a node has more than one parent (a `let` used twice).
     pub fn is_shared(&self, id: NodeId) -> bool {
         self.shared
@@ -399,6 +408,8 @@ pub struct Shape {
     pub nodes: Vec<Node>,
     /// Which nodes have several parents, computed on first use.
     shared: std::sync::OnceLock<Vec<bool>>,
+    /// The large unions evaluated as data ([`group`]), by node, built on first use.
+    groups: std::sync::OnceLock<Vec<Option<std::sync::Arc<group::Group>>>>,
 }
 
 impl PartialEq for Shape {

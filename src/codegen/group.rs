@@ -1,0 +1,141 @@
+//! The WGSL of groups (`ir::group`): a large hard union as data in the `tables` buffer
+//! (a constant per group: its offset), evaluated by a walker function shared by every
+//! group with the same primitive kinds: one loop over the flattened bounding-volume
+//! hierarchy, one `switch` arm per kind. `ir::group::Group::eval` is its CPU mirror.
+
+use crate::ir::group::{Group, INNER};
+use std::fmt::Write;
+
+/// Reads of the `tables` buffer as floats and vectors, and a group tree node's box
+/// distance; emitted once per module that has a group.
+pub const READERS: &str = "fn tables_f32(i: u32) -> f32 {
+    return bitcast<f32>(tables[i]);
+}
+
+fn tables_vec3(i: u32) -> vec3<f32> {
+    return vec3<f32>(bitcast<f32>(tables[i]), bitcast<f32>(tables[i + 1u]), bitcast<f32>(tables[i + 2u]));
+}
+
+// The distance from p to the box of the group tree node at word `at`: 0 inside.
+fn group_box(at: u32, p: vec3<f32>) -> f32 {
+    return length(max(max(tables_vec3(at) - p, p - tables_vec3(at + 4u)), vec3<f32>(0.0)));
+}
+
+";
+
+/// The distance call of a primitive kind at local point `q`, its parameters from `k`.
+fn call_of(code: u32) -> Option<&'static str> {
+    // The order of each kind's parameters is `ir::group::params`'s.
+    Some(match code {
+        0 => "sd_sphere(q, tables_f32(k))",
+        1 => "sd_box(q, tables_vec3(k))",
+        2 => "sd_round_box(q, tables_vec3(k), tables_f32(k + 3u))",
+        3 => "sd_box_frame(q, tables_vec3(k), tables_f32(k + 3u))",
+        4 => "sd_torus(q, tables_f32(k), tables_f32(k + 1u))",
+        5 => "sd_capsule(q, tables_vec3(k), tables_vec3(k + 3u), tables_f32(k + 6u))",
+        6 => "sd_cylinder(q, tables_f32(k), tables_f32(k + 1u))",
+        7 => "sd_capped_cone(q, tables_f32(k), tables_f32(k + 1u), tables_f32(k + 2u))",
+        8 => "sd_plane(q, tables_vec3(k), tables_f32(k + 3u))",
+        9 => "sd_ellipsoid(q, tables_vec3(k))",
+        10 => "sd_octahedron(q, tables_f32(k))",
+        11 => "sd_hex_prism(q, tables_f32(k), tables_f32(k + 1u))",
+        12 => "sd_tri_prism(q, tables_f32(k), tables_f32(k + 1u))",
+        13 => "sd_pyramid(q, tables_f32(k))",
+        14 => "sd_link(q, tables_f32(k), tables_f32(k + 1u), tables_f32(k + 2u))",
+        _ => return None,
+    })
+}
+
+/// The kinds of a group as a bit mask: one walker function per mask.
+pub fn mask(g: &Group) -> u32 {
+    g.kinds().iter().fold(0, |m, k| m | (1 << k))
+}
+
+/// The call of a group's walker at point `p`: (distance, material).
+pub fn call(g: &Group, p: &str) -> String {
+    format!(
+        "group_walk_{:x}(GROUP_{}_AT, {}u, {p})",
+        mask(g),
+        g.key,
+        g.tree.len()
+    )
+}
+
+/// `fn group_walk_MASK(at, nodes, p) -> vec2<f32>` (distance, material): the walk of a
+/// group's tree whose leaves have the kinds of `mask`, from offset `at` of `tables`.
+pub fn walker(mask: u32) -> String {
+    let mut arms = String::new();
+    for code in (0..32).filter(|k| mask & (1 << k) != 0) {
+        if let Some(c) = call_of(code) {
+            let _ = writeln!(arms, "        case {code}u: {{ d = {c}; }}");
+        }
+    }
+    // A leaf record's distance: its point in the primitive's frame, then its kind's arm.
+    let leaf = format!(
+        "fn group_leaf_{mask:x}(r: u32, p: vec3<f32>) -> f32 {{
+    let head = tables[r];
+    var q = p + tables_vec3(r + 2u);
+    var k = r + 5u;
+    if ((head & 256u) != 0u) {{
+        q = mat3x3<f32>(tables_vec3(r + 5u), tables_vec3(r + 8u), tables_vec3(r + 11u)) * p + tables_vec3(r + 2u);
+        k = r + 14u;
+    }}
+    var d = 3.0e38;
+    switch (head & 255u) {{
+{arms}        default: {{}}
+    }}
+    return d;
+}}
+
+"
+    );
+    leaf + &format!(
+        "// A large union as data: a bounding-volume hierarchy over its primitives' boxes
+// (`tables` from `at0`, `nodes` nodes), walked without a stack; a subtree whose box is
+// farther than the best distance so far is skipped (ir::group mirrors this).
+fn group_walk_{mask:x}(at0: u32, nodes: u32, p: vec3<f32>) -> vec2<f32> {{
+    // Node i is words at0 + 8i: box min, skip, box max, record.
+    // The first bound: the leaf reached by descending into the nearer child's box (a
+    // node's children are the next node and the one after the first child's subtree).
+    var i = 0u;
+    loop {{
+        if (tables[at0 + 8u * i + 7u] != {inner}u) {{
+            break;
+        }}
+        let l = i + 1u;
+        let r = tables[at0 + 8u * l + 3u];
+        let bl = group_box(at0 + 8u * l, p);
+        let br = group_box(at0 + 8u * r, p);
+        i = select(l, r, br < bl);
+    }}
+    let first = tables[at0 + 8u * i + 7u];
+    var best = vec2<f32>(group_leaf_{mask:x}(at0 + first, p), tables_f32(at0 + first + 1u));
+    var best_record = first;
+    i = 0u;
+    loop {{
+        if (i >= nodes) {{
+            break;
+        }}
+        let at = at0 + 8u * i;
+        let b = group_box(at, p);
+        if (b > 0.0 && b > best.x) {{
+            i = tables[at + 3u];
+            continue;
+        }}
+        let record = tables[at + 7u];
+        if (record != {inner}u) {{
+            let d = group_leaf_{mask:x}(at0 + record, p);
+            if (d < best.x || (d == best.x && record < best_record)) {{
+                best = vec2<f32>(d, tables_f32(at0 + record + 1u));
+                best_record = record;
+            }}
+        }}
+        i = i + 1u;
+    }}
+    return best;
+}}
+
+",
+        inner = INNER,
+    )
+}

@@ -96,7 +96,8 @@ impl Client {
             .unwrap();
     }
 
-    fn diagnostics(&self) -> Value {
+    /// The next publishDiagnostics, of either stage.
+    fn publish(&self) -> Value {
         loop {
             if let Message::Notification(n) = self
                 .conn
@@ -105,6 +106,24 @@ impl Client {
                 .unwrap()
             {
                 if n.method == "textDocument/publishDiagnostics" {
+                    return n.params;
+                }
+            }
+        }
+    }
+
+    fn diagnostics(&self) -> Value {
+        loop {
+            if let Message::Notification(n) = self
+                .conn
+                .receiver
+                .recv_timeout(Duration::from_secs(30))
+                .unwrap()
+            {
+                // The full set: the front end's stage comes first (see `staged_…`).
+                if n.method == "textDocument/publishDiagnostics"
+                    && n.params.get("sdfcStage").is_none()
+                {
                     return n.params;
                 }
             }
@@ -275,5 +294,46 @@ fn texture_paths_resolve_in_folders_with_spaces() {
         .filter(|d| d["code"].as_str().is_some_and(|c| c.starts_with('E')))
         .collect();
     assert!(errors.is_empty(), "{errors:?}");
+    stop(c, handle);
+}
+
+#[test]
+fn front_end_diagnostics_come_first_then_the_full_set() {
+    let (c, handle) = Client::start();
+    // An unused `let` (the front end's warning) and a seed far off the sphere, which
+    // projects onto the other's point (the atlas geometry's note and warning: only the
+    // back end finds them).
+    let text = "let unused = 1;\nlet ball = sphere(1);\natlas skin on ball {\n    seed a = [0, 1, 0];\n    seed far = [0, 50, 0];\n}\nrender ball;\n";
+    c.notify(
+        "textDocument/didOpen",
+        json!({ "textDocument": { "uri": URI, "languageId": "sdf", "version": 1, "text": text } }),
+    );
+    let codes = |d: &Value| -> Vec<String> {
+        d["diagnostics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x["code"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let front = c.publish();
+    assert_eq!(
+        (front["version"].clone(), front["sdfcStage"].clone()),
+        (json!(1), json!("front"))
+    );
+    assert_eq!(codes(&front), ["W0001"]);
+    let full = c.publish();
+    assert_eq!(full["version"], 1);
+    assert!(full.get("sdfcStage").is_none());
+    let mut all = codes(&full);
+    all.sort();
+    assert_eq!(all, ["N0001", "W0001", "W0004"]);
+    // A front-end error is the whole analysis: one publish, not marked.
+    let broken = "let ball = spher(1);\nrender ball;\n";
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 2 }, "contentChanges": [{ "text": broken }] }));
+    let only = c.publish();
+    assert_eq!(only["version"], 2);
+    assert!(only.get("sdfcStage").is_none());
+    assert_eq!(codes(&only), ["E0103"]);
     stop(c, handle);
 }

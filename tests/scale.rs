@@ -221,3 +221,36 @@ fn ten_times_the_primitives_cost_at_most_fifteen_times_the_compile() {
         "compile {t1:?} → {t2:?} for 10× the primitives"
     );
 }
+
+#[test]
+fn an_edit_that_leaves_an_atlas_as_it_was_does_not_redo_its_geometry() {
+    use sdfc::uv::diagnose::PREPARE_STATS;
+    use std::sync::atomic::Ordering::Relaxed;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
+    let first = driver::check(&src, Some(&dir));
+    let (hits, misses) = (
+        PREPARE_STATS[0].load(Relaxed),
+        PREPARE_STATS[1].load(Relaxed),
+    );
+    // A comment and another definition: the atlas's inputs are the same.
+    let edited = format!("// a comment\nlet spare = sphere(2);\n{src}");
+    let second = driver::check(&edited, Some(&dir));
+    assert!(PREPARE_STATS[0].load(Relaxed) > hits);
+    assert_eq!(PREPARE_STATS[1].load(Relaxed), misses);
+    assert_eq!(first.atlases, second.atlases);
+    // The diagnostics still point into the edited text (the unused `spare`).
+    assert!(second
+        .diagnostics
+        .iter()
+        .any(|d| d.code == sdfc::codes::W_UNUSED));
+    // A moved seed is prepared afresh.
+    let moved = src.replacen(
+        "seed chest_a = [-0.3, 0.35, 0.35]",
+        "seed chest_a = [-0.31, 0.35, 0.35]",
+        1,
+    );
+    assert_ne!(moved, src);
+    driver::check(&moved, Some(&dir));
+    assert!(PREPARE_STATS[1].load(Relaxed) > misses);
+}

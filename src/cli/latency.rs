@@ -19,26 +19,47 @@ fn send_note(conn: &Connection, method: &str, params: serde_json::Value) -> Resu
     Ok(())
 }
 
-/// Waits for the diagnostics of `version`; gives their count.
-fn wait_diagnostics(conn: &Connection, version: i32) -> Result<usize, Error> {
+/// Waits for the diagnostics of `version`; gives their count and whether they are the
+/// front end's stage (a full set follows).
+fn wait_diagnostics(conn: &Connection, version: i32) -> Result<(usize, bool), Error> {
     loop {
         match conn.receiver.recv_timeout(Duration::from_secs(600))? {
             Message::Notification(n)
                 if n.method == "textDocument/publishDiagnostics"
                     && n.params["version"] == version =>
             {
-                return Ok(n.params["diagnostics"].as_array().map_or(0, |a| a.len()));
+                let count = n.params["diagnostics"].as_array().map_or(0, Vec::len);
+                return Ok((count, n.params["sdfcStage"] == "front"));
             }
             _ => {}
         }
     }
 }
 
-pub(super) fn measure(
-    path: &Path,
-    text: &str,
-    edits: u32,
-) -> Result<(Vec<Duration>, usize), Error> {
+/// Waits for both stages of `version`'s diagnostics (the front end's, then the full set;
+/// one publish when the front end found errors); the times from `start` to each, and
+/// the final count.
+fn wait_stages(
+    conn: &Connection,
+    version: i32,
+    start: Instant,
+) -> Result<(Duration, Duration, usize), Error> {
+    let (count, partial) = wait_diagnostics(conn, version)?;
+    let front = start.elapsed();
+    if !partial {
+        return Ok((front, front, count));
+    }
+    let (count, _) = wait_diagnostics(conn, version)?;
+    Ok((front, start.elapsed(), count))
+}
+
+/// The front end's and the full analysis's latencies of each edit.
+pub(super) struct Latencies {
+    pub front: Vec<Duration>,
+    pub full: Vec<Duration>,
+}
+
+pub(super) fn measure(path: &Path, text: &str, edits: u32) -> Result<(Latencies, usize), Error> {
     let (server, client) = Connection::memory();
     let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
     let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
@@ -59,8 +80,11 @@ pub(super) fn measure(
         "textDocument/didOpen",
         json!({ "textDocument": { "uri": uri, "languageId": "sdf", "version": 1, "text": text } }),
     )?;
-    let count = wait_diagnostics(&client, 1)?;
-    let mut times = Vec::new();
+    let (_, _, mut count) = wait_stages(&client, 1, Instant::now())?;
+    let mut times = Latencies {
+        front: Vec::new(),
+        full: Vec::new(),
+    };
     for i in 0..edits as i32 {
         // An edit that changes the text but not the scene: a comment at the end, as when
         // typing; each one is a full re-analysis.
@@ -72,8 +96,10 @@ pub(super) fn measure(
             "textDocument/didChange",
             json!({ "textDocument": { "uri": uri, "version": version }, "contentChanges": [{ "text": changed }] }),
         )?;
-        wait_diagnostics(&client, version)?;
-        times.push(start.elapsed());
+        let (front, full, n) = wait_stages(&client, version, start)?;
+        times.front.push(front);
+        times.full.push(full);
+        count = n;
     }
     client.sender.send(Message::Request(Request::new(
         RequestId::from(2),
@@ -94,16 +120,14 @@ pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
             return ExitCode::from(super::exit::USAGE);
         }
     };
-    let (mut times, count) = match measure(path, &text, edits.max(1)) {
+    let (times, count) = match measure(path, &text, edits.max(1)) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: the language server failed: {e}");
             return ExitCode::from(super::exit::SCENE);
         }
     };
-    times.sort();
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    let pick = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
     println!(
         "scene:     {} ({} bytes, {} diagnostics)",
         path.display(),
@@ -111,30 +135,51 @@ pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
         count
     );
     println!(
-        "didChange → publishDiagnostics over {} edits (parse, check, compile-time geometry, code generation, naga):",
-        times.len()
+        "didChange → publishDiagnostics over {} edits:",
+        times.full.len()
     );
-    println!(
-        "p50 {:.2} ms   p95 {:.2} ms   min {:.2} ms   max {:.2} ms",
-        ms(pick(0.5)),
-        ms(pick(0.95)),
-        ms(times[0]),
-        ms(times[times.len() - 1])
-    );
+    let mut report = serde_json::json!({
+        "bench": "lsp latency",
+        "scene": path.display().to_string(),
+        "edits": times.full.len(),
+        "diagnostics": count,
+    });
+    for (name, what, list) in [
+        (
+            "front",
+            "the front end's (parse, names, types)",
+            times.front,
+        ),
+        (
+            "full",
+            "the full set (also the atlases' geometry, code generation, naga)",
+            times.full,
+        ),
+    ] {
+        let q = quantiles(list);
+        println!(
+            "  {what}: p50 {:.2} ms   p95 {:.2} ms   min {:.2} ms   max {:.2} ms",
+            ms(q[1]),
+            ms(q[2]),
+            ms(q[0]),
+            ms(q[3])
+        );
+        report[format!("{name}_p50_ms")] = ms(q[1]).into();
+        report[format!("{name}_p95_ms")] = ms(q[2]).into();
+        report[format!("{name}_min_ms")] = ms(q[0]).into();
+        report[format!("{name}_max_ms")] = ms(q[3]).into();
+    }
     if let Some(out) = json {
-        let report = serde_json::json!({
-            "bench": "lsp latency",
-            "scene": path.display().to_string(),
-            "edits": times.len(),
-            "diagnostics": count,
-            "p50_ms": ms(pick(0.5)),
-            "p95_ms": ms(pick(0.95)),
-            "min_ms": ms(times[0]),
-            "max_ms": ms(times[times.len() - 1]),
-        });
         if let Err(code) = super::bench::write_json(out, &report) {
             return code;
         }
     }
     ExitCode::SUCCESS
+}
+
+/// Min, p50, p95 and max of a non-empty list.
+pub(super) fn quantiles(mut v: Vec<Duration>) -> [Duration; 4] {
+    v.sort();
+    let pick = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    [v[0], pick(0.5), pick(0.95), v[v.len() - 1]]
 }

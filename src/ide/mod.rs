@@ -38,6 +38,14 @@ impl Document {
         let analysis = crate::driver::check_all_with(&text, access);
         Document { text, analysis }
     }
+
+    /// A document with the front end's analysis only (parse, names, types): what the
+    /// language server publishes at once, before the geometry and code generation.
+    pub fn front(text: impl Into<String>, access: &crate::access::Access) -> Document {
+        let text = text.into();
+        let analysis = crate::driver::analyze_with(&text, access);
+        Document { text, analysis }
+    }
 }
 
 /// Markdown for the editor, and the span it describes.

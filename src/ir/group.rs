@@ -14,11 +14,12 @@ use super::{eval, Aabb, Csg, NodeId, Op, Prim, Shape};
 use glam::{DMat3, DVec3};
 use std::hash::{Hash, Hasher};
 
-/// The fewest simple leaves for which a union becomes a group. Below it, code is
-/// cheaper on every measure `sdfc bench --scale` takes on Mesa's lavapipe (100 spheres
-/// as code: a 104 ms pipeline, a 6 ms frame; as a group: 40 ms and 370 ms), and small
-/// unions stay readable in the generated WGSL.
-pub const MIN_LEAVES: usize = 32;
+/// The fewest simple leaves for which a union becomes a group: about 150 lines of WGSL
+/// as code, one call as a group. (On Mesa's lavapipe, straight-line code is the faster
+/// frame at every size `sdfc bench --scale` measures, up to 1,200 spheres: a SIMD CPU
+/// gathers the table per lane; the groups' gain there is the pipeline, the compile and
+/// the size of the code.)
+pub const MIN_LEAVES: usize = 16;
 
 /// No leaf: an inner node of the tree.
 pub const INNER: u32 = u32::MAX;

@@ -119,7 +119,15 @@ fn convert(uri: &lsp::Uri, o: &Open, d: &Diagnostic) -> lsp::Diagnostic {
     }
 }
 
-fn publish(conn: &Connection, uri: &lsp::Uri, o: Option<&Open>) -> Result<(), Error> {
+/// Publishes a document's diagnostics. The front end's stage, which the full set follows
+/// for the same version, is marked `"sdfcStage": "front"` (a field clients ignore; tests
+/// and `sdfc bench --lsp-latency` read it).
+fn publish(
+    conn: &Connection,
+    uri: &lsp::Uri,
+    o: Option<&Open>,
+    partial: bool,
+) -> Result<(), Error> {
     let (diagnostics, version) = match o {
         Some(o) => (
             o.doc
@@ -132,11 +140,14 @@ fn publish(conn: &Connection, uri: &lsp::Uri, o: Option<&Open>) -> Result<(), Er
         ),
         None => (Vec::new(), None),
     };
-    let params = lsp::PublishDiagnosticsParams {
+    let mut params = serde_json::to_value(lsp::PublishDiagnosticsParams {
         uri: uri.clone(),
         diagnostics,
         version,
-    };
+    })?;
+    if partial {
+        params["sdfcStage"] = "front".into();
+    }
     conn.sender.send(Message::Notification(Notification::new(
         String::from(
             <lsp::notification::PublishDiagnostics as lsp::notification::Notification>::METHOD,
@@ -189,12 +200,24 @@ fn workspace_roots(params: &serde_json::Value) -> Vec<PathBuf> {
         .collect()
 }
 
-fn open(uri: &lsp::Uri, text: String, version: i32, roots: &[PathBuf]) -> Open {
+/// How far an analysis goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    /// Parse, names and types (`driver::analyze_with`).
+    Front,
+    /// Everything `sdfc check` and `compile` report (`driver::check_all_with`).
+    Full,
+}
+
+fn open(uri: &lsp::Uri, text: String, version: i32, roots: &[PathBuf], stage: Stage) -> Open {
     let mut access = crate::access::Access::new(base_dir(uri).as_deref());
     for r in roots {
         access.allow(r);
     }
-    let doc = Document::with_access(text, &access);
+    let doc = match stage {
+        Stage::Front => Document::front(text, &access),
+        Stage::Full => Document::with_access(text, &access),
+    };
     let index = LineIndex::new(&doc.text);
     Open {
         version,

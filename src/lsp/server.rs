@@ -269,7 +269,7 @@ impl Server {
                 s.changed.retain(|(u, _, _)| *u != uri);
                 s.docs.remove(uri.as_str());
                 s.analysing.remove(uri.as_str());
-                publish(&s.conn, &uri, None)
+                publish(&s.conn, &uri, None, false)
             })?
             .on::<Cancel, Error>(|s, p| {
                 s.cancelled.insert(match p.id {
@@ -354,19 +354,20 @@ impl Server {
             // Closed since.
             return Ok(());
         };
-        if latest == d.version {
+        // The front end's stage is published at once; requests wait for the back end's.
+        if latest == d.version && !d.partial {
             self.analysing.remove(&key);
         }
         match d.result {
             Ok(o) => {
-                if self
-                    .docs
-                    .get(&key)
-                    .is_some_and(|old| old.version > o.version)
-                {
+                // Never an older version over a newer one, nor the front end's stage
+                // over the back end's of the same version.
+                if self.docs.get(&key).is_some_and(|old| {
+                    old.version > o.version || (old.version == o.version && d.partial)
+                }) {
                     return Ok(());
                 }
-                publish(&self.conn, &d.uri, Some(&o))?;
+                publish(&self.conn, &d.uri, Some(&o), d.partial)?;
                 self.docs.insert(key, o);
             }
             Err(why) => {

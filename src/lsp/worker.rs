@@ -1,9 +1,13 @@
 //! Analyses run on a worker thread, so the server keeps answering while a large
 //! document is being checked. The worker takes the latest text of each document that
-//! changed (older texts queued behind a newer one are skipped) and sends each analysis
-//! back; a panic inside an analysis comes back as its message.
+//! changed (older texts queued behind a newer one are skipped) and analyses it in two
+//! stages, each sent back as it finishes: the front end (parse, names, types: the
+//! diagnostics most edits change, in milliseconds), then the back end (the atlases'
+//! geometry, lowering, code generation and naga), which a newer text of the same
+//! document queued meanwhile cancels. A panic inside an analysis comes back as its
+//! message.
 
-use super::{open, Open};
+use super::{open, Open, Stage};
 use crossbeam_channel::{unbounded, Receiver, Sender};
 use lsp_types as lsp;
 use std::path::PathBuf;
@@ -21,6 +25,8 @@ pub(super) struct Done {
     pub uri: lsp::Uri,
     pub version: i32,
     pub result: Result<Open, String>,
+    /// The front end's stage: the back end's follows (unless cancelled).
+    pub partial: bool,
 }
 
 /// Starts the worker; it ends when the job sender is dropped.
@@ -32,39 +38,69 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
         // Deep (but valid) scenes recurse; the passes also grow their stacks on demand.
         .stack_size(64 << 20)
         .spawn(move || {
-            while let Ok(first) = inbox.recv() {
-                // The latest text per document, in the order documents first appear.
-                let mut batch: Vec<Job> = vec![first];
-                for job in inbox.try_iter() {
-                    match batch.iter_mut().find(|j| j.uri == job.uri) {
-                        Some(j) => *j = job,
-                        None => batch.push(job),
+            let mut batch: Vec<Job> = Vec::new();
+            loop {
+                if batch.is_empty() {
+                    match inbox.recv() {
+                        Ok(job) => batch.push(job),
+                        Err(_) => return,
                     }
                 }
-                for job in batch {
-                    let Job {
-                        uri,
-                        text,
-                        version,
-                        roots,
-                    } = job;
-                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        open(&uri, text, version, &roots)
-                    }))
-                    .map_err(|panic| super::server::panic_message(&panic));
-                    if results
+                take_newer(&mut batch, &inbox);
+                let Job {
+                    uri,
+                    text,
+                    version,
+                    roots,
+                } = batch.remove(0);
+                let send = |result, partial| {
+                    results
                         .send(Done {
-                            uri,
+                            uri: uri.clone(),
                             version,
                             result,
+                            partial,
                         })
-                        .is_err()
-                    {
-                        return;
-                    }
+                        .is_ok()
+                };
+                let front = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    open(&uri, text.clone(), version, &roots, Stage::Front)
+                }))
+                .map_err(|panic| super::server::panic_message(&panic));
+                // A front end with errors is the whole analysis: the back end needs a
+                // checked program.
+                let whole = front.as_ref().map_or(true, |o| o.doc.analysis.has_errors());
+                if !send(front, !whole) {
+                    return;
+                }
+                if whole {
+                    continue;
+                }
+                // A newer text of this document cancels its back end.
+                take_newer(&mut batch, &inbox);
+                if batch.iter().any(|j| j.uri == uri) {
+                    continue;
+                }
+                let full = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    open(&uri, text, version, &roots, Stage::Full)
+                }))
+                .map_err(|panic| super::server::panic_message(&panic));
+                if !send(full, false) {
+                    return;
                 }
             }
         })
         .expect("a thread for analyses");
     (jobs, done)
+}
+
+/// Moves the jobs waiting in `inbox` into `batch`: the latest text per document, in the
+/// order documents first appear.
+fn take_newer(batch: &mut Vec<Job>, inbox: &Receiver<Job>) {
+    for job in inbox.try_iter() {
+        match batch.iter_mut().find(|j| j.uri == job.uri) {
+            Some(j) => *j = job,
+            None => batch.push(job),
+        }
+    }
 }

@@ -11,6 +11,66 @@ use crate::ir::{self, eval};
 use crate::sema::{AtlasDef, Program};
 use glam::DVec3;
 
+/// The inputs [`Atlas::prepare`] reads, without spans: the shape's IR, the atlas's
+/// name and settings, its seeds' names, positions and tangents, its merges.
+fn prepare_key(def: &AtlasDef, shape: &ir::Shape) -> String {
+    let seeds: Vec<_> = def
+        .seeds
+        .iter()
+        .map(|s| (&s.name, s.position, s.tangent))
+        .collect();
+    let merges: Vec<_> = def.merges.iter().map(|m| (m.a, m.b)).collect();
+    format!(
+        "{:?}|{:?}|{seeds:?}|{merges:?}|{:?}",
+        def.name, def.params, shape.nodes
+    )
+}
+
+/// Prepared atlases by their inputs, so that an edit that leaves an atlas's inputs as
+/// they were (a comment, formatting, another definition) does not redo its geometry
+/// (the language server checks the document on every edit). Atlases on displaced
+/// shapes, whose fields read other atlases and textures, are always prepared afresh.
+static PREPARED: std::sync::Mutex<Vec<(String, Result<Atlas, PrepareError>)>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// The most prepared atlases kept, most recently used last.
+const PREPARED_KEPT: usize = 16;
+
+/// How many preparations were answered from the cache, and how many were computed.
+pub static PREPARE_STATS: [std::sync::atomic::AtomicUsize; 2] = [
+    std::sync::atomic::AtomicUsize::new(0),
+    std::sync::atomic::AtomicUsize::new(0),
+];
+
+fn prepare_cached(def: &AtlasDef, shape: &ir::Shape) -> Result<Atlas, PrepareError> {
+    use std::sync::atomic::Ordering::Relaxed;
+    if !shape.heights().is_empty() {
+        return Atlas::prepare(def, shape);
+    }
+    let key = prepare_key(def, shape);
+    // A poisoned lock (a panic elsewhere while holding it) only loses the cache.
+    let hit = PREPARED.lock().ok().and_then(|mut kept| {
+        let at = kept.iter().position(|(k, _)| *k == key)?;
+        let entry = kept.remove(at);
+        let value = entry.1.clone();
+        kept.push(entry);
+        Some(value)
+    });
+    if let Some(value) = hit {
+        PREPARE_STATS[0].fetch_add(1, Relaxed);
+        return value;
+    }
+    PREPARE_STATS[1].fetch_add(1, Relaxed);
+    let value = Atlas::prepare(def, shape);
+    if let Ok(mut kept) = PREPARED.lock() {
+        if kept.len() >= PREPARED_KEPT {
+            drop(kept.remove(0));
+        }
+        kept.push((key, value.clone()));
+    }
+    value
+}
+
 /// Every atlas of a checked, error-free program prepared (None where it cannot be),
 /// with the diagnostics of their geometry.
 pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
@@ -40,7 +100,7 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
             continue;
         };
         shape.bind_heights(&out, &textures);
-        match Atlas::prepare(def, &shape) {
+        match prepare_cached(def, &shape) {
             Ok(mut a) => {
                 if let Some(t) = &target {
                     a.rest = ir::rest::RestQuery::find(t, &shape);

@@ -90,7 +90,10 @@ impl Pipe {
     pub fn diagnostics(&mut self) -> Value {
         loop {
             let m = self.read();
-            if m["method"] == "textDocument/publishDiagnostics" {
+            // The full set: the front end's stage comes first.
+            if m["method"] == "textDocument/publishDiagnostics"
+                && m["params"].get("sdfcStage").is_none()
+            {
                 return m["params"].clone();
             }
         }

@@ -90,7 +90,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         plain: false,
         cold: false,
         constant_uv: false,
-        unions_as_code: false,
+        unions_as_code: args.unions_as_code,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);
@@ -125,6 +125,12 @@ pub fn run(args: CompileArgs) -> ExitCode {
         Output::Text(t) => t.into_bytes(),
         Output::Binary(b) => b,
     };
+    let words = compiled.module.manifest.tables.len();
+    if words > 0 && args.manifest.is_none() {
+        eprintln!(
+            "note: the module reads the `tables` storage buffer ({words} words: seed grids, large unions); `--manifest FILE` writes its contents"
+        );
+    }
     if let Some(path) = &args.manifest {
         let json = serde_json::to_string_pretty(&compiled.module.manifest).unwrap_or_default();
         if let Err(e) = write_output(path, json.as_bytes()) {

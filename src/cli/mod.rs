@@ -373,6 +373,11 @@ pub struct CompileArgs {
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
+    /// Large unions (16 or more primitives under moves, turns and paints) as code, one
+    /// call per primitive, instead of data in the `tables` buffer walked through a
+    /// bounding-volume hierarchy (the default; see the README's Big scenes).
+    #[arg(long)]
+    pub unions_as_code: bool,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,

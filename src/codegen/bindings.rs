@@ -58,18 +58,9 @@ pub struct Binding {
 pub const RENDER_GROUP: u32 = 0;
 pub const COMPUTE_GROUP: u32 = 1;
 
-/// Which entry points read the `tables` storage buffer (`Manifest::tables`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Tables {
-    None,
-    /// The atlases' seed grids: what reads an atlas.
-    Atlases,
-    /// Also groups in the shapes' code: every entry point that evaluates the scene.
-    Scene,
-}
-
-/// The table for a module that samples `textures` and reads `tables`.
-pub fn table(textures: &[TextureUse], tables: Tables) -> Vec<Binding> {
+/// The table for a module that samples `textures` and, with `tables`, reads the
+/// `tables` storage buffer (`Manifest::tables`).
+pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -101,19 +92,17 @@ pub fn table(textures: &[TextureUse], tables: Tables) -> Vec<Binding> {
             resource: Resource::Sampler(i),
         });
     }
-    let readers = match tables {
-        Tables::None => None,
-        Tables::Atlases => Some(vec!["fs_main", "cs_atlas", "cs_material", "cs_bake"]),
-        Tables::Scene => Some(vec![
+    // Every entry point that evaluates the scene may read it: the shapes' groups, and the
+    // atlases (a displacement's height reads one from `scene_map`).
+    if tables {
+        let used_by = vec![
             "fs_main",
             "cs_points",
             "cs_grid",
             "cs_atlas",
             "cs_material",
             "cs_bake",
-        ]),
-    };
-    if let Some(used_by) = readers {
+        ];
         out.push(Binding {
             group: RENDER_GROUP,
             binding: out.len() as u32,

@@ -131,7 +131,7 @@ impl Writer {
         }
     }
 
-    fn fresh(&mut self, prefix: &str) -> String {
+    pub(super) fn fresh(&mut self, prefix: &str) -> String {
         self.next += 1;
         format!("{prefix}{}", self.next)
     }
@@ -177,26 +177,7 @@ impl Writer {
     fn shape_inner(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
         let d = self.fresh("d");
         if let Some(g) = shape.group(id).filter(|_| !self.unions_as_code) {
-            // A large union: its leaves as data, then its other operands as code.
-            if !self.groups.iter().any(|x| x.key == g.key) {
-                self.groups.push(g.clone());
-            }
-            let call = super::group::call(g, p);
-            let v = if self.blend {
-                format!("{call}.xyyy * vec4<f32>(1.0, 1.0, 1.0, 0.0)")
-            } else {
-                call
-            };
-            self.line(&format!("let {d} = {v};"));
-            let mode = if self.blend { "_blend" } else { "" };
-            let mut acc = d;
-            for &o in &g.others {
-                let dd = self.shape(shape, o, p);
-                let next = self.fresh("d");
-                self.line(&format!("let {next} = op_union{mode}({acc}, {dd}, 0.0);"));
-                acc = next;
-            }
-            return acc;
+            return self.group(shape, g, &d, p);
         }
         match &shape[id].op {
             Op::Prim(pr) => {

@@ -3,7 +3,9 @@
 //! group with the same primitive kinds: one loop over the flattened bounding-volume
 //! hierarchy, one `switch` arm per kind. `ir::group::Group::eval` is its CPU mirror.
 
+use super::emit::Writer;
 use crate::ir::group::{Group, INNER};
+use crate::ir::Shape;
 use std::fmt::Write;
 
 /// Reads of the `tables` buffer as floats and vectors, and a group tree node's box
@@ -138,4 +140,35 @@ fn group_walk_{mask:x}(at0: u32, nodes: u32, p: vec3<f32>) -> vec2<f32> {{
 ",
         inner = INNER,
     )
+}
+
+impl Writer {
+    /// A large union at point `p` into variable `d`: its leaves as data (the group's
+    /// walker), then its other operands as code; the variable holding the union.
+    pub(super) fn group(
+        &mut self,
+        shape: &Shape,
+        g: &std::sync::Arc<Group>,
+        d: &str,
+        p: &str,
+    ) -> String {
+        if !self.groups.iter().any(|x| x.key == g.key) {
+            self.groups.push(g.clone());
+        }
+        let value = if self.blend {
+            format!("{}.xyyy * vec4<f32>(1.0, 1.0, 1.0, 0.0)", call(g, p))
+        } else {
+            call(g, p)
+        };
+        self.line(&format!("let {d} = {value};"));
+        let mode = if self.blend { "_blend" } else { "" };
+        let mut acc = d.to_string();
+        for &o in &g.others {
+            let dd = self.shape(shape, o, p);
+            let next = self.fresh("d");
+            self.line(&format!("let {next} = op_union{mode}({acc}, {dd}, 0.0);"));
+            acc = next;
+        }
+        acc
+    }
 }

@@ -133,9 +133,9 @@ pub struct Manifest {
     /// Names of the shapes with an `sdf_NAME` function.
     pub shapes: Vec<String>,
     pub textures: Vec<TextureUse>,
-    /// The contents of the `tables` storage buffer (the seed grids' lists; f32 values as
-    /// their bits), which the runtime uploads as they are; empty, with no binding, when
-    /// the module has no atlas.
+    /// The contents of the `tables` storage buffer (the atlases' seed-grid lists and the
+    /// groups' trees and leaf records; f32 values as their bits), which the runtime
+    /// uploads as they are; empty, with no binding, when the module has neither.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub tables: Vec<u32>,
 }
@@ -268,18 +268,12 @@ pub fn generate(
     }
     g.atlas_choice(options, plain)?;
     let textures = g.materials(if plain { &[] } else { &program.materials }, uses)?;
-    let tables = if !g.groups.is_empty() {
-        bindings::Tables::Scene
-    } else if !g.tables.is_empty() {
-        bindings::Tables::Atlases
-    } else {
-        bindings::Tables::None
-    };
+    let groups = !g.groups.is_empty();
     g.groups();
-    if tables == bindings::Tables::Scene {
+    if groups {
         g.out.push_str(group::READERS);
     }
-    let table = bindings::table(&textures, tables);
+    let table = bindings::table(&textures, !g.tables.is_empty());
     let entry = template::fill(
         template::ENTRY,
         &[("bindings", bindings::declarations(&table))],

@@ -63,7 +63,7 @@ pub struct Group {
     pub leaves: Vec<Leaf>,
     pub others: Vec<NodeId>,
     pub tree: Vec<TreeNode>,
-    /// The table the shader reads ([`Group::encode`]).
+    /// The table the shader reads (`Group::encode`).
     pub words: Vec<u32>,
     /// A name for the group's code and constants, from its table: equal tables share
     /// one function.

@@ -112,20 +112,12 @@ impl Client {
         }
     }
 
+    /// The full set of the next version's diagnostics (the front end's stage comes first).
     fn diagnostics(&self) -> Value {
         loop {
-            if let Message::Notification(n) = self
-                .conn
-                .receiver
-                .recv_timeout(Duration::from_secs(30))
-                .unwrap()
-            {
-                // The full set: the front end's stage comes first (see `staged_…`).
-                if n.method == "textDocument/publishDiagnostics"
-                    && n.params.get("sdfcStage").is_none()
-                {
-                    return n.params;
-                }
+            let d = self.publish();
+            if d.get("sdfcStage").is_none() {
+                return d;
             }
         }
     }

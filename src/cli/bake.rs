@@ -238,12 +238,9 @@ pub fn run(args: BakeArgs) -> ExitCode {
             return ExitCode::from(exit::USAGE);
         }
     };
-    let gpu = match Gpu::new(args.backend) {
+    let gpu = match super::open_gpu(args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(exit::gpu(&e));
-        }
+        Err(code) => return code,
     };
     let bars = Bars {
         bar: Mutex::new(None),
@@ -361,12 +358,9 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             return ExitCode::from(exit::USAGE);
         }
     };
-    let gpu = match Gpu::new(args.backend) {
+    let gpu = match super::open_gpu(args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(exit::gpu(&e));
-        }
+        Err(code) => return code,
     };
     let baked = match pipeline::bake(
         &gpu,

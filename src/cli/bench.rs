@@ -2,7 +2,7 @@
 
 use super::{compile, BenchArgs};
 use sdfc::codegen::{Options, WalkForm};
-use sdfc::gpu::{self, Gpu, ViewMode};
+use sdfc::gpu::{self, ViewMode};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -160,12 +160,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Err(code) => return code,
     };
     (view.width, view.height) = args.size.unwrap_or((1920, 1080));
-    let gpu = match Gpu::new(args.backend) {
+    let gpu = match super::open_gpu(args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
+        Err(code) => return code,
     };
     let dir = super::base_dir(&scene);
     let measure = |module: &sdfc::codegen::Module,

@@ -15,6 +15,14 @@ pub mod seeds;
 pub mod sweep;
 
 /// The exit statuses, one meaning each (the README's table).
+/// The GPU of `backend`, or the error printed and its exit status.
+pub fn open_gpu(backend: sdfc::gpu::Backend) -> Result<sdfc::gpu::Gpu, std::process::ExitCode> {
+    sdfc::gpu::Gpu::new(backend).map_err(|e| {
+        eprintln!("error: {e}");
+        std::process::ExitCode::from(exit::gpu(&e))
+    })
+}
+
 pub mod exit {
     /// The scene has errors.
     pub const SCENE: u8 = 1;

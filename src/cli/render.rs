@@ -2,7 +2,7 @@
 
 use super::{compile, RenderArgs};
 use sdfc::fsutil::write_output;
-use sdfc::gpu::{self, Frame, Gpu, ViewMode};
+use sdfc::gpu::{self, Frame, ViewMode};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -118,12 +118,9 @@ pub fn run(args: RenderArgs) -> ExitCode {
         view.width = w;
         view.height = h;
     }
-    let gpu = match Gpu::new(args.backend) {
+    let gpu = match super::open_gpu(args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
+        Err(code) => return code,
     };
     let frame = match gpu::render(
         &gpu,

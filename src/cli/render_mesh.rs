@@ -5,7 +5,7 @@
 
 use super::render::write_frame;
 use super::RenderArgs;
-use sdfc::gpu::{Gpu, MeshError, MeshRenderer};
+use sdfc::gpu::{MeshError, MeshRenderer};
 use sdfc::view::View;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -42,12 +42,9 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Err(e) => return usage(format!("{name} is not a mesh baked by sdfc: {e}")),
     };
     let load_time = load_start.elapsed();
-    let gpu = match Gpu::new(args.backend) {
+    let gpu = match super::open_gpu(args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
+        Err(code) => return code,
     };
     let fail = |e: MeshError| match e {
         MeshError::Input(_) | MeshError::View(_) => usage(e.to_string()),

@@ -57,10 +57,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
 }
 
 fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
-    let gpu = Gpu::new(args.backend).map_err(|e| {
-        eprintln!("error: {e}");
-        ExitCode::from(super::exit::gpu(&e))
-    })?;
+    let gpu = super::open_gpu(args.backend)?;
     let (width, height) = args.size.unwrap_or((160, 120));
     println!("scale: sdfc::bench::city(N, seeds), N spheres in unions of 20, a checker material");
     println!("adapter:   {}", gpu.describe());

@@ -123,10 +123,7 @@ pub fn run(args: &BenchArgs) -> ExitCode {
 }
 
 fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
-    let gpu = Gpu::new(args.backend).map_err(|e| {
-        eprintln!("error: {e}");
-        ExitCode::from(super::exit::gpu(&e))
-    })?;
+    let gpu = super::open_gpu(args.backend)?;
     let (width, height) = args.size.unwrap_or((320, 240));
     let bench = Bench {
         gpu: &gpu,

@@ -86,15 +86,23 @@ impl Pipe {
         }
     }
 
-    /// The next diagnostics the server publishes.
-    pub fn diagnostics(&mut self) -> Value {
+    /// The next publishDiagnostics, of either stage.
+    pub fn publish(&mut self) -> Value {
         loop {
             let m = self.read();
-            // The full set: the front end's stage comes first.
-            if m["method"] == "textDocument/publishDiagnostics"
-                && m["params"].get("sdfcStage").is_none()
-            {
+            if m["method"] == "textDocument/publishDiagnostics" {
                 return m["params"].clone();
+            }
+        }
+    }
+
+    /// The next full set of diagnostics the server publishes (the front end's stage
+    /// comes first).
+    pub fn diagnostics(&mut self) -> Value {
+        loop {
+            let d = self.publish();
+            if d.get("sdfcStage").is_none() {
+                return d;
             }
         }
     }
@@ -143,6 +151,35 @@ fn the_real_binary_speaks_lsp_over_stdio() {
     p.send(did_open(super::URI, "render sphre(1);"));
     let d = p.diagnostics();
     assert_eq!(d["diagnostics"][0]["code"], "E0103");
+    assert!(p.stop().success());
+}
+
+#[test]
+fn the_front_end_stage_comes_first_over_the_pipe() {
+    let (uri, text) = robot();
+    let mut p = Pipe::spawn();
+    p.initialize();
+    // An unused `let`: the front end's warning, in both stages; the robot's atlas
+    // geometry only in the second (its N0001 notes for the seeds moved onto the surface).
+    p.send(did_open(&uri, &format!("let spare = 1;\n{text}")));
+    let codes = |d: &Value| -> Vec<String> {
+        d["diagnostics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x["code"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let front = p.publish();
+    assert_eq!(
+        (&front["version"], &front["sdfcStage"]),
+        (&json!(1), &json!("front"))
+    );
+    assert_eq!(codes(&front), ["W0001"]);
+    let full = p.publish();
+    assert_eq!(full["version"], 1);
+    assert!(full.get("sdfcStage").is_none());
+    assert!(codes(&full).contains(&"W0001".to_string()));
     assert!(p.stop().success());
 }
 

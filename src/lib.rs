@@ -35,6 +35,7 @@ pub mod span;
 pub mod syntax;
 pub mod uv;
 pub mod view;
+pub mod viewer;
 
 pub use diagnostic::{Diagnostic, Severity};
 pub use span::Span;

@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => cli::eval::run(args),
         Command::Compile(args) => cli::compile::run(args),
         Command::Render(args) => cli::render::run(args),
+        Command::View(args) => cli::view::run(args),
         Command::Bake(args) => cli::bake::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::FitHeight(args) => cli::fit_height::run(args),

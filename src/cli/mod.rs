@@ -13,6 +13,7 @@ pub mod render_mesh;
 pub mod scale;
 pub mod seeds;
 pub mod sweep;
+pub mod view;
 
 /// The exit statuses, one meaning each (the README's table).
 /// The GPU of `backend`, or the error printed and its exit status.
@@ -117,6 +118,19 @@ pub enum Command {
     /// 2 on usage or I/O problems (an unreadable .glb), 3 on an internal compiler error,
     /// 4 when no GPU adapter can be used.
     Render(RenderArgs),
+    /// Open a live viewer: orbit (left drag), pan (middle or shift drag), zoom (wheel);
+    /// F frames the shape, R resets to the scene's camera; 1-9 switch views (colour,
+    /// normal, uv checker, seeds, blend, distortion, seams, status, steps); S saves a
+    /// screenshot next to the scene; Esc quits.
+    ///
+    /// The scene and its textures are watched and reloaded on change; a version with
+    /// errors prints its diagnostics and the last good one stays on screen. Seeds by
+    /// mouse, each a text edit to the scene file (written atomically): ctrl-click adds
+    /// a seed, dragging a seed moves it, alt-click removes it with its merges,
+    /// shift-clicking two seeds merges them; ctrl-Z undoes the viewer's last edit.
+    /// Exit status: 0 when closed, 1 when the scene never built (with --frames), 2 on
+    /// usage or I/O problems, 4 when no window or GPU adapter can be used.
+    View(view::ViewArgs),
     /// Bake a textured scene into a textured mesh with a seamless atlas (binary glTF).
     ///
     /// Meshes the shape's surface (dual contouring), makes one quadrilateral chart per

@@ -12,7 +12,7 @@ pub use compute::{
     eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
 };
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
-pub use render::{eval_stats, render, render_timed, Frame, Renderer, Timings, ViewMode};
+pub use render::{eval_stats, render, render_timed, Frame, Renderer, Targets, Timings, ViewMode};
 
 use std::fmt;
 use std::sync::Arc;
@@ -74,17 +74,43 @@ pub struct Gpu {
 impl Gpu {
     /// Opens the best adapter of the requested kind.
     pub fn new(backend: Backend) -> Result<Gpu, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+        let desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        let instance = wgpu::Instance::new(Self::descriptor(desc, backend));
+        Self::open(&instance, None)
+    }
+
+    /// Opens the best adapter of the requested kind that can present to a window, with
+    /// the window's surface (`sdfc view`). `display` is the windowing system's
+    /// connection (winit's `OwnedDisplayHandle`), which GL needs.
+    pub fn with_surface(
+        backend: Backend,
+        display: Box<dyn wgpu::wgt::WgpuHasDisplayHandle>,
+        window: impl Into<wgpu::SurfaceTarget<'static>>,
+    ) -> Result<(Gpu, wgpu::Surface<'static>), GpuError> {
+        let desc = wgpu::InstanceDescriptor::new_with_display_handle(display);
+        let instance = wgpu::Instance::new(Self::descriptor(desc, backend));
+        let surface = instance
+            .create_surface(window)
+            .map_err(|e| GpuError::NoAdapter(format!("no surface for the window: {e}")))?;
+        let gpu = Self::open(&instance, Some(&surface))?;
+        Ok((gpu, surface))
+    }
+
+    fn descriptor(desc: wgpu::InstanceDescriptor, backend: Backend) -> wgpu::InstanceDescriptor {
+        let mut desc = desc.with_env();
         match backend {
             Backend::Auto => {}
             Backend::Vulkan => desc.backends = wgpu::Backends::VULKAN,
             Backend::Gl => desc.backends = wgpu::Backends::GL,
         }
-        let instance = wgpu::Instance::new(desc);
+        desc
+    }
+
+    fn open(instance: &wgpu::Instance, surface: Option<&wgpu::Surface>) -> Result<Gpu, GpuError> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             force_fallback_adapter: false,
-            compatible_surface: None,
+            compatible_surface: surface,
             ..Default::default()
         }))
         .map_err(|e| GpuError::NoAdapter(e.to_string()))?;

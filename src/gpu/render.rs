@@ -222,7 +222,7 @@ pub struct Renderer {
 }
 
 /// The offscreen targets of one frame size and their readback buffers.
-pub(super) struct Targets {
+pub struct Targets {
     width: u32,
     height: u32,
     textures: Vec<wgpu::Texture>,
@@ -415,6 +415,72 @@ impl Renderer {
     fn read(&self, gpu: &Gpu, targets: &Targets) -> Result<Frame, GpuError> {
         read(gpu, &self.formats, targets)
     }
+
+    /// Copies the targets of the last [`Renderer::draw_into`] out and reads them back.
+    pub fn read_back(&self, gpu: &Gpu, targets: &Targets) -> Result<Frame, GpuError> {
+        gpu.scoped(|| {
+            let mut enc = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("read back"),
+                });
+            copy_out(&mut enc, targets);
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        self.read(gpu, targets)
+    }
+
+    /// Targets of one frame size for [`Renderer::draw_into`] (the viewer's: drawn, then
+    /// shown in a window).
+    pub fn new_targets(&self, gpu: &Gpu, width: u32, height: u32) -> Result<Targets, GpuError> {
+        gpu.check_size(width, height, bytes_per_texel(&self.formats))?;
+        gpu.scoped(|| self.targets(gpu, width, height))
+    }
+
+    /// Draws one frame of `view` into `targets` (of `view`'s size) and waits for it:
+    /// returns the submit-to-complete time. Nothing is read back.
+    pub fn draw_into(
+        &self,
+        gpu: &Gpu,
+        view: &View,
+        mode: ViewMode,
+        targets: &Targets,
+    ) -> Result<Duration, GpuError> {
+        let uniforms = globals(view, mode);
+        let started = Instant::now();
+        gpu.scoped(|| {
+            use wgpu::util::DeviceExt;
+            let buffer = gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("globals"),
+                    contents: bytemuck::cast_slice(&uniforms),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let bind_group = self.bind_group(gpu, &buffer)?;
+            let mut enc = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame"),
+                });
+            self.draw(&mut enc, targets, &bind_group, None);
+            gpu.queue.submit([enc.finish()]);
+            Ok::<_, GpuError>(())
+        })??;
+        gpu.wait()?;
+        Ok(started.elapsed())
+    }
+}
+
+impl Targets {
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The sRGB colour target.
+    pub fn color(&self) -> &wgpu::TextureView {
+        &self.views[0]
+    }
 }
 
 pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
@@ -502,7 +568,9 @@ pub(super) fn targets(
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: *f,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         })

@@ -9,6 +9,7 @@ pub mod complete;
 pub mod format;
 mod member;
 pub mod rename;
+pub mod seed_edit;
 pub mod seeds;
 pub mod semantic;
 pub mod walk;

@@ -1,0 +1,801 @@
+//! The viewer's window (winit) and its event loop: camera, views, progressive
+//! resolution, hot reload from a file watcher (notify), seed edits by mouse,
+//! screenshots.
+
+use super::edit::SeedEditor;
+use super::pick;
+use super::present::{Presenter, Shot};
+use super::reload::{Outcome, Reloader};
+use super::{interactive_divisor, Orbit, VIEWS};
+use crate::codegen;
+use crate::gpu::{Backend, Gpu, Renderer, Targets, ViewMode};
+use crate::ir::Shape;
+use crate::view::View;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// What `sdfc view` was asked for.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub scene: PathBuf,
+    pub shape: Option<String>,
+    pub backend: Backend,
+    pub size: Option<(u32, u32)>,
+    pub walk: codegen::WalkForm,
+    pub mode: ViewMode,
+    /// Render this many frames, save the screenshot and quit (tests and scripts).
+    pub frames: Option<u32>,
+    pub screenshot: Option<PathBuf>,
+    /// The file access rules of the scene (its folder, and `--allow` ones).
+    pub access: crate::access::Access,
+}
+
+/// Why the viewer could not run (the CLI turns it into an exit status).
+#[derive(Debug)]
+pub enum ViewError {
+    /// No window could be opened (no display).
+    Display(String),
+    Gpu(crate::gpu::GpuError),
+    /// The scene never built (its report was printed).
+    Scene,
+    Io(String),
+}
+
+impl std::fmt::Display for ViewError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            ViewError::Display(m) | ViewError::Io(m) => f.write_str(m),
+            ViewError::Gpu(e) => write!(f, "{e}"),
+            ViewError::Scene => f.write_str("the scene has errors"),
+        }
+    }
+}
+
+/// A change on disk, from the watcher thread.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Changed {
+    Scene,
+    Texture,
+}
+
+/// The window's time budget for a frame while the camera moves.
+const INTERACTIVE_MS: f64 = 40.0;
+/// The camera counts as still this long after the last wheel notch.
+const SETTLE: Duration = Duration::from_millis(200);
+/// File events closer than this are one change (an editor's save is several).
+const DEBOUNCE: Duration = Duration::from_millis(60);
+/// A click moves the cursor less than this (else it is a drag), in pixels.
+const CLICK: f64 = 3.0;
+
+/// The state of a mouse press.
+#[derive(Debug, Clone)]
+enum Drag {
+    Orbit,
+    Pan,
+    /// Moving a seed: its atlas and name.
+    Seed(String, String),
+}
+
+struct App {
+    options: Options,
+    name: String,
+    base_dir: PathBuf,
+    reloader: Reloader<Renderer>,
+    editor: SeedEditor,
+    proxy: EventLoopProxy<Changed>,
+    /// The watched files: the scene and its textures (canonical paths).
+    watched: Vec<PathBuf>,
+    watcher: Option<notify::RecommendedWatcher>,
+    window: Option<Arc<Window>>,
+    gpu: Option<Gpu>,
+    presenter: Option<Presenter>,
+    targets: Option<Targets>,
+    orbit: Option<Orbit>,
+    mode: usize,
+    modifiers: ModifiersState,
+    cursor: (f64, f64),
+    pressed: Option<(MouseButton, (f64, f64), Drag)>,
+    /// The camera is moving until then: frames are drawn at a reduced resolution.
+    moving_until: Option<Instant>,
+    /// The last full-resolution frame time, in milliseconds.
+    full_ms: f64,
+    last_frame_ms: f64,
+    divisor: u32,
+    pending: Option<(Instant, bool)>,
+    /// A seed shift-clicked first, waiting for the second of a merge.
+    merge_first: Option<(String, String)>,
+    frames_drawn: u32,
+    screenshot_next: bool,
+    error: Option<ViewError>,
+}
+
+/// Opens the window and runs until it is closed (or `frames` were drawn).
+pub fn run(options: Options) -> Result<(), ViewError> {
+    let event_loop = EventLoop::<Changed>::with_user_event()
+        .build()
+        .map_err(|e| ViewError::Display(format!("cannot open a window: {e}")))?;
+    let name = options.scene.display().to_string();
+    let base_dir = match options.scene.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let codegen_options = codegen::Options {
+        shape: options.shape.clone(),
+        walk: options.walk,
+        ..Default::default()
+    };
+    let mut app = App {
+        reloader: Reloader::new(name.clone(), options.access.clone(), codegen_options),
+        editor: SeedEditor::new(&options.scene, &base_dir),
+        proxy: event_loop.create_proxy(),
+        mode: VIEWS
+            .iter()
+            .position(|(m, _)| *m == options.mode)
+            .unwrap_or(0),
+        options,
+        name,
+        base_dir,
+        watched: Vec::new(),
+        watcher: None,
+        window: None,
+        gpu: None,
+        presenter: None,
+        targets: None,
+        orbit: None,
+        modifiers: ModifiersState::empty(),
+        cursor: (0.0, 0.0),
+        pressed: None,
+        moving_until: None,
+        full_ms: 0.0,
+        last_frame_ms: 0.0,
+        divisor: 1,
+        pending: None,
+        merge_first: None,
+        frames_drawn: 0,
+        screenshot_next: false,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| ViewError::Display(format!("the window's event loop failed: {e}")))?;
+    match app.error.take() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+impl App {
+    fn say(&self, message: &str) {
+        eprintln!("{message}");
+    }
+
+    fn shape(&self) -> Option<&Shape> {
+        let loaded = self.reloader.good.as_ref()?;
+        let scene = loaded.doc.analysis.scene.as_ref()?;
+        crate::driver::pick_shape(scene, self.options.shape.as_deref()).ok()
+    }
+
+    /// The view of the loaded scene at the window's size, with the viewer's camera.
+    fn view(&self) -> Option<View> {
+        let loaded = self.reloader.good.as_ref()?;
+        let shape = self.shape()?;
+        let render = if self.options.shape.is_some() {
+            None
+        } else {
+            loaded.doc.analysis.program.render.as_ref()
+        };
+        let mut view = View::new(render, shape);
+        let (w, h) = self.presenter.as_ref()?.size();
+        view.width = w;
+        view.height = h;
+        if let Some(orbit) = &self.orbit {
+            view.camera = orbit.camera();
+            let b = shape.framing_bounds();
+            let reach = (view.camera.eye - b.center()).length() + (b.max - b.min).length();
+            view.far = view.far.max(reach * 2.0);
+        }
+        Some(view)
+    }
+
+    /// The scene's own camera as an orbit (what `R` returns to).
+    fn scene_orbit(&self) -> Option<Orbit> {
+        let loaded = self.reloader.good.as_ref()?;
+        let shape = self.shape()?;
+        let render = if self.options.shape.is_some() {
+            None
+        } else {
+            loaded.doc.analysis.program.render.as_ref()
+        };
+        let view = View::new(render, shape);
+        Some(Orbit::from_camera(
+            &view.camera,
+            shape.framing_bounds().center(),
+        ))
+    }
+
+    /// Reads the scene and reloads it; prints the outcome.
+    fn reload(&mut self, force: bool) {
+        let text = match std::fs::read(&self.options.scene) {
+            Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+            Err(e) => {
+                self.say(&format!("error: cannot read {}: {e}", self.name));
+                return;
+            }
+        };
+        self.reload_text(&text, force);
+    }
+
+    fn reload_text(&mut self, text: &str, force: bool) {
+        let Some(gpu) = self.gpu.as_ref() else {
+            return;
+        };
+        let base = self.base_dir.clone();
+        let outcome = self.reloader.reload(text, force, |c| {
+            Renderer::new(gpu, &c.module, &base).map_err(|e| e.to_string())
+        });
+        match outcome {
+            Outcome::Unchanged => return,
+            Outcome::Swapped => {
+                let loaded = self.reloader.good.as_ref().expect("swapped in");
+                let warnings = &loaded.doc.analysis.diagnostics;
+                if !warnings.is_empty() {
+                    eprint!(
+                        "{}",
+                        crate::diagnostic::render(&self.name, text, warnings, false)
+                    );
+                }
+                eprintln!(
+                    "loaded {}: compile {:.1} ms, pipeline {:.1} ms",
+                    self.name,
+                    loaded.compile_time.as_secs_f64() * 1e3,
+                    loaded.pipeline.pipeline_time.as_secs_f64() * 1e3
+                );
+                if self.orbit.is_none() {
+                    self.orbit = self.scene_orbit();
+                }
+                self.watch_textures();
+                self.full_ms = 0.0;
+            }
+            Outcome::Failed(report) => {
+                eprint!("{report}");
+                eprintln!(
+                    "{}: not reloaded; showing the last good version until the file is fixed",
+                    self.name
+                );
+            }
+        }
+        self.update_title();
+        self.request_redraw();
+    }
+
+    /// Watches the scene's folder and its textures' folders.
+    fn watch_textures(&mut self) {
+        let Some(loaded) = self.reloader.good.as_ref() else {
+            return;
+        };
+        let mut files = vec![self.options.scene.clone()];
+        files.extend(
+            loaded
+                .compiled
+                .module
+                .manifest
+                .textures
+                .iter()
+                .map(|t| self.base_dir.join(&t.path)),
+        );
+        let files: Vec<PathBuf> = files
+            .iter()
+            .filter_map(|f| std::fs::canonicalize(f).ok())
+            .collect();
+        if files == self.watched && self.watcher.is_some() {
+            return;
+        }
+        let proxy = self.proxy.clone();
+        let scene = files.first().cloned();
+        let textures: Vec<PathBuf> = files.iter().skip(1).cloned().collect();
+        let handler = move |event: notify::Result<notify::Event>| {
+            let Ok(event) = event else { return };
+            if matches!(event.kind, notify::EventKind::Access(_)) {
+                return;
+            }
+            for p in &event.paths {
+                if Some(p) == scene.as_ref() {
+                    let _ = proxy.send_event(Changed::Scene);
+                } else if textures.contains(p) {
+                    let _ = proxy.send_event(Changed::Texture);
+                }
+            }
+        };
+        use notify::Watcher;
+        match notify::recommended_watcher(handler) {
+            Ok(mut watcher) => {
+                let mut dirs: Vec<&Path> = files.iter().filter_map(|f| f.parent()).collect();
+                dirs.sort();
+                dirs.dedup();
+                for dir in dirs {
+                    if let Err(e) = watcher.watch(dir, notify::RecursiveMode::NonRecursive) {
+                        self.say(&format!("warning: cannot watch {}: {e}", dir.display()));
+                    }
+                }
+                self.watcher = Some(watcher);
+                self.watched = files;
+            }
+            Err(e) => self.say(&format!("warning: no hot reload: {e}")),
+        }
+    }
+
+    fn request_redraw(&self) {
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+    }
+
+    fn update_title(&self) {
+        let Some(window) = &self.window else { return };
+        let mut title = format!("sdfc view: {} [{}]", self.name, VIEWS[self.mode].1);
+        if let Some(loaded) = &self.reloader.good {
+            title.push_str(&format!(
+                " frame {:.0} ms{} | compile {:.1} ms",
+                self.last_frame_ms,
+                if self.divisor > 1 {
+                    format!(" (1/{} res)", self.divisor)
+                } else {
+                    String::new()
+                },
+                loaded.compile_time.as_secs_f64() * 1e3
+            ));
+        }
+        if let Some(gpu) = &self.gpu {
+            title.push_str(&format!(" | {}", gpu.info.name));
+        }
+        if self.reloader.stale.is_some() {
+            title.push_str(" | STALE: the file has errors (see the terminal)");
+        }
+        window.set_title(&title);
+    }
+
+    fn moving(&self) -> bool {
+        self.pressed
+            .as_ref()
+            .is_some_and(|(_, _, d)| !matches!(d, Drag::Seed(..)))
+            || self.moving_until.is_some_and(|t| Instant::now() < t)
+    }
+
+    fn draw(&mut self) -> Result<(), ViewError> {
+        let Some(full) = self.view() else {
+            return Ok(());
+        };
+        let moving = self.moving() && self.options.frames.is_none();
+        self.divisor = if moving {
+            interactive_divisor(self.full_ms, INTERACTIVE_MS)
+        } else {
+            1
+        };
+        let mut view = full.clone();
+        view.width = (full.width / self.divisor).max(1);
+        view.height = (full.height / self.divisor).max(1);
+        let (gpu, loaded) = match (self.gpu.as_ref(), self.reloader.good.as_ref()) {
+            (Some(g), Some(l)) => (g, l),
+            _ => return Ok(()),
+        };
+        let renderer = &loaded.pipeline;
+        if self.targets.as_ref().map(|t| t.size()) != Some((view.width, view.height)) {
+            self.targets = Some(
+                renderer
+                    .new_targets(gpu, view.width, view.height)
+                    .map_err(ViewError::Gpu)?,
+            );
+        }
+        let targets = self.targets.as_ref().expect("made above");
+        let took = renderer
+            .draw_into(gpu, &view, VIEWS[self.mode].0, targets)
+            .map_err(ViewError::Gpu)?;
+        self.last_frame_ms = took.as_secs_f64() * 1e3;
+        if self.divisor == 1 {
+            self.full_ms = self.last_frame_ms;
+        }
+        let capture = self.screenshot_next && self.divisor == 1;
+        let presenter = self.presenter.as_mut().expect("a window");
+        let shot = presenter
+            .present(gpu, renderer, targets, capture)
+            .map_err(ViewError::Gpu)?;
+        self.frames_drawn += 1;
+        if let Some(shot) = shot {
+            self.screenshot_next = false;
+            self.save(&shot)?;
+        }
+        self.update_title();
+        Ok(())
+    }
+
+    /// Saves a screenshot: to `--screenshot`, or next to the scene as `STEM-N.png`.
+    fn save(&self, shot: &Shot) -> Result<(), ViewError> {
+        let path = match &self.options.screenshot {
+            Some(p) => p.clone(),
+            None => {
+                let stem = self
+                    .options
+                    .scene
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "scene".into());
+                (1..)
+                    .map(|k| self.base_dir.join(format!("{stem}-view-{k}.png")))
+                    .find(|p| !p.exists())
+                    .expect("a free name")
+            }
+        };
+        let img = image::RgbaImage::from_raw(shot.width, shot.height, shot.rgba.clone())
+            .ok_or_else(|| ViewError::Io("the screenshot has the wrong size".into()))?;
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| ViewError::Io(format!("cannot encode the screenshot: {e}")))?;
+        crate::fsutil::write_output(&path, &bytes)
+            .map_err(|e| ViewError::Io(format!("cannot write {}: {e}", path.display())))?;
+        eprintln!(
+            "saved {} ({}x{}, from the {})",
+            path.display(),
+            shot.width,
+            shot.height,
+            if shot.from_surface {
+                "window"
+            } else {
+                "renderer's target"
+            }
+        );
+        Ok(())
+    }
+
+    /// The seed edits of a mouse click at the cursor; prints what happened.
+    fn seed_click(&mut self, button_mods: ModifiersState) {
+        let Some(view) = self.view() else { return };
+        let Some(loaded) = self.reloader.current() else {
+            self.say("seed edits wait until the file has no errors");
+            return;
+        };
+        let Some(shape) = self.shape() else { return };
+        let (px, py) = self.cursor;
+        let doc = &loaded.doc;
+        let result = if button_mods.control_key() {
+            let Some(hit) = pick::surface(shape, &view, px, py) else {
+                self.say("add seed: no surface under the cursor");
+                return;
+            };
+            let Some(atlas) = pick::atlas_at(&doc.analysis, hit.position, view.scale) else {
+                self.say("add seed: no atlas on the surface under the cursor");
+                return;
+            };
+            let edits = crate::ide::seed_edit::add_seed(doc, &atlas, hit.position);
+            let what = match &edits {
+                Ok((_, name)) => format!("add seed `{name}` to atlas `{atlas}`"),
+                Err(_) => String::from("add seed"),
+            };
+            self.editor
+                .apply(&what, doc, edits.map(|(e, _)| e), false)
+                .map(|t| (t, what))
+        } else {
+            let Some(seed) = pick::seed(&doc.analysis, shape, &view, px, py, 12.0) else {
+                return;
+            };
+            if button_mods.alt_key() {
+                let edits = crate::ide::seed_edit::remove_seed(doc, &seed.atlas, &seed.seed);
+                let what = format!("remove seed `{}`", seed.seed);
+                self.editor
+                    .apply(&what, doc, edits, false)
+                    .map(|t| (t, what))
+            } else if button_mods.shift_key() {
+                match self.merge_first.take() {
+                    Some((atlas, first)) if atlas == seed.atlas && first != seed.seed => {
+                        let edits = crate::ide::seed_edit::merge(doc, &atlas, &first, &seed.seed);
+                        let what = format!("merge `{first}` and `{}`", seed.seed);
+                        self.editor
+                            .apply(&what, doc, edits, true)
+                            .map(|t| (t, what))
+                    }
+                    _ => {
+                        self.say(&format!(
+                            "merge: `{}` chosen; shift-click a second seed of atlas `{}`",
+                            seed.seed, seed.atlas
+                        ));
+                        self.merge_first = Some((seed.atlas, seed.seed));
+                        return;
+                    }
+                }
+            } else {
+                return;
+            }
+        };
+        self.edited(result);
+    }
+
+    /// After an edit: reload what was written at once (the watcher's echo is then the
+    /// same text), or print why it was refused.
+    fn edited(&mut self, result: Result<(String, String), String>) {
+        match result {
+            Ok((text, what)) => {
+                eprintln!("{what}: written to {}", self.name);
+                self.reload_text(&text, false);
+            }
+            Err(report) => eprint!("{}", report.trim_end_matches('\n').to_string() + "\n"),
+        }
+    }
+
+    fn drop_seed(&mut self, atlas: &str, seed: &str) {
+        let Some(view) = self.view() else { return };
+        let Some(loaded) = self.reloader.current() else {
+            return;
+        };
+        let Some(shape) = self.shape() else { return };
+        let Some(hit) = pick::surface(shape, &view, self.cursor.0, self.cursor.1) else {
+            self.say(&format!("move seed `{seed}`: no surface under the cursor"));
+            return;
+        };
+        let doc = &loaded.doc;
+        let edits = crate::ide::seed_edit::move_seed(doc, atlas, seed, hit.position);
+        let what = format!("move seed `{seed}`");
+        let result = self
+            .editor
+            .apply(&what, doc, edits, false)
+            .map(|t| (t, what));
+        self.edited(result);
+    }
+
+    fn key(&mut self, event_loop: &ActiveEventLoop, key: &Key) {
+        let ctrl = self.modifiers.control_key();
+        match key {
+            Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Character(c) => match c.as_str() {
+                "z" | "Z" if ctrl => {
+                    let result = self
+                        .editor
+                        .undo()
+                        .map(|(t, what)| (t, format!("undo `{what}`")));
+                    self.edited(result);
+                }
+                "f" | "F" => {
+                    let bounds = self.shape().map(|s| s.framing_bounds());
+                    if let (Some(orbit), Some(b)) = (self.orbit.as_mut(), bounds) {
+                        orbit.frame(b);
+                    }
+                    self.request_redraw();
+                }
+                "r" | "R" => {
+                    self.orbit = self.scene_orbit();
+                    self.request_redraw();
+                }
+                "s" | "S" => {
+                    self.screenshot_next = true;
+                    self.request_redraw();
+                }
+                d if d.len() == 1 && ("1"..="9").contains(&d) => {
+                    self.mode = d.parse::<usize>().expect("a digit") - 1;
+                    self.request_redraw();
+                }
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+}
+
+impl ApplicationHandler<Changed> for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        // The first build decides the window's size (the scene's `render` size).
+        let mut size = self.options.size;
+        if size.is_none() {
+            let text = std::fs::read_to_string(&self.options.scene).unwrap_or_default();
+            let analysis = crate::driver::analyze_with(&text, &self.options.access);
+            let s = analysis
+                .program
+                .render
+                .as_ref()
+                .map(|r| r.settings.size)
+                .unwrap_or(crate::sema::RenderSettings::default().size);
+            size = Some((s[0], s[1]));
+        }
+        let (w, h) = size.expect("set above");
+        let attributes = Window::default_attributes()
+            .with_title(format!("sdfc view: {}", self.name))
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = match event_loop.create_window(attributes) {
+            Ok(w) => Arc::new(w),
+            Err(e) => {
+                self.error = Some(ViewError::Display(format!("cannot open a window: {e}")));
+                event_loop.exit();
+                return;
+            }
+        };
+        let display = Box::new(event_loop.owned_display_handle());
+        let (gpu, surface) = match Gpu::with_surface(self.options.backend, display, window.clone())
+        {
+            Ok(x) => x,
+            Err(e) => {
+                self.error = Some(ViewError::Gpu(e));
+                event_loop.exit();
+                return;
+            }
+        };
+        let inner = window.inner_size();
+        match Presenter::new(&gpu, surface, inner.width, inner.height) {
+            Ok(p) => self.presenter = Some(p),
+            Err(e) => {
+                self.error = Some(ViewError::Gpu(e));
+                event_loop.exit();
+                return;
+            }
+        }
+        eprintln!("adapter: {}", gpu.describe());
+        self.gpu = Some(gpu);
+        self.window = Some(window);
+        self.reload(false);
+        if self.reloader.good.is_none() {
+            // Nothing to show: the report is printed; the viewer waits for a fix unless
+            // it was asked for a fixed number of frames.
+            if self.options.frames.is_some() {
+                self.error = Some(ViewError::Scene);
+                event_loop.exit();
+                return;
+            }
+        }
+    }
+
+    fn user_event(&mut self, _: &ActiveEventLoop, changed: Changed) {
+        let force = changed == Changed::Texture || self.pending.is_some_and(|(_, f)| f);
+        self.pending = Some((Instant::now() + DEBOUNCE, force));
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some((at, force)) = self.pending {
+            if Instant::now() >= at {
+                self.pending = None;
+                self.reload(force);
+            }
+        }
+        let mut wake = self.pending.map(|(at, _)| at);
+        if let Some(until) = self.moving_until {
+            if Instant::now() >= until {
+                // The camera stopped: refine to full resolution.
+                self.moving_until = None;
+                self.request_redraw();
+            } else {
+                wake = Some(wake.map_or(until, |w| w.min(until)));
+            }
+        }
+        event_loop.set_control_flow(match wake {
+            Some(at) => ControlFlow::WaitUntil(at),
+            None => ControlFlow::Wait,
+        });
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let (Some(p), Some(gpu)) = (self.presenter.as_mut(), self.gpu.as_ref()) {
+                    if let Err(e) = p.resize(gpu, size.width, size.height) {
+                        self.say(&format!("warning: {e}"));
+                    }
+                }
+                self.request_redraw();
+            }
+            WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                self.key(event_loop, &event.logical_key)
+            }
+            WindowEvent::CursorMoved {
+                position: PhysicalPosition { x, y },
+                ..
+            } => {
+                let (dx, dy) = (x - self.cursor.0, y - self.cursor.1);
+                self.cursor = (x, y);
+                let width = self.presenter.as_ref().map_or(1, |p| p.size().0) as f64;
+                let height = self.presenter.as_ref().map_or(1, |p| p.size().1) as f64;
+                if let (Some((_, _, drag)), Some(orbit)) = (&self.pressed, self.orbit.as_mut()) {
+                    match drag {
+                        Drag::Orbit => orbit.rotate(dx, dy, width),
+                        Drag::Pan => orbit.pan(dx, dy, height),
+                        Drag::Seed(..) => return,
+                    }
+                    self.request_redraw();
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y as f64,
+                    MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+                };
+                if let Some(orbit) = self.orbit.as_mut() {
+                    orbit.zoom(steps);
+                }
+                self.moving_until = Some(Instant::now() + SETTLE);
+                self.request_redraw();
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                self.mouse(state, button);
+            }
+            WindowEvent::RedrawRequested => {
+                if let Some(k) = self.options.frames {
+                    // The last of the scripted frames is the screenshot.
+                    self.screenshot_next |=
+                        self.frames_drawn + 1 >= k && self.options.screenshot.is_some();
+                }
+                if let Err(e) = self.draw() {
+                    // A frame that fails never closes the viewer (unless scripted).
+                    self.say(&format!("error: {e}"));
+                    if self.options.frames.is_some() {
+                        self.error = Some(e);
+                        event_loop.exit();
+                        return;
+                    }
+                }
+                if let Some(k) = self.options.frames {
+                    if self.frames_drawn >= k && !self.screenshot_next {
+                        event_loop.exit();
+                        return;
+                    }
+                    self.request_redraw();
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl App {
+    fn mouse(&mut self, state: ElementState, button: MouseButton) {
+        let mods = self.modifiers;
+        match state {
+            ElementState::Pressed => {
+                let drag = match button {
+                    MouseButton::Middle => Drag::Pan,
+                    MouseButton::Left if mods.control_key() || mods.alt_key() => Drag::Orbit,
+                    MouseButton::Left => {
+                        let on_seed = self.view().and_then(|view| {
+                            let loaded = self.reloader.current()?;
+                            let shape = self.shape()?;
+                            let (px, py) = self.cursor;
+                            pick::seed(&loaded.doc.analysis, shape, &view, px, py, 12.0)
+                        });
+                        match on_seed {
+                            Some(s) if !mods.shift_key() => Drag::Seed(s.atlas, s.seed),
+                            None if mods.shift_key() => Drag::Pan,
+                            _ => Drag::Orbit,
+                        }
+                    }
+                    _ => return,
+                };
+                self.pressed = Some((button, self.cursor, drag));
+            }
+            ElementState::Released => {
+                let Some((pressed_button, at, drag)) = self.pressed.take() else {
+                    return;
+                };
+                if pressed_button != button {
+                    return;
+                }
+                let moved =
+                    ((self.cursor.0 - at.0).powi(2) + (self.cursor.1 - at.1).powi(2)).sqrt();
+                match drag {
+                    Drag::Seed(atlas, seed) if moved >= CLICK => self.drop_seed(&atlas, &seed),
+                    _ if moved < CLICK && button == MouseButton::Left => self.seed_click(mods),
+                    _ => {}
+                }
+                // The camera stopped: refine.
+                self.request_redraw();
+            }
+        }
+    }
+}

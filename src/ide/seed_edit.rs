@@ -310,9 +310,9 @@ pub enum Checked {
 }
 
 /// Applies `edits` to the document and checks the result (with the document's folder
-/// for textures): refused when it has errors, or when `strict` is set and a warning
-/// falls on an inserted or rewritten span (a merge the compiler accepts only with a
-/// warning: unreachable seeds, an obstruction).
+/// for textures): refused when it has errors (an unreachable merge is one), or when
+/// `strict` is set and it has a warning the document did not have (a merge that
+/// closes a cycle with an obstruction).
 pub fn checked(
     doc: &Document,
     edits: &[Edit],
@@ -336,31 +336,22 @@ pub fn checked(
         };
     }
     if strict {
-        // The spans the edits wrote, in the edited text.
-        let mut written = Vec::new();
-        let mut sorted: Vec<&Edit> = edits.iter().collect();
-        sorted.sort_by_key(|e| e.span.start);
-        let mut shift: isize = 0;
-        for e in sorted {
-            let start = (e.span.start as isize + shift) as usize;
-            written.push(Span::new(start, start + e.text.len()));
-            shift += e.text.len() as isize - (e.span.end - e.span.start) as isize;
-        }
-        let warned: Vec<Diagnostic> = after
+        // Warnings the edit brought (by code and message, as spans move): a merge that
+        // closes a cycle with an obstruction, or merges seeds already merged.
+        let key = |d: &Diagnostic| (d.code, d.message.clone());
+        let before: Vec<_> = doc.analysis.diagnostics.iter().map(key).collect();
+        let new: Vec<Diagnostic> = after
             .analysis
             .diagnostics
             .iter()
-            .filter(|d| {
-                d.span()
-                    .is_some_and(|s| written.iter().any(|w| s.start < w.end && w.start < s.end))
-            })
+            .filter(|d| !before.contains(&key(d)))
             .cloned()
             .collect();
-        if !warned.is_empty() {
+        if !new.is_empty() {
             return Checked::Refused {
                 text,
                 reason: String::from("the compiler does not accept this merge"),
-                diagnostics: warned,
+                diagnostics: new,
             };
         }
     }

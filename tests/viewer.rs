@@ -1,0 +1,388 @@
+//! `sdfc view`: the parts that need no window (picking, seed edits on real example
+//! files, the reload state machine, the orbit camera), then one real window under Xvfb
+//! whose screenshot must match `sdfc render` of the same view.
+
+mod common;
+
+use glam::DVec3;
+use sdfc::driver::check;
+use sdfc::ide::seed_edit::{add_seed, merge, move_seed, remove_seed};
+use sdfc::ide::Document;
+use sdfc::view::{Camera, View};
+use sdfc::viewer::edit::SeedEditor;
+use sdfc::viewer::pick;
+use sdfc::viewer::reload::{Outcome, Reloader};
+use sdfc::viewer::Orbit;
+use std::path::{Path, PathBuf};
+
+const SPHERE: &str = "
+let ball = sphere(1);
+atlas a on ball {
+    seed front = [0, 0, 1];
+    seed back = [0, 0, -1];
+}
+render ball {
+    camera = look_at([0, 0, 5], [0, 0, 0], fov: 0.8);
+    size = [64, 48];
+}
+";
+
+fn sphere_view() -> (sdfc::driver::Analysis, View) {
+    let a = check(SPHERE, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics);
+    let shape = a.scene.as_ref().and_then(|s| s.render.clone()).unwrap();
+    let view = View::new(a.program.render.as_ref(), &shape);
+    (a, view)
+}
+
+#[test]
+fn picking_hits_the_analytic_point_on_a_sphere() {
+    let (a, view) = sphere_view();
+    let shape = a.scene.as_ref().and_then(|s| s.render.as_ref()).unwrap();
+    let c = view.camera;
+    let mut hits = 0;
+    // The sphere spans about 11.6 pixels around the centre: hits inside (one near the
+    // rim, where rays graze), a miss outside.
+    let pixels = [
+        (32.0, 24.0),
+        (25.5, 19.5),
+        (38.0, 17.0),
+        (28.0, 33.0),
+        (40.25, 30.75),
+        (42.5, 24.0),
+        (45.0, 20.0),
+    ];
+    for (px, py) in pixels {
+        let dir = c.ray(px, py, view.width as f64, view.height as f64);
+        // The ray against the unit sphere: |eye + t dir|² = 1.
+        let b = c.eye.dot(dir);
+        let disc = b * b - (c.eye.length_squared() - 1.0);
+        let picked = pick::surface(shape, &view, px, py);
+        if disc < 0.0 {
+            assert!(picked.is_none(), "pixel ({px}, {py}) misses the sphere");
+            continue;
+        }
+        let t = -b - disc.sqrt();
+        let expected = c.eye + dir * t;
+        let p = picked.unwrap_or_else(|| panic!("pixel ({px}, {py}) hits the sphere"));
+        let error = (p.position - expected).length();
+        assert!(
+            error < 1e-4 * view.scale,
+            "pixel ({px}, {py}): {:?} vs {expected:?} ({error:e})",
+            p.position
+        );
+        assert!((p.normal - expected).length() < 1e-4);
+        hits += 1;
+    }
+    assert_eq!(hits, 6);
+    // A corner of the image looks past the sphere.
+    assert!(pick::surface(shape, &view, 0.5, 0.5).is_none());
+}
+
+#[test]
+fn the_seed_under_the_cursor_is_the_visible_one() {
+    let (a, view) = sphere_view();
+    let shape = a.scene.as_ref().and_then(|s| s.render.as_ref()).unwrap();
+    // Both seeds project to the centre; only the front one is visible.
+    let (sx, sy, _) = pick::project(&view, DVec3::Z).unwrap();
+    assert!((sx - 32.0).abs() < 1e-9 && (sy - 24.0).abs() < 1e-9);
+    let s = pick::seed(&a, shape, &view, sx + 2.0, sy - 1.0, 12.0).unwrap();
+    assert_eq!((s.atlas.as_str(), s.seed.as_str()), ("a", "front"));
+    assert!(pick::seed(&a, shape, &view, sx + 20.0, sy, 12.0).is_none());
+    assert_eq!(
+        pick::atlas_at(&a, DVec3::X, view.scale).as_deref(),
+        Some("a")
+    );
+}
+
+#[test]
+fn the_orbit_camera_gives_back_the_scene_camera() {
+    let camera = Camera::look_at(DVec3::new(3.0, 2.0, 4.0), DVec3::new(0.5, 0.0, -0.2), 0.7);
+    let orbit = Orbit::from_camera(&camera, DVec3::ZERO);
+    let back = orbit.camera();
+    for (x, y) in [
+        (back.eye, camera.eye),
+        (back.forward, camera.forward),
+        (back.right, camera.right),
+        (back.up, camera.up),
+    ] {
+        assert!((x - y).length() < 1e-12, "{x:?} vs {y:?}");
+    }
+    // Zoom keeps the target; pan keeps the distance and moves along the image plane.
+    let mut o = orbit;
+    o.zoom(2.0);
+    assert!((o.target - orbit.target).length() < 1e-12 && o.distance < orbit.distance);
+    o.pan(10.0, 0.0, 100.0);
+    let moved = o.target - orbit.target;
+    assert!(moved.dot(camera.forward).abs() < 1e-9 && moved.dot(camera.right) < 0.0);
+    assert_eq!(sdfc::viewer::interactive_divisor(10.0, 40.0), 1);
+    assert_eq!(sdfc::viewer::interactive_divisor(160.0, 40.0), 2);
+    assert_eq!(sdfc::viewer::interactive_divisor(1e6, 40.0), 8);
+}
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples")
+}
+
+/// `examples/NAME` copied into a temporary folder, with a comment added inside its
+/// atlas block before the `merge` line: (folder, path, text).
+fn scratch(name: &str) -> (tempfile::TempDir, PathBuf, String) {
+    let text = std::fs::read_to_string(examples().join(name)).unwrap();
+    let text = text.replacen(
+        "    merge ",
+        "    // the ring around the hole\n    merge ",
+        1,
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, &text).unwrap();
+    (dir, path, text)
+}
+
+fn doc(text: &str) -> Document {
+    Document::new(text, Some(&examples()))
+}
+
+/// The file after an edit: it checks clean, and every comment of the original is there.
+fn assert_clean(text: &str, original: &str) -> Document {
+    let d = doc(text);
+    assert!(
+        !d.analysis.has_errors(),
+        "{}",
+        sdfc::diagnostic::render("edited", text, &d.analysis.diagnostics, false)
+    );
+    for line in original
+        .lines()
+        .filter(|l| l.trim_start().starts_with("//"))
+    {
+        assert!(
+            text.contains(line),
+            "the comment {line:?} was lost:\n{text}"
+        );
+    }
+    d
+}
+
+#[test]
+fn seed_edits_rewrite_the_scene_file_and_undo() {
+    let (_dir, path, original) = scratch("plate_hole.sdf");
+    let mut editor = SeedEditor::new(&path, &examples());
+    let seeds = |d: &Document| d.analysis.program.atlases[0].seeds.len();
+
+    // Add: a new seed after the last one, the file's indentation kept.
+    let d0 = doc(&original);
+    let edits = add_seed(&d0, "top", DVec3::new(1.5, 0.1, 1.5)).map(|(e, n)| {
+        assert_eq!(n, "s0");
+        e
+    });
+    let t1 = editor.apply("add", &d0, edits, false).unwrap();
+    assert!(
+        t1.contains("    seed south = [0, 0.1, 1.2];\n    seed s0 = [1.5, 0.1, 1.5];\n"),
+        "{t1}"
+    );
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), t1);
+    let d1 = assert_clean(&t1, &original);
+    assert_eq!(seeds(&d1), 5);
+
+    // Move: only the position's text changes.
+    let t2 = editor
+        .apply(
+            "move",
+            &d1,
+            move_seed(&d1, "top", "s0", DVec3::new(-1.5, 0.1, -1.5)),
+            false,
+        )
+        .unwrap();
+    assert_eq!(t2, t1.replace("[1.5, 0.1, 1.5]", "[-1.5, 0.1, -1.5]"));
+    let d2 = assert_clean(&t2, &original);
+
+    // Merge twice: a tree edge, then a cycle that closes on the flat plate.
+    let t3 = editor
+        .apply("merge", &d2, merge(&d2, "top", "north", "s0"), true)
+        .unwrap();
+    assert!(
+        t3.contains("    merge east north west south east;\n    merge north s0;\n"),
+        "{t3}"
+    );
+    let d3 = assert_clean(&t3, &original);
+    assert_eq!(d3.analysis.program.atlases[0].merges.len(), 5);
+    let t4 = editor
+        .apply("merge", &d3, merge(&d3, "top", "s0", "west"), true)
+        .unwrap();
+    let d4 = assert_clean(&t4, &original);
+    assert_eq!(d4.analysis.program.atlases[0].merges.len(), 6);
+    // Merging again is refused, and so is a merge across the hole (unreachable).
+    assert!(merge(&d4, "top", "west", "s0").is_err());
+    let refused = editor
+        .apply("merge", &d4, merge(&d4, "top", "east", "west"), true)
+        .unwrap_err();
+    assert!(
+        refused.contains("E0402") && refused.contains("was not changed"),
+        "{refused}"
+    );
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), t4);
+
+    // Remove: the seed's line goes, and the ring loses the edges through it.
+    let t5 = editor
+        .apply("remove", &d4, remove_seed(&d4, "top", "north"), false)
+        .unwrap();
+    assert!(!t5.contains("north"), "{t5}");
+    assert!(
+        t5.contains("    merge west south east;\n    merge s0 west;\n"),
+        "{t5}"
+    );
+    let d5 = assert_clean(&t5, &original);
+    assert_eq!(seeds(&d5), 4);
+    assert_eq!(d5.analysis.program.atlases[0].merges.len(), 3);
+
+    // Undo, step by step, back to the original bytes.
+    for expected in [&t4, &t3, &t2, &t1, &original] {
+        let (text, _) = editor.undo().unwrap();
+        assert_eq!(&text, expected);
+        assert_eq!(&std::fs::read_to_string(&path).unwrap(), expected);
+    }
+    assert!(editor.undo().is_err());
+
+    // An edit made on a stale document (the file changed since) is refused, and undo
+    // never overwrites someone else's change.
+    let stale = editor.apply(
+        "add",
+        &d1,
+        add_seed(&d1, "top", DVec3::Y).map(|(e, _)| e),
+        false,
+    );
+    assert!(stale.unwrap_err().contains("changed since"));
+    let t = editor
+        .apply(
+            "add",
+            &d0,
+            add_seed(&d0, "top", DVec3::new(1.5, 0.1, 1.5)).map(|(e, _)| e),
+            false,
+        )
+        .unwrap();
+    std::fs::write(&path, format!("{t}// edited elsewhere\n")).unwrap();
+    assert!(editor.undo().unwrap_err().contains("changed since"));
+}
+
+#[test]
+fn the_reload_state_machine_keeps_the_last_good_scene() {
+    let good = "render sphere(1) { size = [8, 8]; }";
+    let other = "render sphere(2) { size = [8, 8]; }";
+    let bad = "render sphere(oops) { size = [8, 8]; }";
+    let access = sdfc::access::Access::new(None);
+    let mut r: Reloader<u32> = Reloader::new("scene.sdf", access, Default::default());
+    let mut builds = 0;
+    let mut build = |_: &sdfc::driver::Compiled| {
+        builds += 1;
+        Ok::<u32, String>(builds)
+    };
+    assert_eq!(r.reload(good, false, &mut build), Outcome::Swapped);
+    assert_eq!(r.good.as_ref().unwrap().pipeline, 1);
+    assert_eq!(r.reload(good, false, &mut build), Outcome::Unchanged);
+    // good → bad: the old pipeline stays, the window is stale, edits wait.
+    let Outcome::Failed(report) = r.reload(bad, false, &mut build) else {
+        panic!("a bad file fails");
+    };
+    assert!(
+        report.contains("error") && report.contains("oops"),
+        "{report}"
+    );
+    assert_eq!(r.good.as_ref().unwrap().pipeline, 1);
+    assert!(r.stale.is_some() && r.current().is_none());
+    assert_eq!(r.good.as_ref().unwrap().doc.text, good);
+    // bad → good: swapped.
+    assert_eq!(r.reload(other, false, &mut build), Outcome::Swapped);
+    assert_eq!(r.good.as_ref().unwrap().pipeline, 2);
+    assert!(r.stale.is_none() && r.current().is_some());
+    // A pipeline that fails to build keeps the last good one too.
+    let failed = r.reload(good, false, |_| Err::<u32, _>("no".to_string()));
+    assert!(matches!(failed, Outcome::Failed(ref m) if m.contains("pipeline did not build")));
+    assert_eq!(r.good.as_ref().unwrap().pipeline, 2);
+    // The same text again with `force` (a texture changed) builds again.
+    assert_eq!(r.reload(good, true, &mut build), Outcome::Swapped);
+    assert_eq!(r.good.as_ref().unwrap().pipeline, 3);
+}
+
+/// Mean absolute difference per channel (0–255) and the share of pixels that differ
+/// by more than 16 in any channel (the reference-image test's metric).
+fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
+    let mut sum = 0u64;
+    let mut bad = 0usize;
+    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+        let mut worst = 0;
+        for k in 0..3 {
+            let d = (pa[k] as i32 - pb[k] as i32).unsigned_abs();
+            sum += d as u64;
+            worst = worst.max(d);
+        }
+        if worst > 16 {
+            bad += 1;
+        }
+    }
+    let n = (a.len() / 4) as f64;
+    (sum as f64 / (n * 3.0), bad as f64 / n)
+}
+
+#[test]
+fn the_viewer_window_shows_what_render_draws() {
+    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let xvfb = std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output()
+        .is_ok();
+    if !xvfb {
+        if require {
+            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run is missing (apt-get install xvfb xauth)");
+        }
+        eprintln!("SKIPPED: no xvfb-run for the viewer's window test");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let reference = dir.path().join("render.png");
+    let out = std::process::Command::new("xvfb-run")
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            env!("CARGO_BIN_EXE_sdfc"),
+            "view",
+        ])
+        .arg("examples/capsule.sdf")
+        .args(["--size", "160x120", "--frames", "2", "--screenshot"])
+        .arg(&shot)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.code() == Some(4) && !require {
+        eprintln!("SKIPPED: no window or adapter for the viewer:\n{stderr}");
+        return;
+    }
+    assert!(out.status.success(), "sdfc view failed:\n{stderr}");
+    assert!(stderr.contains("saved"), "{stderr}");
+    let (code, _, err) = common::sdfc(&[
+        "render",
+        "examples/capsule.sdf",
+        "--walk",
+        "loop",
+        "--size",
+        "160x120",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let a = image::open(&shot).unwrap().to_rgba8();
+    let b = image::open(&reference).unwrap().to_rgba8();
+    assert_eq!(a.dimensions(), b.dimensions());
+    let (mean, share) = image_difference(a.as_raw(), b.as_raw());
+    eprintln!(
+        "viewer window vs render: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16 ({})",
+        share * 100.0,
+        stderr
+            .lines()
+            .find(|l| l.starts_with("saved"))
+            .unwrap_or("")
+    );
+    assert!(mean <= 1.5 && share <= 0.005, "mean {mean}, share {share}");
+}

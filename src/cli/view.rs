@@ -33,6 +33,10 @@ pub struct ViewArgs {
     /// Where --frames saves the last frame (PNG, written atomically).
     #[arg(long, value_name = "FILE", requires = "frames")]
     pub screenshot: Option<PathBuf>,
+    /// With --frames: turn the camera by this many degrees a frame, as a drag would,
+    /// to measure the frame times while the camera moves (printed at the end).
+    #[arg(long, value_name = "DEGREES", requires = "frames")]
+    pub spin: Option<f64>,
 }
 
 pub fn run(args: ViewArgs) -> ExitCode {
@@ -65,6 +69,7 @@ pub fn run(args: ViewArgs) -> ExitCode {
         mode: args.view,
         frames: args.frames,
         screenshot: args.screenshot,
+        spin: args.spin,
     };
     match sdfc::viewer::run(options) {
         Ok(()) => ExitCode::SUCCESS,

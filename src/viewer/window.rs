@@ -33,6 +33,9 @@ pub struct Options {
     /// Render this many frames, save the screenshot and quit (tests and scripts).
     pub frames: Option<u32>,
     pub screenshot: Option<PathBuf>,
+    /// With `frames`: turn the camera by this many degrees a frame, as a drag would (a
+    /// scripted orbit, to measure the frame times while the camera moves).
+    pub spin: Option<f64>,
     /// The file access rules of the scene (its folder, and `--allow` ones).
     pub access: crate::access::Access,
 }
@@ -104,14 +107,20 @@ struct App {
     pressed: Option<(MouseButton, (f64, f64), Drag)>,
     /// The camera is moving until then: frames are drawn at a reduced resolution.
     moving_until: Option<Instant>,
-    /// The last full-resolution frame time, in milliseconds.
+    /// The estimated time of a full-resolution frame, in milliseconds.
     full_ms: f64,
     last_frame_ms: f64,
     divisor: u32,
+    /// The next frame is the first of a new pipeline.
+    fresh: bool,
+    /// The largest divisor used while moving (for the report).
+    divisor_used: u32,
     pending: Option<(Instant, bool)>,
     /// A seed shift-clicked first, waiting for the second of a merge.
     merge_first: Option<(String, String)>,
     frames_drawn: u32,
+    /// Frame times in milliseconds: at full resolution, and reduced while moving.
+    times: (Vec<f64>, Vec<f64>),
     screenshot_next: bool,
     error: Option<ViewError>,
 }
@@ -156,22 +165,58 @@ pub fn run(options: Options) -> Result<(), ViewError> {
         full_ms: 0.0,
         last_frame_ms: 0.0,
         divisor: 1,
+        divisor_used: 1,
+        fresh: true,
         pending: None,
         merge_first: None,
         frames_drawn: 0,
+        times: (Vec::new(), Vec::new()),
         screenshot_next: false,
         error: None,
     };
     event_loop
         .run_app(&mut app)
         .map_err(|e| ViewError::Display(format!("the window's event loop failed: {e}")))?;
+    app.report_times();
     match app.error.take() {
         Some(e) => Err(e),
         None => Ok(()),
     }
 }
 
+/// The median of some milliseconds.
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
 impl App {
+    /// Prints the frame times the window measured (submit to complete, per frame).
+    fn report_times(&self) {
+        let (full, reduced) = &self.times;
+        if full.is_empty() && reduced.is_empty() {
+            return;
+        }
+        let size = self.presenter.as_ref().map_or((0, 0), |p| p.size());
+        let mut line = format!(
+            "frames: {} at {}x{}, median {:.1} ms",
+            full.len(),
+            size.0,
+            size.1,
+            median(full)
+        );
+        if !reduced.is_empty() {
+            line.push_str(&format!(
+                "; {} while moving, at reduced resolution (1/{} a side), median {:.1} ms",
+                reduced.len(),
+                self.divisor_used,
+                median(reduced)
+            ));
+        }
+        eprintln!("{line}");
+    }
+
     fn say(&self, message: &str) {
         eprintln!("{message}");
     }
@@ -261,7 +306,7 @@ impl App {
                     self.orbit = self.scene_orbit();
                 }
                 self.watch_textures();
-                self.full_ms = 0.0;
+                self.fresh = true;
             }
             Outcome::Failed(report) => {
                 eprint!("{report}");
@@ -372,7 +417,9 @@ impl App {
         let Some(full) = self.view() else {
             return Ok(());
         };
-        let moving = self.moving() && self.options.frames.is_none();
+        let scripted = self.options.frames.is_some();
+        let moving =
+            self.moving() && (!scripted || self.options.spin.is_some()) && !self.screenshot_next;
         self.divisor = if moving {
             interactive_divisor(self.full_ms, INTERACTIVE_MS)
         } else {
@@ -398,8 +445,17 @@ impl App {
             .draw_into(gpu, &view, VIEWS[self.mode].0, targets)
             .map_err(ViewError::Gpu)?;
         self.last_frame_ms = took.as_secs_f64() * 1e3;
+        // The cost of a full-resolution frame, estimated from this one (frame time
+        // grows with the pixels); not from the first frame of a new pipeline, which
+        // includes the driver's own shader compilation.
+        if !std::mem::take(&mut self.fresh) {
+            self.full_ms = self.last_frame_ms * (self.divisor * self.divisor) as f64;
+        }
         if self.divisor == 1 {
-            self.full_ms = self.last_frame_ms;
+            self.times.0.push(self.last_frame_ms);
+        } else {
+            self.divisor_used = self.divisor_used.max(self.divisor);
+            self.times.1.push(self.last_frame_ms);
         }
         let capture = self.screenshot_next && self.divisor == 1;
         let presenter = self.presenter.as_mut().expect("a window");
@@ -727,6 +783,13 @@ impl ApplicationHandler<Changed> for App {
                 self.mouse(state, button);
             }
             WindowEvent::RedrawRequested => {
+                if let (Some(deg), Some(orbit)) = (self.options.spin, self.orbit.as_mut()) {
+                    // A scripted drag: the first frame still, then turning.
+                    if self.frames_drawn > 0 {
+                        orbit.yaw += deg.to_radians();
+                        self.moving_until = Some(Instant::now() + SETTLE);
+                    }
+                }
                 if let Some(k) = self.options.frames {
                     // The last of the scripted frames is the screenshot.
                     self.screenshot_next |=

@@ -386,3 +386,145 @@ fn the_viewer_window_shows_what_render_draws() {
     );
     assert!(mean <= 1.5 && share <= 0.005, "mean {mean}, share {share}");
 }
+
+/// The scene of the real-window mouse test: a unit ball seen head-on.
+const BALL: &str = "// A ball for the viewer's mouse test.
+let ball = sphere(1);
+atlas a on ball {
+    seed front = [0, 0, 1];
+}
+render ball {
+    camera = look_at([0, 0, 5], fov: 0.8);
+    size = [160, 120];
+}
+";
+
+/// Drives a real viewer window with X events (xdotool, through XTEST), and edits the
+/// file behind its back. Each step waits for its effect (at most 30 s) and says so.
+const DRIVE: &str = r#"
+set -u
+"$SDFC" view "$SCENE" 2>"$LOG" &
+pid=$!
+count() { grep -c -- "$1" "$2" 2>/dev/null || true; }
+wait_until() { # PATTERN FILE N: until PATTERN is on N lines of FILE (0: on none)
+  for i in $(seq 1 300); do
+    c=$(count "$1" "$2")
+    if [ "$3" = 0 ]; then [ "$c" = 0 ] && return 0; else [ "$c" -ge "$3" ] && return 0; fi
+    sleep 0.1
+  done
+  echo "STEP FAILED: waiting for $3 x '$1' in $2" >&2; kill $pid; exit 1
+}
+wait_until '^loaded' "$LOG" 1
+win=$(xdotool search --sync --name 'sdfc view' | head -1)
+xdotool windowfocus --sync "$win"
+xdotool mousemove --window "$win" 100 60
+sleep 0.3
+echo "step: ctrl-click adds a seed"
+xdotool keydown ctrl; sleep 0.2; xdotool click 1; sleep 0.2; xdotool keyup ctrl
+wait_until 'seed s0' "$SCENE" 1
+wait_until '^loaded' "$LOG" 2
+echo "step: alt-click removes it"
+xdotool keydown alt; sleep 0.2; xdotool click 1; sleep 0.2; xdotool keyup alt
+wait_until 'seed s0' "$SCENE" 0
+wait_until '^loaded' "$LOG" 3
+echo "step: ctrl-z brings it back"
+xdotool key ctrl+z
+wait_until 'seed s0' "$SCENE" 1
+wait_until '^loaded' "$LOG" 4
+echo "step: dragging it moves it"
+xdotool mousedown 1; sleep 0.2
+for x in 98 95 92 90 88; do xdotool mousemove --window "$win" $x 45; sleep 0.05; done
+sleep 0.2; xdotool mouseup 1
+wait_until 'move seed' "$LOG" 1
+wait_until '^loaded' "$LOG" 5
+echo "step: an edit elsewhere reloads"
+echo "// changed elsewhere" >> "$SCENE"
+wait_until '^loaded' "$LOG" 6
+echo "step: a broken file keeps the last good scene"
+sed -i 's/sphere(1)/sphere(oops)/' "$SCENE"
+wait_until 'not reloaded' "$LOG" 1
+echo "step: Esc quits"
+xdotool key Escape
+wait $pid
+echo "exit=$?"
+"#;
+
+#[test]
+fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
+    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let has = |tool: &str| {
+        std::process::Command::new(tool)
+            .arg("--help")
+            .output()
+            .is_ok()
+    };
+    if !has("xvfb-run") || !has("xdotool") {
+        if require {
+            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run or xdotool is missing (apt-get install xvfb xauth xdotool)");
+        }
+        eprintln!("SKIPPED: no xvfb-run or xdotool for the viewer's mouse test");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("ball.sdf");
+    let log = dir.path().join("view.log");
+    let script = dir.path().join("drive.sh");
+    std::fs::write(&scene, BALL).unwrap();
+    std::fs::write(&script, DRIVE).unwrap();
+    let out = std::process::Command::new("timeout")
+        .args([
+            "120",
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            "bash",
+        ])
+        .arg(&script)
+        .env("SDFC", env!("CARGO_BIN_EXE_sdfc"))
+        .env("SCENE", &scene)
+        .env("LOG", &log)
+        .output()
+        .unwrap();
+    let steps = String::from_utf8_lossy(&out.stdout);
+    let errors = String::from_utf8_lossy(&out.stderr);
+    let viewer = std::fs::read_to_string(&log).unwrap_or_default();
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let context = format!("steps:\n{steps}\n{errors}\nviewer:\n{viewer}\nfile:\n{text}");
+    if viewer.contains("no GPU adapter") && !require {
+        eprintln!("SKIPPED: no adapter for the viewer's window:\n{context}");
+        return;
+    }
+    assert!(steps.contains("exit=0"), "{context}");
+    for said in [
+        "add seed `s0` to atlas `a`: written",
+        "remove seed `s0`: written",
+        "undo `remove seed `s0``: written",
+        "move seed `s0`: written",
+        "not reloaded; showing the last good version",
+        "error[E0100]",
+    ] {
+        assert!(
+            viewer.contains(said),
+            "the viewer did not say {said:?}\n{context}"
+        );
+    }
+    // The file as the edits left it: the comment on top kept, the seed moved on the
+    // surface (up and left of where it was added), then the two edits made elsewhere.
+    assert!(
+        text.starts_with("// A ball for the viewer's mouse test.\n"),
+        "{context}"
+    );
+    assert!(text.ends_with("}\n// changed elsewhere\n"), "{context}");
+    let line = text.lines().find(|l| l.contains("seed s0 = ")).unwrap();
+    let nums: Vec<f64> = line
+        .split(['[', ']', ','])
+        .filter_map(|t| t.trim().parse().ok())
+        .collect();
+    let p = DVec3::new(nums[0], nums[1], nums[2]);
+    assert!((p.length() - 1.0).abs() < 1e-4, "s0 = {p:?} is on the ball");
+    assert!(
+        p.x > 0.0 && p.y > 0.0,
+        "s0 = {p:?} moved up, still right of the centre"
+    );
+}

@@ -116,6 +116,101 @@ fn every_face_of_a_box_gets_a_seed_and_placement_is_deterministic() {
     assert_eq!(place(), placed, "not deterministic");
 }
 
+/// Fig. 12: on the top of a plate with a hole, placement finds a merged ring around the
+/// hole: a cycle of merges among seeds of the top face that winds once around the
+/// hole's axis. The plate is flat, so the cycle closes without an obstruction.
+#[test]
+fn the_ring_around_the_hole_is_found_and_closed() {
+    let source = "let plate = box([4, 0.2, 4]) - cylinder(radius: 0.6, height: 1);\natlas top on plate { steps = 20; seed x = [1.2, 0.1, 0]; }\nrender plate;\n";
+    let analysis = sdfc::driver::check(source, None);
+    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
+    let def = &analysis.program.atlases[0];
+    let shape = sdfc::ir::lower_shape(&def.shape).unwrap();
+    let placed = sdfc::uv::seeds::place(def, &shape, &sdfc_samples(&shape), Default::default());
+    // The merges among seeds on the top face (y = 0.1).
+    let top = |k: usize| (placed.seeds[k].0.y - 0.1).abs() < 1e-3;
+    let edges: Vec<(usize, usize)> = placed
+        .merges
+        .iter()
+        .copied()
+        .filter(|&(a, b)| top(a) && top(b))
+        .collect();
+    // Remove leaves until only cycles remain (the 2-core of the merge graph).
+    let mut live = edges.clone();
+    loop {
+        let degree =
+            |k: usize, e: &[(usize, usize)]| e.iter().filter(|&&(a, b)| a == k || b == k).count();
+        let before = live.len();
+        let snapshot = live.clone();
+        live.retain(|&(a, b)| degree(a, &snapshot) > 1 && degree(b, &snapshot) > 1);
+        if live.len() == before {
+            break;
+        }
+    }
+    assert!(
+        !live.is_empty(),
+        "no cycle among the top face's merges {edges:?}"
+    );
+    // Some cycle winds around the hole's axis (y): lift each seed's angle about the
+    // axis along a spanning tree of the merges (each edge sweeps less than π, as the
+    // seeds are close); an edge off the tree whose own sweep disagrees with the lifted
+    // angles by a turn closes a cycle that goes once around the hole.
+    let angle = |k: usize| placed.seeds[k].0.z.atan2(placed.seeds[k].0.x);
+    let wrap = |mut d: f64| {
+        while d > std::f64::consts::PI {
+            d -= std::f64::consts::TAU;
+        }
+        while d < -std::f64::consts::PI {
+            d += std::f64::consts::TAU;
+        }
+        d
+    };
+    let mut lifted: std::collections::BTreeMap<usize, f64> = Default::default();
+    let mut winds = false;
+    for &(a0, _) in &live {
+        if lifted.contains_key(&a0) {
+            continue;
+        }
+        lifted.insert(a0, angle(a0));
+        let mut stack = vec![a0];
+        let mut tree = std::collections::BTreeSet::new();
+        while let Some(at) = stack.pop() {
+            for (i, &(a, b)) in live.iter().enumerate() {
+                let next = match (a == at, b == at) {
+                    (true, _) => b,
+                    (_, true) => a,
+                    _ => continue,
+                };
+                if tree.contains(&i) {
+                    continue;
+                }
+                let through = lifted[&at] + wrap(angle(next) - angle(at));
+                match lifted.get(&next) {
+                    None => {
+                        tree.insert(i);
+                        lifted.insert(next, through);
+                        stack.push(next);
+                    }
+                    Some(&there) => {
+                        tree.insert(i);
+                        if (through - there).abs() > std::f64::consts::PI {
+                            winds = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(winds, "no merged cycle around the hole: {live:?}");
+    // And the atlas, cycle included, checks clean.
+    let text = format!(
+        "let plate = box([4, 0.2, 4]) - cylinder(radius: 0.6, height: 1);\natlas top on plate {{\n    steps = 20;\n{}}}\nrender plate;\n",
+        sdfc::ide::seeds::statements(&placed)
+    );
+    let checked = sdfc::driver::check(&text, None);
+    assert!(checked.diagnostics.is_empty(), "{:?}", checked.diagnostics);
+}
+
 /// Surface samples as `sdfc seeds` makes them: quad centres of a dual-contouring mesh.
 fn sdfc_samples(shape: &sdfc::ir::Shape) -> Vec<sdfc::uv::seeds::SurfaceSample> {
     sdfc::bake::mesh::surface_samples(shape, 40).unwrap()

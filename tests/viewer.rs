@@ -166,7 +166,7 @@ fn assert_clean(text: &str, original: &str) -> Document {
 #[test]
 fn seed_edits_rewrite_the_scene_file_and_undo() {
     let (_dir, path, original) = scratch("plate_hole.sdf");
-    let mut editor = SeedEditor::new(&path, &examples());
+    let mut editor = SeedEditor::new(&path, sdfc::access::Access::new(Some(&examples())));
     let seeds = |d: &Document| d.analysis.program.atlases[0].seeds.len();
 
     // Add: a new seed after the last one, the file's indentation kept.
@@ -262,6 +262,93 @@ fn seed_edits_rewrite_the_scene_file_and_undo() {
         .unwrap();
     std::fs::write(&path, format!("{t}// edited elsewhere\n")).unwrap();
     assert!(editor.undo().unwrap_err().contains("changed since"));
+}
+
+/// `p` projected onto the zero set of `shape` (Newton steps along the gradient).
+fn project(shape: &sdfc::ir::Shape, mut p: DVec3) -> DVec3 {
+    for _ in 0..50 {
+        let d = sdfc::ir::eval::distance(shape, p);
+        let g = sdfc::ir::eval::gradient(shape, p);
+        if d.abs() < 1e-9 || g.length_squared() < 1e-12 {
+            break;
+        }
+        p -= g * (d / g.length_squared());
+    }
+    p
+}
+
+#[test]
+fn seed_edits_check_clean_on_every_example() {
+    use sdfc::ide::seed_edit::{checked, Checked};
+    let mut edited = 0;
+    for entry in std::fs::read_dir(examples()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("sdf") {
+            continue;
+        }
+        let original = std::fs::read_to_string(&path).unwrap();
+        let d = doc(&original);
+        let Some(Some(atlas)) = d.analysis.atlases.first() else {
+            continue;
+        };
+        let name = atlas.name.clone();
+        let seeds = &d.analysis.program.atlases[0].seeds;
+        let first = &seeds[0].name;
+        let last = &seeds[seeds.len() - 1].name;
+        // Add halfway between the first two seeds (on the surface), move the first onto
+        // its projection, remove the last with its merges.
+        let a = atlas.seeds[0].seed.p;
+        let b = atlas
+            .seeds
+            .get(1)
+            .map_or(a + DVec3::splat(0.05), |s| s.seed.p);
+        let mid = project(&atlas.shape, (a + b) * 0.5);
+        let mut cases = vec![
+            ("add", add_seed(&d, &name, mid).map(|(e, _)| e)),
+            ("move", move_seed(&d, &name, first, a)),
+        ];
+        if seeds.len() > 1 {
+            cases.push(("remove", remove_seed(&d, &name, last)));
+        }
+        for (what, edits) in cases {
+            let edits = edits.unwrap_or_else(|e| panic!("{}: {what}: {e}", path.display()));
+            match checked(
+                &d,
+                &edits,
+                &sdfc::access::Access::new(Some(&examples())),
+                false,
+            ) {
+                Checked::Accepted { text, doc: after } => {
+                    for line in original
+                        .lines()
+                        .filter(|l| l.trim_start().starts_with("//"))
+                    {
+                        assert!(
+                            text.contains(line),
+                            "{}: {what} lost {line:?}",
+                            path.display()
+                        );
+                    }
+                    let count = after.analysis.program.atlases[0].seeds.len();
+                    let expected = match what {
+                        "add" => seeds.len() + 1,
+                        "remove" => seeds.len() - 1,
+                        _ => seeds.len(),
+                    };
+                    assert_eq!(count, expected, "{}: {what}", path.display());
+                    edited += 1;
+                }
+                Checked::Refused {
+                    text, diagnostics, ..
+                } => panic!(
+                    "{}: {what} refused:\n{}",
+                    path.display(),
+                    sdfc::diagnostic::render("edited", &text, &diagnostics, false)
+                ),
+            }
+        }
+    }
+    assert!(edited >= 30, "only {edited} edits");
 }
 
 #[test]
@@ -400,7 +487,7 @@ render ball {
 ";
 
 /// Drives a real viewer window with X events (xdotool, through XTEST), and edits the
-/// file behind its back. Each step waits for its effect (at most 30 s) and says so.
+/// file behind its back (first fixing the broken file it starts on). Each step waits for its effect (at most 30 s) and says so.
 const DRIVE: &str = r#"
 set -u
 "$SDFC" view "$SCENE" 2>"$LOG" &
@@ -414,6 +501,9 @@ wait_until() { # PATTERN FILE N: until PATTERN is on N lines of FILE (0: on none
   done
   echo "STEP FAILED: waiting for $3 x '$1' in $2" >&2; kill $pid; exit 1
 }
+echo "step: a file broken at start is watched until it is fixed"
+wait_until 'not reloaded' "$LOG" 1
+sed -i 's/sphere(oops)/sphere(1)/' "$SCENE"
 wait_until '^loaded' "$LOG" 1
 win=$(xdotool search --sync --name 'sdfc view' | head -1)
 xdotool windowfocus --sync "$win"
@@ -437,12 +527,19 @@ for x in 98 95 92 90 88; do xdotool mousemove --window "$win" $x 45; sleep 0.05;
 sleep 0.2; xdotool mouseup 1
 wait_until 'move seed' "$LOG" 1
 wait_until '^loaded' "$LOG" 5
+echo "step: shift-clicking two seeds merges them"
+xdotool mousemove --window "$win" 80 60; sleep 0.2
+xdotool keydown shift; sleep 0.2; xdotool click 1; sleep 0.3
+xdotool mousemove --window "$win" 88 45; sleep 0.2; xdotool click 1; sleep 0.2
+xdotool keyup shift
+wait_until 'merge front s0;' "$SCENE" 1
+wait_until '^loaded' "$LOG" 6
 echo "step: an edit elsewhere reloads"
 echo "// changed elsewhere" >> "$SCENE"
-wait_until '^loaded' "$LOG" 6
+wait_until '^loaded' "$LOG" 7
 echo "step: a broken file keeps the last good scene"
 sed -i 's/sphere(1)/sphere(oops)/' "$SCENE"
-wait_until 'not reloaded' "$LOG" 1
+wait_until 'not reloaded' "$LOG" 2
 echo "step: Esc quits"
 xdotool key Escape
 wait $pid
@@ -469,7 +566,8 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
     let scene = dir.path().join("ball.sdf");
     let log = dir.path().join("view.log");
     let script = dir.path().join("drive.sh");
-    std::fs::write(&scene, BALL).unwrap();
+    // Broken at first: the viewer starts, says why, and waits for the fix.
+    std::fs::write(&scene, BALL.replace("sphere(1)", "sphere(oops)")).unwrap();
     std::fs::write(&script, DRIVE).unwrap();
     let out = std::process::Command::new("timeout")
         .args([
@@ -501,6 +599,7 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
         "remove seed `s0`: written",
         "undo `remove seed `s0``: written",
         "move seed `s0`: written",
+        "merge `front` and `s0`: written",
         "not reloaded; showing the last good version",
         "error[E0100]",
     ] {
@@ -516,6 +615,7 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
         "{context}"
     );
     assert!(text.ends_with("}\n// changed elsewhere\n"), "{context}");
+    assert!(text.contains(";\n    merge front s0;\n}"), "{context}");
     let line = text.lines().find(|l| l.contains("seed s0 = ")).unwrap();
     let nums: Vec<f64> = line
         .split(['[', ']', ','])

@@ -15,9 +15,10 @@ use crate::span::Span;
 use crate::syntax::ast::{AtlasStmt, ItemKind};
 use glam::DVec3;
 
-/// A number as written into the scene: six decimals at most, no trailing zeros.
+/// A number as written into the scene: nine decimals at most (picking is exact to
+/// 1e-9 of the scene's size), no trailing zeros.
 fn num(x: f64) -> String {
-    let s = format!("{x:.6}");
+    let s = format!("{x:.9}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" || s.is_empty() {
         "0".into()
@@ -251,6 +252,7 @@ pub fn remove_seed(doc: &Document, atlas_name: &str, seed: &str) -> Result<Vec<E
                 text: String::new(),
             });
         } else {
+            // (A comment inside the statement, between its names, goes with it.)
             let ind = indent(text, span.start).to_string();
             let rewritten: Vec<String> = chains
                 .iter()
@@ -265,8 +267,8 @@ pub fn remove_seed(doc: &Document, atlas_name: &str, seed: &str) -> Result<Vec<E
     Ok(edits)
 }
 
-/// Merges seeds `a` and `b` of atlas `atlas`: `merge a b;` after the last merge (or
-/// the last seed).
+/// Merges seeds `a` and `b` of atlas `atlas`: `merge a b;` after the last merge or
+/// seed statement, whichever comes last.
 pub fn merge(doc: &Document, atlas_name: &str, a: &str, b: &str) -> Result<Vec<Edit>, String> {
     let def = atlas(doc, atlas_name)?;
     let index = |n: &str| {
@@ -309,18 +311,18 @@ pub enum Checked {
     },
 }
 
-/// Applies `edits` to the document and checks the result (with the document's folder
-/// for textures): refused when it has errors (an unreachable merge is one), or when
+/// Applies `edits` to the document and checks the result (reading textures under
+/// `access`): refused when it has errors (an unreachable merge is one), or when
 /// `strict` is set and it has a warning the document did not have (a merge that
 /// closes a cycle with an obstruction).
 pub fn checked(
     doc: &Document,
     edits: &[Edit],
-    base_dir: Option<&std::path::Path>,
+    access: &crate::access::Access,
     strict: bool,
 ) -> Checked {
     let text = super::actions::apply(&doc.text, edits);
-    let after = Document::new(text.clone(), base_dir);
+    let after = Document::with_access(text.clone(), access);
     let errors: Vec<Diagnostic> = after
         .analysis
         .diagnostics
@@ -338,13 +340,20 @@ pub fn checked(
     if strict {
         // Warnings the edit brought (by code and message, as spans move): a merge that
         // closes a cycle with an obstruction, or merges seeds already merged.
+        // Counted, so that a second warning like one already there is new too.
         let key = |d: &Diagnostic| (d.code, d.message.clone());
-        let before: Vec<_> = doc.analysis.diagnostics.iter().map(key).collect();
+        let mut before: Vec<_> = doc.analysis.diagnostics.iter().map(key).collect();
         let new: Vec<Diagnostic> = after
             .analysis
             .diagnostics
             .iter()
-            .filter(|d| !before.contains(&key(d)))
+            .filter(|d| match before.iter().position(|k| *k == key(d)) {
+                Some(i) => {
+                    before.swap_remove(i);
+                    false
+                }
+                None => true,
+            })
             .cloned()
             .collect();
         if !new.is_empty() {

@@ -18,12 +18,17 @@
 //! (Lloyd-like) relaxation would need the walk distances from every sample to every
 //! candidate, which costs far more walks for a modest saving in seeds.
 //!
-//! **Merges: a spanning forest of the seeds' neighbourhood graph.** Two seeds are
-//! neighbours when some sample has both among its two geodesic-nearest covering seeds
-//! (their regions touch); the pair is a candidate when each seed's walk reaches the
-//! other. Candidates join in order of length (Kruskal), so the graph has no cycle and
-//! hence no obstruction (holonomy or offset residual); each merge is kept only if the
-//! atlas still prepares without a diagnostic. Each merge group has one fixed tangent
+//! **Merges: a spanning forest of the seeds' neighbourhood graph, then the cycles
+//! that close.** Two seeds are neighbours when some sample has both among its two
+//! geodesic-nearest covering seeds (their regions touch); the pair is a candidate when
+//! each seed's walk reaches the other. Candidates join in order of length (Kruskal):
+//! a forest has no cycle and hence no obstruction (holonomy or offset residual); each
+//! merge is kept only if the atlas still prepares without a diagnostic. Then the
+//! candidates the forest skipped, each of which would close a cycle, are tried
+//! shortest first, and each is kept only where the atlas stays free of diagnostics:
+//! its cycle's holonomy and offset residual under the obstruction limits. On a flat
+//! or developable region (the ring around a hole, Fig. 12) the cycles close, and the
+//! chart has no seam where the forest left one; around a sphere's cap they do not. Each merge group has one fixed tangent
 //! (its first seed's, the world x axis projected), and the optimal-frame solve (Eq. 45)
 //! turns the others.
 //!
@@ -33,7 +38,7 @@
 //! **Keeping the seeds there** (`PlaceOptions::keep`): the atlas's own seeds (projected)
 //! and merges come first, as they are; placement only adds seeds where the surface is
 //! still uncovered, and the forest only adds merges that touch a new seed, joining the
-//! existing groups without closing a cycle.
+//! existing groups (a closing merge also touches a new seed).
 //!
 //! Everything is deterministic: samples are visited in order and ties go to the lower
 //! index.
@@ -368,9 +373,12 @@ fn merge_forest(
         }
         placed
     };
+    let mut closing = Vec::new();
     for (_, a, b) in candidates {
         let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
         if ra == rb {
+            // Would close a cycle: tried once the forest is complete.
+            closing.push((a, b));
             continue;
         }
         let mut trial_parent = parent.clone();
@@ -387,7 +395,25 @@ fn merge_forest(
             merges.pop();
         }
     }
+    // Cycles, shortest first: each closes only where the atlas stays free of
+    // diagnostics, that is where its holonomy and offset residual stay under the
+    // obstruction limits (W0005) and the walks still reach. A closed cycle joins the
+    // charts along its last edge too (the ring around a hole becomes one chart with no
+    // seam, Fig. 12), where the forest left a frontier.
     let placed = with_tangents(&mut parent);
+    for (a, b) in closing {
+        if root(&mut parent, a) != root(&mut parent, b) {
+            continue;
+        }
+        merges.push((a, b));
+        let trial = with_seeds(def, &placed, &merges);
+        let clean = Atlas::prepare(&trial, shape)
+            .map(|atlas| super::diagnose::diagnostics(&trial, &atlas).is_empty())
+            .unwrap_or(false);
+        if !clean {
+            merges.pop();
+        }
+    }
     (placed, merges)
 }
 

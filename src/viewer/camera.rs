@@ -59,10 +59,13 @@ impl Orbit {
         self.distance = (self.distance * 0.85f64.powf(steps)).clamp(1e-4, 1e7);
     }
 
-    /// Frames `bounds` from the current direction: the whole box fits the view.
-    pub fn frame(&mut self, bounds: Aabb) {
+    /// Frames `bounds` from the current direction: the box's bounding sphere fits the
+    /// view of aspect `aspect` (width / height), across its narrower angle.
+    pub fn frame(&mut self, bounds: Aabb, aspect: f64) {
         let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-3);
+        let half = (self.fov * 0.5).tan();
+        let narrower = half.min(half * aspect.max(1e-3)).atan();
         self.target = bounds.center();
-        self.distance = radius / (self.fov * 0.5).sin() * 1.1;
+        self.distance = radius / narrower.sin() * 1.1;
     }
 }

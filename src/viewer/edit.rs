@@ -2,6 +2,7 @@
 //! checked, written atomically (an editor with the file open reloads it cleanly), and
 //! undone in reverse order.
 
+use crate::access::Access;
 use crate::diagnostic::{self, Edit};
 use crate::fsutil::write_output;
 use crate::ide::seed_edit::{checked, Checked};
@@ -18,15 +19,16 @@ struct Made {
 
 pub struct SeedEditor {
     path: PathBuf,
-    base_dir: PathBuf,
+    /// The files the scene may read (its folder and `--allow` ones), as the viewer's.
+    access: Access,
     undo: Vec<Made>,
 }
 
 impl SeedEditor {
-    pub fn new(path: &Path, base_dir: &Path) -> SeedEditor {
+    pub fn new(path: &Path, access: Access) -> SeedEditor {
         SeedEditor {
             path: path.to_path_buf(),
-            base_dir: base_dir.to_path_buf(),
+            access,
             undo: Vec::new(),
         }
     }
@@ -37,7 +39,7 @@ impl SeedEditor {
     }
 
     /// Applies `edits` (made on `doc`, the scene on screen) to the file, when the result
-    /// checks (and with `strict`, when no warning falls on what the edit wrote). Returns
+    /// checks (and with `strict`, when it brings no new warning). Returns
     /// the new text, or the report of why not: the diagnostics as `sdfc check` prints
     /// them.
     pub fn apply(
@@ -55,7 +57,7 @@ impl SeedEditor {
                 self.path.display()
             ));
         }
-        match checked(doc, &edits, Some(&self.base_dir), strict) {
+        match checked(doc, &edits, &self.access, strict) {
             Checked::Accepted { text, .. } => {
                 write_output(&self.path, text.as_bytes())
                     .map_err(|e| format!("{what}: cannot write {}: {e}", self.path.display()))?;
@@ -81,9 +83,10 @@ impl SeedEditor {
     /// Reverts the last edit the viewer made, when the file is still as that edit left
     /// it. Returns the restored text and what was undone.
     pub fn undo(&mut self) -> Result<(String, String), String> {
-        let Some(last) = self.undo.pop() else {
+        let Some(last) = self.undo.last().cloned() else {
             return Err(String::from("nothing to undo"));
         };
+        // Popped only once the file is restored: an I/O error leaves it to try again.
         let on_disk = self.read()?;
         if on_disk != last.after {
             // Someone else edited the file since: undoing would lose their change.
@@ -96,6 +99,7 @@ impl SeedEditor {
         }
         write_output(&self.path, last.before.as_bytes())
             .map_err(|e| format!("cannot write {}: {e}", self.path.display()))?;
+        self.undo.pop();
         Ok((last.before, last.what))
     }
 

@@ -1,7 +1,9 @@
 //! Picking for the viewer's mouse: the surface point under a pixel, found by sphere
 //! tracing the CPU reference in f64 along the camera ray (the same ray the shader
-//! casts), refined along the ray to |f| below 1e-9 of the scene's scale; and the seed
-//! under a pixel.
+//! casts), then refined by Newton steps along the ray to |f| below 1e-9 of the scene's
+//! scale (where the ray grazes the surface and Newton would leave the hit, the trace's
+//! own point stays: within its hit tolerance, 1e-4 · max(t, 1) at the default); and
+//! the seed under a pixel.
 
 use crate::driver::Analysis;
 use crate::ir::{eval, Shape};

@@ -178,13 +178,15 @@ impl Presenter {
     /// Shows `targets`' colour (stretched, smoothly when it is at a reduced resolution)
     /// and, with `capture`, returns what was shown: read from the surface where it
     /// allows copies, else from the colour target (the same pixels at full resolution).
+    /// `None` when nothing could be shown this time (the surface was outdated, lost,
+    /// hidden or busy); `Some(None)` when shown without a capture.
     pub fn present(
         &mut self,
         gpu: &Gpu,
         renderer: &crate::gpu::Renderer,
         targets: &Targets,
         capture: bool,
-    ) -> Result<Option<Shot>, GpuError> {
+    ) -> Result<Option<Option<Shot>>, GpuError> {
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -282,7 +284,7 @@ impl Presenter {
         })?;
         gpu.queue.present(texture);
         if !capture {
-            return Ok(None);
+            return Ok(Some(None));
         }
         let shot = match readback {
             Some(buffer) => {
@@ -316,6 +318,6 @@ impl Presenter {
                 }
             }
         };
-        Ok(Some(shot))
+        Ok(Some(Some(shot)))
     }
 }

@@ -2,8 +2,10 @@
 //! resolution, hot reload from a file watcher (notify), seed edits by mouse,
 //! screenshots.
 
+mod input;
+
 use super::edit::SeedEditor;
-use super::pick;
+
 use super::present::{Presenter, Shot};
 use super::reload::{Outcome, Reloader};
 use super::{interactive_divisor, Orbit, VIEWS};
@@ -18,7 +20,7 @@ use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
-use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::keyboard::ModifiersState;
 use winit::window::{Window, WindowId};
 
 /// What `sdfc view` was asked for.
@@ -142,7 +144,7 @@ pub fn run(options: Options) -> Result<(), ViewError> {
     };
     let mut app = App {
         reloader: Reloader::new(name.clone(), options.access.clone(), codegen_options),
-        editor: SeedEditor::new(&options.scene, &base_dir),
+        editor: SeedEditor::new(&options.scene, options.access.clone()),
         proxy: event_loop.create_proxy(),
         mode: VIEWS
             .iter()
@@ -307,6 +309,7 @@ impl App {
                 }
                 self.watch_textures();
                 self.fresh = true;
+                self.merge_first = None;
             }
             Outcome::Failed(report) => {
                 eprint!("{report}");
@@ -322,28 +325,27 @@ impl App {
 
     /// Watches the scene's folder and its textures' folders.
     fn watch_textures(&mut self) {
-        let Some(loaded) = self.reloader.good.as_ref() else {
+        // The scene is watched even before it first builds (the viewer waits for a fix).
+        let Ok(scene) = std::fs::canonicalize(&self.options.scene) else {
             return;
         };
-        let mut files = vec![self.options.scene.clone()];
-        files.extend(
-            loaded
-                .compiled
-                .module
-                .manifest
-                .textures
-                .iter()
-                .map(|t| self.base_dir.join(&t.path)),
-        );
-        let files: Vec<PathBuf> = files
-            .iter()
-            .filter_map(|f| std::fs::canonicalize(f).ok())
-            .collect();
+        let mut files = vec![scene.clone()];
+        if let Some(loaded) = self.reloader.good.as_ref() {
+            files.extend(
+                loaded
+                    .compiled
+                    .module
+                    .manifest
+                    .textures
+                    .iter()
+                    .filter_map(|t| std::fs::canonicalize(self.base_dir.join(&t.path)).ok()),
+            );
+        }
         if files == self.watched && self.watcher.is_some() {
             return;
         }
         let proxy = self.proxy.clone();
-        let scene = files.first().cloned();
+        let scene = Some(scene);
         let textures: Vec<PathBuf> = files.iter().skip(1).cloned().collect();
         let handler = move |event: notify::Result<notify::Event>| {
             let Ok(event) = event else { return };
@@ -459,9 +461,15 @@ impl App {
         }
         let capture = self.screenshot_next && self.divisor == 1;
         let presenter = self.presenter.as_mut().expect("a window");
-        let shot = presenter
+        let Some(shot) = presenter
             .present(gpu, renderer, targets, capture)
-            .map_err(ViewError::Gpu)?;
+            .map_err(ViewError::Gpu)?
+        else {
+            // Not shown (the surface was outdated, hidden or busy): try again shortly.
+            std::thread::sleep(Duration::from_millis(10));
+            self.request_redraw();
+            return Ok(());
+        };
         self.frames_drawn += 1;
         if let Some(shot) = shot {
             self.screenshot_next = false;
@@ -471,7 +479,7 @@ impl App {
         Ok(())
     }
 
-    /// Saves a screenshot: to `--screenshot`, or next to the scene as `STEM-N.png`.
+    /// Saves a screenshot: to `--screenshot`, or next to the scene as `STEM-view-N.png`.
     fn save(&self, shot: &Shot) -> Result<(), ViewError> {
         let path = match &self.options.screenshot {
             Some(p) => p.clone(),
@@ -510,137 +518,6 @@ impl App {
             }
         );
         Ok(())
-    }
-
-    /// The seed edits of a mouse click at the cursor; prints what happened.
-    fn seed_click(&mut self, button_mods: ModifiersState) {
-        let Some(view) = self.view() else { return };
-        let Some(loaded) = self.reloader.current() else {
-            self.say("seed edits wait until the file has no errors");
-            return;
-        };
-        let Some(shape) = self.shape() else { return };
-        let (px, py) = self.cursor;
-        let doc = &loaded.doc;
-        let result = if button_mods.control_key() {
-            let Some(hit) = pick::surface(shape, &view, px, py) else {
-                self.say("add seed: no surface under the cursor");
-                return;
-            };
-            let Some(atlas) = pick::atlas_at(&doc.analysis, hit.position, view.scale) else {
-                self.say("add seed: no atlas on the surface under the cursor");
-                return;
-            };
-            let edits = crate::ide::seed_edit::add_seed(doc, &atlas, hit.position);
-            let what = match &edits {
-                Ok((_, name)) => format!("add seed `{name}` to atlas `{atlas}`"),
-                Err(_) => String::from("add seed"),
-            };
-            self.editor
-                .apply(&what, doc, edits.map(|(e, _)| e), false)
-                .map(|t| (t, what))
-        } else {
-            let Some(seed) = pick::seed(&doc.analysis, shape, &view, px, py, 12.0) else {
-                return;
-            };
-            if button_mods.alt_key() {
-                let edits = crate::ide::seed_edit::remove_seed(doc, &seed.atlas, &seed.seed);
-                let what = format!("remove seed `{}`", seed.seed);
-                self.editor
-                    .apply(&what, doc, edits, false)
-                    .map(|t| (t, what))
-            } else if button_mods.shift_key() {
-                match self.merge_first.take() {
-                    Some((atlas, first)) if atlas == seed.atlas && first != seed.seed => {
-                        let edits = crate::ide::seed_edit::merge(doc, &atlas, &first, &seed.seed);
-                        let what = format!("merge `{first}` and `{}`", seed.seed);
-                        self.editor
-                            .apply(&what, doc, edits, true)
-                            .map(|t| (t, what))
-                    }
-                    _ => {
-                        self.say(&format!(
-                            "merge: `{}` chosen; shift-click a second seed of atlas `{}`",
-                            seed.seed, seed.atlas
-                        ));
-                        self.merge_first = Some((seed.atlas, seed.seed));
-                        return;
-                    }
-                }
-            } else {
-                return;
-            }
-        };
-        self.edited(result);
-    }
-
-    /// After an edit: reload what was written at once (the watcher's echo is then the
-    /// same text), or print why it was refused.
-    fn edited(&mut self, result: Result<(String, String), String>) {
-        match result {
-            Ok((text, what)) => {
-                eprintln!("{what}: written to {}", self.name);
-                self.reload_text(&text, false);
-            }
-            Err(report) => eprint!("{}", report.trim_end_matches('\n').to_string() + "\n"),
-        }
-    }
-
-    fn drop_seed(&mut self, atlas: &str, seed: &str) {
-        let Some(view) = self.view() else { return };
-        let Some(loaded) = self.reloader.current() else {
-            return;
-        };
-        let Some(shape) = self.shape() else { return };
-        let Some(hit) = pick::surface(shape, &view, self.cursor.0, self.cursor.1) else {
-            self.say(&format!("move seed `{seed}`: no surface under the cursor"));
-            return;
-        };
-        let doc = &loaded.doc;
-        let edits = crate::ide::seed_edit::move_seed(doc, atlas, seed, hit.position);
-        let what = format!("move seed `{seed}`");
-        let result = self
-            .editor
-            .apply(&what, doc, edits, false)
-            .map(|t| (t, what));
-        self.edited(result);
-    }
-
-    fn key(&mut self, event_loop: &ActiveEventLoop, key: &Key) {
-        let ctrl = self.modifiers.control_key();
-        match key {
-            Key::Named(NamedKey::Escape) => event_loop.exit(),
-            Key::Character(c) => match c.as_str() {
-                "z" | "Z" if ctrl => {
-                    let result = self
-                        .editor
-                        .undo()
-                        .map(|(t, what)| (t, format!("undo `{what}`")));
-                    self.edited(result);
-                }
-                "f" | "F" => {
-                    let bounds = self.shape().map(|s| s.framing_bounds());
-                    if let (Some(orbit), Some(b)) = (self.orbit.as_mut(), bounds) {
-                        orbit.frame(b);
-                    }
-                    self.request_redraw();
-                }
-                "r" | "R" => {
-                    self.orbit = self.scene_orbit();
-                    self.request_redraw();
-                }
-                "s" | "S" => {
-                    self.screenshot_next = true;
-                    self.request_redraw();
-                }
-                d if d.len() == 1 && ("1"..="9").contains(&d) => {
-                    self.mode = d.parse::<usize>().expect("a digit") - 1;
-                    self.request_redraw();
-                }
-                _ => {}
-            },
-            _ => {}
-        }
     }
 }
 
@@ -697,6 +574,7 @@ impl ApplicationHandler<Changed> for App {
         self.gpu = Some(gpu);
         self.window = Some(window);
         self.reload(false);
+        self.watch_textures();
         if self.reloader.good.is_none() {
             // Nothing to show: the report is printed; the viewer waits for a fix unless
             // it was asked for a fixed number of frames.
@@ -748,6 +626,13 @@ impl ApplicationHandler<Changed> for App {
                 self.request_redraw();
             }
             WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
+            // A release the window will not see: the drag ends here, and the camera
+            // refines.
+            WindowEvent::Focused(false) | WindowEvent::CursorLeft { .. } => {
+                if self.pressed.take().is_some() {
+                    self.request_redraw();
+                }
+            }
             WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
                 self.key(event_loop, &event.logical_key)
             }
@@ -813,52 +698,6 @@ impl ApplicationHandler<Changed> for App {
                 }
             }
             _ => {}
-        }
-    }
-}
-
-impl App {
-    fn mouse(&mut self, state: ElementState, button: MouseButton) {
-        let mods = self.modifiers;
-        match state {
-            ElementState::Pressed => {
-                let drag = match button {
-                    MouseButton::Middle => Drag::Pan,
-                    MouseButton::Left if mods.control_key() || mods.alt_key() => Drag::Orbit,
-                    MouseButton::Left => {
-                        let on_seed = self.view().and_then(|view| {
-                            let loaded = self.reloader.current()?;
-                            let shape = self.shape()?;
-                            let (px, py) = self.cursor;
-                            pick::seed(&loaded.doc.analysis, shape, &view, px, py, 12.0)
-                        });
-                        match on_seed {
-                            Some(s) if !mods.shift_key() => Drag::Seed(s.atlas, s.seed),
-                            None if mods.shift_key() => Drag::Pan,
-                            _ => Drag::Orbit,
-                        }
-                    }
-                    _ => return,
-                };
-                self.pressed = Some((button, self.cursor, drag));
-            }
-            ElementState::Released => {
-                let Some((pressed_button, at, drag)) = self.pressed.take() else {
-                    return;
-                };
-                if pressed_button != button {
-                    return;
-                }
-                let moved =
-                    ((self.cursor.0 - at.0).powi(2) + (self.cursor.1 - at.1).powi(2)).sqrt();
-                match drag {
-                    Drag::Seed(atlas, seed) if moved >= CLICK => self.drop_seed(&atlas, &seed),
-                    _ if moved < CLICK && button == MouseButton::Left => self.seed_click(mods),
-                    _ => {}
-                }
-                // The camera stopped: refine.
-                self.request_redraw();
-            }
         }
     }
 }

@@ -170,7 +170,8 @@ pub enum Command {
     Fmt(fmt::FmtArgs),
     /// Place an atlas's seeds and merges automatically: farthest-point sampling until
     /// Alg. 2 succeeds on the target share of the surface, then a merge forest of the
-    /// neighbouring seeds whose walks reach each other (no cycles, so no obstruction).
+    /// neighbouring seeds whose walks reach each other, and the cycles that close
+    /// under the obstruction limits.
     ///
     /// Prints the `seed` and `merge` statements, or with --write replaces the atlas's
     /// own in the file (formatted, written atomically). Exit status: 0 on success, 1

@@ -200,26 +200,6 @@ fn warped_boxes_render_without_holes() {
     }
 }
 
-/// Mean absolute difference per channel (0–255) and the share of pixels that differ
-/// by more than 16 in any channel.
-fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
-    let mut sum = 0u64;
-    let mut bad = 0usize;
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
-        let mut worst = 0;
-        for k in 0..3 {
-            let d = (pa[k] as i32 - pb[k] as i32).unsigned_abs();
-            sum += d as u64;
-            worst = worst.max(d);
-        }
-        if worst > 16 {
-            bad += 1;
-        }
-    }
-    let n = (a.len() / 4) as f64;
-    (sum as f64 / (n * 3.0), bad as f64 / n)
-}
-
 #[test]
 fn primitives_match_the_reference_image() {
     let Some(gpu) = gpu_for_tests() else { return };
@@ -240,7 +220,7 @@ fn primitives_match_the_reference_image() {
         .expect("tests/reference/primitives.png (SDFC_BLESS=1 writes it)")
         .to_rgba8();
     assert_eq!(reference.dimensions(), (frame.width, frame.height));
-    let (mean, share) = image_difference(reference.as_raw(), &frame.color);
+    let (mean, share) = common::image_difference(reference.as_raw(), &frame.color);
     eprintln!(
         "primitives vs reference: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16",
         share * 100.0
@@ -273,7 +253,7 @@ fn the_gl_backend_renders_the_same_picture() {
         image::open(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/primitives.png"))
             .unwrap()
             .to_rgba8();
-    let (mean, share) = image_difference(reference.as_raw(), &frame.color);
+    let (mean, share) = common::image_difference(reference.as_raw(), &frame.color);
     eprintln!(
         "GL ({}) vs reference: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16",
         gpu.describe(),

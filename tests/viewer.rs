@@ -390,26 +390,6 @@ fn the_reload_state_machine_keeps_the_last_good_scene() {
     assert_eq!(r.good.as_ref().unwrap().pipeline, 3);
 }
 
-/// Mean absolute difference per channel (0–255) and the share of pixels that differ
-/// by more than 16 in any channel (the reference-image test's metric).
-fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
-    let mut sum = 0u64;
-    let mut bad = 0usize;
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
-        let mut worst = 0;
-        for k in 0..3 {
-            let d = (pa[k] as i32 - pb[k] as i32).unsigned_abs();
-            sum += d as u64;
-            worst = worst.max(d);
-        }
-        if worst > 16 {
-            bad += 1;
-        }
-    }
-    let n = (a.len() / 4) as f64;
-    (sum as f64 / (n * 3.0), bad as f64 / n)
-}
-
 #[test]
 fn the_viewer_window_shows_what_render_draws() {
     let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
@@ -462,7 +442,7 @@ fn the_viewer_window_shows_what_render_draws() {
     let a = image::open(&shot).unwrap().to_rgba8();
     let b = image::open(&reference).unwrap().to_rgba8();
     assert_eq!(a.dimensions(), b.dimensions());
-    let (mean, share) = image_difference(a.as_raw(), b.as_raw());
+    let (mean, share) = common::image_difference(a.as_raw(), b.as_raw());
     eprintln!(
         "viewer window vs render: mean |Δ| = {mean:.3}/255, {:.3}% of pixels off by > 16 ({})",
         share * 100.0,

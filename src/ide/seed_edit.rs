@@ -15,10 +15,9 @@ use crate::span::Span;
 use crate::syntax::ast::{AtlasStmt, ItemKind};
 use glam::DVec3;
 
-/// A number as written into the scene: nine decimals at most (picking is exact to
-/// 1e-9 of the scene's size), no trailing zeros.
-fn num(x: f64) -> String {
-    let s = format!("{x:.9}");
+/// A number as written into the scene: `decimals` at most, no trailing zeros.
+pub fn number(x: f64, decimals: usize) -> String {
+    let s = format!("{x:.decimals$}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" || s.is_empty() {
         "0".into()
@@ -27,9 +26,11 @@ fn num(x: f64) -> String {
     }
 }
 
-/// A position as a vector literal.
+/// A position as a vector literal, with nine decimals at most (picking is exact to
+/// 1e-9 of the scene's size).
 pub fn vec3(p: DVec3) -> String {
-    format!("[{}, {}, {}]", num(p.x), num(p.y), num(p.z))
+    let n = |x| number(x, 9);
+    format!("[{}, {}, {}]", n(p.x), n(p.y), n(p.z))
 }
 
 fn atlas<'a>(doc: &'a Document, name: &str) -> Result<&'a AtlasDef, String> {

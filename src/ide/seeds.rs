@@ -17,18 +17,10 @@ pub const TITLE_KEEP: &str = "Add seeds to cover the gaps";
 /// Surface samples: dual-contouring cells along the shape's longest side (the default).
 pub const GRID: usize = 40;
 
-fn num(x: f64) -> String {
-    let s = format!("{x:.6}");
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if s == "-0" {
-        "0".into()
-    } else {
-        s
-    }
-}
-
+/// A position as a vector literal, six decimals at most.
 fn vec3(p: DVec3) -> String {
-    format!("[{}, {}, {}]", num(p.x), num(p.y), num(p.z))
+    let n = |x| super::seed_edit::number(x, 6);
+    format!("[{}, {}, {}]", n(p.x), n(p.y), n(p.z))
 }
 
 /// The placement as atlas statements, four spaces in: every seed and merge, named

@@ -229,16 +229,21 @@ impl App {
         crate::driver::pick_shape(scene, self.options.shape.as_deref()).ok()
     }
 
+    /// The view the loaded scene asks for (its `render` item; framed with `--shape`), as
+    /// `sdfc render` resolves it.
+    fn scene_view(&self) -> Option<View> {
+        let loaded = self.reloader.good.as_ref()?;
+        let render = match self.options.shape {
+            Some(_) => None,
+            None => loaded.doc.analysis.program.render.as_ref(),
+        };
+        Some(View::new(render, self.shape()?))
+    }
+
     /// The view of the loaded scene at the window's size, with the viewer's camera.
     fn view(&self) -> Option<View> {
-        let loaded = self.reloader.good.as_ref()?;
         let shape = self.shape()?;
-        let render = if self.options.shape.is_some() {
-            None
-        } else {
-            loaded.doc.analysis.program.render.as_ref()
-        };
-        let mut view = View::new(render, shape);
+        let mut view = self.scene_view()?;
         let (w, h) = self.presenter.as_ref()?.size();
         view.width = w;
         view.height = h;
@@ -253,14 +258,8 @@ impl App {
 
     /// The scene's own camera as an orbit (what `R` returns to).
     fn scene_orbit(&self) -> Option<Orbit> {
-        let loaded = self.reloader.good.as_ref()?;
         let shape = self.shape()?;
-        let render = if self.options.shape.is_some() {
-            None
-        } else {
-            loaded.doc.analysis.program.render.as_ref()
-        };
-        let view = View::new(render, shape);
+        let view = self.scene_view()?;
         Some(Orbit::from_camera(
             &view.camera,
             shape.framing_bounds().center(),

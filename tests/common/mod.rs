@@ -200,3 +200,23 @@ pub fn surface_points(
     }
     out
 }
+
+/// Mean absolute difference per channel (0–255) and the share of pixels that differ
+/// by more than 16 in any channel.
+pub fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
+    let mut sum = 0u64;
+    let mut bad = 0usize;
+    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+        let mut worst = 0;
+        for k in 0..3 {
+            let d = (pa[k] as i32 - pb[k] as i32).unsigned_abs();
+            sum += d as u64;
+            worst = worst.max(d);
+        }
+        if worst > 16 {
+            bad += 1;
+        }
+    }
+    let n = (a.len() / 4) as f64;
+    (sum as f64 / (n * 3.0), bad as f64 / n)
+}

@@ -216,6 +216,7 @@ fn seed_grids_live_in_the_tables_buffer() {
     let options = codegen::Options {
         seed_grid: codegen::SeedGridChoice::On,
         walk: codegen::WalkForm::Loop,
+        prune: true,
         ..Default::default()
     };
     let m = driver::generate(&a, &options).unwrap();
@@ -230,7 +231,18 @@ fn seed_grids_live_in_the_tables_buffer() {
     assert_eq!(at("ATLAS_0_ITEMS_AT", grid.items.len()), grid.items);
     let bound: Vec<u32> = grid.bound.iter().map(|&b| (b as f32).to_bits()).collect();
     assert_eq!(at("ATLAS_0_BOUND_AT", bound.len()), bound);
-    assert_eq!(words.len(), grid.start.len() + 2 * grid.items.len());
+    // The pruning's per-seed limits (uv::prune), after the grid.
+    let pruning = atlas.pruning().expect("the robot's walks are pruned");
+    let limits: Vec<u32> = pruning
+        .limit
+        .iter()
+        .map(|&l| (l as f32).to_bits())
+        .collect();
+    assert_eq!(at("ATLAS_0_PRUNE_AT", limits.len()), limits);
+    assert_eq!(
+        words.len(),
+        grid.start.len() + 2 * grid.items.len() + limits.len()
+    );
     assert!(grid.items.len() > 1000, "{}", grid.items.len());
     // One read-only storage binding in the render group, declared and documented.
     let tables: Vec<_> = m

@@ -69,7 +69,8 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
             let points = surface_points(atlas, &target, 600, 17 + k as u64);
             let scale = sdfc::uv::atlas::scale(&atlas.shape);
             let mut results = Vec::new();
-            // The grid (for more than 4 seeds, as by default) and the plain scan.
+            // The grid (for more than 4 seeds, as by default) with pruned walks, and the
+            // plain scan with whole ones.
             let choices: &[SeedGridChoice] = if atlas.seeds.len() > 4 {
                 &[SeedGridChoice::On, SeedGridChoice::Off]
             } else {
@@ -80,6 +81,9 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                     atlas: Some(def.name.clone()),
                     seed_grid: grid,
                     walk: codegen::WalkForm::Loop,
+                    // The first variant with the walks pruned per seed (uv::prune,
+                    // opt-in), checked against the CPU and the unpruned plain scan.
+                    prune: grid == choices[0],
                     ..Default::default()
                 };
                 let module = sdfc::driver::compile(&analysis, &options).unwrap().module;

@@ -223,6 +223,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         cold: false,
         constant_uv: false,
         unions_as_code: false,
+        prune: false,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

@@ -82,6 +82,24 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
+    // The walks pruned per seed (uv::prune, opt-in), measured against the default loop.
+    let pruned = if analysis
+        .atlases
+        .iter()
+        .flatten()
+        .any(|a| a.pruning().is_some())
+    {
+        match variant(Options {
+            walk: WalkForm::Loop,
+            prune: true,
+            ..base.clone()
+        }) {
+            Ok(m) => Some(m),
+            Err(code) => return code,
+        }
+    } else {
+        None
+    };
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
@@ -200,6 +218,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("shaded, loop walk, cold start", &cold, ViewMode::Color),
         ("shaded, constant uv (no walks)", &constant, ViewMode::Color),
     ];
+    let mut pruned_row = None;
+    if let Some(m) = &pruned {
+        pruned_row = Some(rows.len());
+        rows.push(("shaded, loop walk, pruned", m, ViewMode::Color));
+    }
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
         undisplaced_row = Some(rows.len());
@@ -244,6 +267,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("textured ÷ constant uv, unrolled", 1, 4),
         ("textured ÷ constant uv, loop", 2, 4),
     ];
+    if let Some(k) = pruned_row {
+        pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
+    }
     if let Some((one, two)) = refined_rows {
         pairs.push(("refine = 1 ÷ 0, loop", one, 2));
         pairs.push(("refine = 2 ÷ 0, loop", two, 2));

@@ -289,6 +289,10 @@ pub struct RenderArgs {
     /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
     #[arg(long, value_enum, default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
+    /// Prune each walk's field to the union operands within its reach (exact; off by
+    /// default, as it measured slower on the software adapter: see the README's Performance).
+    #[arg(long)]
+    pub prune: bool,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
@@ -401,6 +405,10 @@ pub struct CompileArgs {
     /// bounding-volume hierarchy (the default; see the README's Big scenes).
     #[arg(long)]
     pub unions_as_code: bool,
+    /// Prune each walk's field to the union operands within its reach (exact; off by
+    /// default, as it measured slower on the software adapter: see the README's Performance).
+    #[arg(long)]
+    pub prune: bool,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,

@@ -102,6 +102,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         cold: false,
         constant_uv: false,
         unions_as_code: false,
+        prune: args.prune,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

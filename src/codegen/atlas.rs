@@ -31,6 +31,7 @@ use super::emit::{lit, point_expr, vec3, Writer};
 use super::template;
 use crate::uv::grid::SeedGrid;
 use crate::uv::logmap::sharp_angle;
+use crate::uv::prune;
 use crate::uv::Atlas;
 use glam::DVec3;
 
@@ -58,8 +59,43 @@ pub fn emit(
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
     w.unions_as_code = options.unions_as_code;
-    let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+    let pruning = (options.prune && !options.constant_uv)
+        .then(|| atlas.pruning())
+        .flatten();
+    let field_fn = match &pruning {
+        None => {
+            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+            format!(
+                "fn atlas_{k}_f(p: vec3<f32>) -> f32 {{\n    sdf_evals = sdf_evals + 1u;\n{}    return {field}.x;\n}}\n",
+                w.out
+            )
+        }
+        Some(pr) => {
+            // The whole field, for points outside the guard or the window.
+            let mut whole = Writer::new(&format!("atlas_{k}_whole"));
+            whole.unions_as_code = options.unions_as_code;
+            let whole_result = whole.shape(&atlas.shape, atlas.shape.root(), "p");
+            w.prune = Some((format!("atlas_{k}_mask"), std::sync::Arc::new(pr.clone())));
+            w.indent(1);
+            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+            w.helpers.push_str(&whole.helpers);
+            groups.append(&mut whole.groups);
+            let whole_fn = format!(
+                "fn atlas_{k}_whole(p: vec3<f32>) -> f32 {{\n{}    return {whole_result}.x;\n}}\n\n",
+                whole.out
+            );
+            whole_fn + &pruned_field(k, pr, &w.out, &field, words)
+        }
+    };
     groups.append(&mut w.groups);
+    let (walk_begin, walk_end) = if pruning.is_some() {
+        (
+            format!("            atlas_{k}_centre = ATLAS_{k}_P[j];\n            atlas_{k}_reach = min(dmax, {} * length(x - atlas_{k}_centre));\n            atlas_{k}_mask = atlas_{k}_walk_mask(j, atlas_{k}_reach);\n", lit(prune::CHORD_REACH)),
+            format!("            atlas_{k}_mask = 0xffffffffu;\n"),
+        )
+    } else {
+        (String::new(), String::new())
+    };
     let n = p.steps.max(1);
     let walk_steps = match form {
         WalkForm::Unrolled => (0..n)
@@ -104,9 +140,10 @@ pub fn emit(
         ("k", k.to_string()),
         ("seeds", atlas.seeds.len().to_string()),
         ("n", n.to_string()),
-        ("field_body", w.out),
+        ("field_fn", field_fn),
         ("field_helpers", w.helpers),
-        ("field_result", field),
+        ("walk_begin", walk_begin),
+        ("walk_end", walk_end),
         ("h_gradient", lit(p.h_gradient)),
         ("onto_tolerance", lit(atlas.onto_tolerance())),
         ("reproject", p.reproject.to_string()),
@@ -151,6 +188,56 @@ pub fn emit(
         ("max_distance", lit(p.max_distance)),
     ];
     template::fill(template::ATLAS, &values)
+}
+
+/// The atlas's field with its walks' pruning (`uv::prune`, mirrored by
+/// `Pruning::field`): the body `body` (result `result`) evaluated with the walk's mask
+/// inside the guard and the window, and again with every operand elsewhere; and the
+/// mask of a walk, from the per-seed limits appended to `words` (the `tables` buffer).
+fn pruned_field(
+    k: usize,
+    pr: &prune::Pruning,
+    body: &str,
+    result: &str,
+    words: &mut Vec<u32>,
+) -> String {
+    let at = words.len();
+    words.extend(pr.limit.iter().map(|&l| (l as f32).to_bits()));
+    let candidates = pr.candidates.len();
+    let (guard, window, eps) = (lit(prune::GUARD), lit(prune::WINDOW), lit(pr.eps));
+    format!(
+        "// The walk's pruning (uv/prune.rs): the mask of the union operands it evaluates, its
+// seed and its reach; every bit set outside walks.
+var<private> atlas_{k}_mask: u32 = 0xffffffffu;
+var<private> atlas_{k}_centre: vec3<f32> = vec3<f32>(0.0, 0.0, 0.0);
+var<private> atlas_{k}_reach: f32 = 0.0;
+const ATLAS_{k}_PRUNE_AT: u32 = {at}u;
+
+// A walk's mask: candidate c is skipped when the reach is below limit[j][c].
+fn atlas_{k}_walk_mask(j: u32, reach: f32) -> u32 {{
+    var mask = 0xffffffffu;
+    for (var c = 0u; c < {candidates}u; c = c + 1u) {{
+        if (reach < bitcast<f32>(tables[ATLAS_{k}_PRUNE_AT + j * {candidates}u + c])) {{
+            mask = mask & ~(1u << c);
+        }}
+    }}
+    return mask;
+}}
+
+// The field: pruned inside the walk's guard and window, whole elsewhere.
+fn atlas_{k}_f(p: vec3<f32>) -> f32 {{
+    sdf_evals = sdf_evals + 1u;
+    if (atlas_{k}_mask != 0xffffffffu && length(p - atlas_{k}_centre) <= {guard} * atlas_{k}_reach + {eps}) {{
+{body}        let v = {result}.x;
+        if (abs(v) < {window} * atlas_{k}_reach + {eps}) {{
+            return v;
+        }}
+        sdf_evals = sdf_evals + 1u;
+    }}
+    return atlas_{k}_whole(p);
+}}
+"
+    )
 }
 
 /// The body of `atlas_K(x)`: Alg. 2, mirrored when the atlas has a `mirror` plane

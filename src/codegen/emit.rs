@@ -75,6 +75,10 @@ pub struct Writer {
     pub blend: bool,
     /// Large unions as code, not as groups (`Options::unions_as_code`).
     pub unions_as_code: bool,
+    /// An atlas field's pruning (`uv::prune`): the private variable holding the walk's
+    /// mask, and which union operands its bits guard. Only the top writer has it: the
+    /// union chain is never inside a helper.
+    pub prune: Option<(String, std::sync::Arc<crate::uv::prune::Pruning>)>,
 }
 
 impl Writer {
@@ -93,6 +97,7 @@ impl Writer {
             groups: Vec::new(),
             blend: false,
             unions_as_code: false,
+            prune: None,
         }
     }
 
@@ -134,6 +139,11 @@ impl Writer {
     pub(super) fn fresh(&mut self, prefix: &str) -> String {
         self.next += 1;
         format!("{prefix}{}", self.next)
+    }
+
+    /// Writes the following lines `levels` deeper.
+    pub fn indent(&mut self, levels: usize) {
+        self.indent += levels;
     }
 
     pub fn line(&mut self, text: &str) {
@@ -225,8 +235,11 @@ impl Writer {
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Csg { op, k, a, b } => {
-                let da = self.shape(shape, *a, p);
-                let db = self.shape(shape, *b, p);
+                let (da, db) = if self.on_chain(id) {
+                    (self.operand(shape, *a, p), self.operand(shape, *b, p))
+                } else {
+                    (self.shape(shape, *a, p), self.shape(shape, *b, p))
+                };
                 let f = match op {
                     Csg::Union => "op_union",
                     Csg::Intersection => "op_intersection",
@@ -371,6 +384,41 @@ impl Writer {
 
     /// Writes node `child` as a helper function `PREFIX_TAGn(p)` (for nodes evaluated
     /// at several points, or behind a branch: naga limits brace nesting); its name.
+    /// Whether `id` is on the pruned union chain of this writer's atlas field.
+    fn on_chain(&self, id: NodeId) -> bool {
+        self.prune
+            .as_ref()
+            .is_some_and(|(_, pr)| pr.on_chain.get(id.index()).copied().unwrap_or(false))
+    }
+
+    /// An operand of a union on the chain: evaluated only when its bit of the pruning mask is set, where it
+    /// is a pruning candidate (1e30 otherwise, which leaves the union the other operand).
+    fn operand(&mut self, shape: &Shape, c: NodeId, p: &str) -> String {
+        let Some((mask, bit)) = self
+            .prune
+            .as_ref()
+            .and_then(|(mask, pr)| Some((mask.clone(), pr.bit(c)?)))
+        else {
+            return self.shape(shape, c, p);
+        };
+        if let Some(d) = self.done.get(&(c, p.to_string())) {
+            return d.clone();
+        }
+        let d = self.fresh("d");
+        let far = self.leaf("1e30", "0.0");
+        self.line(&format!("var {d} = {far};"));
+        self.line(&format!("if (({mask} & {}u) != 0u) {{", 1u32 << bit));
+        self.indent += 1;
+        // What is evaluated inside the block is not in scope after it.
+        let before = self.done.clone();
+        let dc = self.shape(shape, c, p);
+        self.line(&format!("{d} = {dc};"));
+        self.done = before;
+        self.indent -= 1;
+        self.line("}");
+        d
+    }
+
     fn helper_fn(&mut self, shape: &Shape, child: NodeId, tag: &str) -> String {
         let helper = self.fresh(&format!("{}_{tag}", self.prefix));
         let mut inner_w = self.sub(&helper);

@@ -186,6 +186,11 @@ pub struct Options {
     /// hierarchy (`ir::group`): the baseline `sdfc bench --scale` measures groups against.
     /// The CPU reference always uses the groups.
     pub unions_as_code: bool,
+    /// Per-seed pruning of the walks (`uv::prune`): a walk skips the union operands that
+    /// cannot change the field within its reach. Exact, but off by default: on the
+    /// software adapter its branches cost more than the primitives they skip (1.57×
+    /// slower on the robot, `sdfc bench`); a GPU may decide otherwise (`--prune`).
+    pub prune: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.

@@ -201,6 +201,11 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
     eval(shape, p).0
 }
 
+/// The distance of node `id` (a subtree of the shape) at `p`.
+pub fn node_distance(shape: &Shape, id: NodeId, p: DVec3) -> f64 {
+    eval_node(shape, id, p).0
+}
+
 fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
     stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p))
 }

@@ -243,6 +243,13 @@ impl Atlas {
         self.search(x, list.into_iter(), false)
     }
 
+    /// The pruning of the field for this atlas's walks ([`super::prune`]), if some
+    /// union operand could be pruned for some seed.
+    pub fn pruning(&self) -> Option<super::prune::Pruning> {
+        let seeds: Vec<DVec3> = self.seeds.iter().map(|s| s.seed.p).collect();
+        super::prune::Pruning::new(&self.shape, &seeds)
+    }
+
     /// The seed acceleration grid the generated shader uses for this atlas.
     pub fn seed_grid(&self) -> SeedGrid {
         let b = self.shape.framing_bounds();

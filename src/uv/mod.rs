@@ -11,6 +11,7 @@ pub mod fit;
 pub mod grid;
 pub mod logmap;
 pub mod merge;
+pub mod prune;
 pub mod refine;
 pub mod seeds;
 

@@ -578,3 +578,29 @@ fn evals_view_counts_six_evaluations_per_walk_step() {
     assert!(hits > 100 && misses > 100, "{hits} {misses}");
     assert!(sixty as f64 >= 0.9 * hits as f64, "{sixty} of {hits}");
 }
+
+#[test]
+fn pipelines_are_built_once_per_module_and_device() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let a = compile("render sphere(0.8);", (24, 16));
+    let b = compile("render sphere(0.6);", (24, 16));
+    gpu.pipelines.clear();
+    let first = gpu::Renderer::new(&gpu, &a.module, dir).unwrap();
+    let again = gpu::Renderer::new(&gpu, &a.module, dir).unwrap();
+    let other = gpu::Renderer::new(&gpu, &b.module, dir).unwrap();
+    assert!(!first.pipeline_cached && again.pipeline_cached && !other.pipeline_cached);
+    assert_eq!(gpu.pipelines.len(), 2);
+    // The cached pipeline draws what the built one does, and the other module its own.
+    let frame =
+        |r: &gpu::Renderer, c: &Compiled| r.frames(&gpu, &c.view, ViewMode::Color, 0, 1).unwrap().0;
+    let (f1, f2, f3) = (frame(&first, &a), frame(&again, &a), frame(&other, &b));
+    assert_eq!(f1.color, f2.color);
+    assert_ne!(f1.color, f3.color);
+    // The compute queries share the device's cache too.
+    let points = random_points(64, 1.0, 5);
+    let built = gpu::eval_points(&gpu, &a.module, &points).unwrap();
+    let kept = gpu.pipelines.len();
+    assert_eq!(gpu::eval_points(&gpu, &a.module, &points).unwrap(), built);
+    assert_eq!(gpu.pipelines.len(), kept);
+}

@@ -186,8 +186,10 @@ pub fn run(args: BenchArgs) -> ExitCode {
     let measure = |module: &sdfc::codegen::Module,
                    mode: ViewMode|
      -> Result<(Row, gpu::Renderer), gpu::GpuError> {
-        // One pipeline per module; a warm-up frame, then the measured ones; then one
-        // frame of the evals view for the evaluations per pixel.
+        // One pipeline per module, built (not found in the device's cache); a warm-up
+        // frame, then the measured ones; then one frame of the evals view for the
+        // evaluations per pixel.
+        gpu.pipelines.clear();
         let renderer = gpu::Renderer::new(&gpu, module, &dir)?;
         let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
         let (evals, _) = renderer.frames(&gpu, &view, ViewMode::Evals, 0, 1)?;
@@ -258,6 +260,18 @@ pub fn run(args: BenchArgs) -> ExitCode {
             }
         }
     }
+    // The loop walk's pipeline built, then asked for again: the in-process cache
+    // (gpu::cache) that a viewer reload with unchanged WGSL hits.
+    gpu.pipelines.clear();
+    let again = gpu::Renderer::new(&gpu, &rolled, &dir)
+        .and_then(|built| Ok((built, gpu::Renderer::new(&gpu, &rolled, &dir)?)));
+    let (built, again) = match again {
+        Ok((a, b)) => (a.pipeline_time, b.pipeline_time),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(super::exit::gpu(&e));
+        }
+    };
     // The comparisons whose frames are alternated one by one (with, without): the warm
     // start against none; the scene against its constant-uv twin (row 4), unrolled and
     // loop, which is what the atlases cost with everything else equal; refined against
@@ -310,6 +324,12 @@ pub fn run(args: BenchArgs) -> ExitCode {
             r.evals_p95
         );
     }
+    println!(
+        "{:34} pipeline {:9.2} ms   (built again: {:.2} ms)",
+        "loop walk, same WGSL again (cache)",
+        ms(again),
+        ms(built)
+    );
     let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
     // (label, value, how it was measured)
     let mut ratios: Vec<(&str, f64, &str)> = vec![
@@ -358,6 +378,8 @@ pub fn run(args: BenchArgs) -> ExitCode {
             "size": [view.width, view.height],
             "frames": args.frames.max(1),
             "compile_ms": ms(compile_time),
+            "pipeline_cached_ms": ms(again),
+            "pipeline_rebuilt_ms": ms(built),
             "rows": results.iter().map(|(name, r)| serde_json::json!({
                 "name": name,
                 "pipeline_ms": ms(r.pipeline),

@@ -201,6 +201,8 @@ fn measure(
         eprintln!("error: {name}: {e}");
         ExitCode::from(super::exit::gpu(&e))
     };
+    // A real build: benchmarks measure pipelines, not the cache.
+    gpu.pipelines.clear();
     let renderer = Renderer::new(gpu, &module, Path::new(".")).map_err(fail)?;
     let shape = analysis
         .scene
@@ -223,6 +225,8 @@ fn measure(
         )
         .map_err(|e| super::compile::report(&name, &source, e))?
         .module;
+        // A real build: benchmarks measure pipelines, not the cache.
+        gpu.pipelines.clear();
         let slow = Renderer::new(gpu, &code, Path::new(".")).map_err(fail)?;
         let (_, frames) = slow
             .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))

@@ -88,6 +88,8 @@ impl Bench<'_> {
             eprintln!("error: {e}");
             ExitCode::from(super::exit::gpu(&e))
         };
+        // A real build: benchmarks measure pipelines, not the cache.
+        self.gpu.pipelines.clear();
         let renderer = gpu::Renderer::new(self.gpu, &module, Path::new(".")).map_err(gpu_error)?;
         let (frame, _) = renderer
             .frames(self.gpu, &view, ViewMode::Color, 1, self.frames)

@@ -3,7 +3,7 @@
 
 use super::scene_group::{self, Images, Resources, Stage};
 use super::texture::{sampler, upload};
-use super::{Gpu, GpuError};
+use super::{cache, Gpu, GpuError};
 use crate::codegen::bindings::{Resource, COMPUTE_GROUP, RENDER_GROUP};
 use crate::codegen::Module;
 use crate::ir::material::Textures;
@@ -125,15 +125,18 @@ struct Bound<'a> {
     with: Resources<'a>,
 }
 
-fn create_queries(
+/// The compute pipeline of `entry_name` over the render group of `group0` and the
+/// queries' group, with both layouts.
+fn query_pipeline(
     d: &wgpu::Device,
     wgsl: &str,
     group0: &Bound,
     entry_name: &str,
-    data: &[[f32; 4]],
-    size: u64,
-) -> Result<Queries, GpuError> {
-    use wgpu::util::DeviceExt;
+) -> (
+    wgpu::ComputePipeline,
+    wgpu::BindGroupLayout,
+    wgpu::BindGroupLayout,
+) {
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("scene"),
         source: wgpu::ShaderSource::Wgsl(wgsl.into()),
@@ -176,6 +179,23 @@ fn create_queries(
         compilation_options: Default::default(),
         cache: None,
     });
+    (pipeline, empty, layout1)
+}
+
+fn create_queries(
+    gpu: &Gpu,
+    wgsl: &str,
+    group0: &Bound,
+    entry_name: &str,
+    data: &[[f32; 4]],
+    size: u64,
+) -> Result<Queries, GpuError> {
+    use wgpu::util::DeviceExt;
+    let d = &gpu.device;
+    let key = cache::key(entry_name, (group0.bindings, group0.stage), wgsl);
+    let ((pipeline, empty, layout1), _) = gpu.pipelines.get_or_try(key, || {
+        gpu.scoped(|| query_pipeline(d, wgsl, group0, entry_name))
+    })?;
     let grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("grid"),
         contents: &[0u8; 48],
@@ -281,7 +301,7 @@ fn run_raw(
     }
     let d = &gpu.device;
     let size = (data.len() * 16 * per_point) as u64;
-    let q = gpu.scoped(|| create_queries(d, wgsl, group0, entry_name, data, size))??;
+    let q = gpu.scoped(|| create_queries(gpu, wgsl, group0, entry_name, data, size))??;
     gpu.scoped(|| {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("queries"),
@@ -350,8 +370,15 @@ pub fn eval_materials(
         slot(Resource::Results)?,
     );
     let tables = scene_group::tables(gpu, module)?;
-    let (pipeline, layout0, layout1) =
-        gpu.scoped(|| material_pipeline(d, module, [points_at, normals_at, results_at]))?;
+    let slots = [points_at, normals_at, results_at];
+    let key = cache::key(
+        "cs_material",
+        (&module.manifest.bindings, slots),
+        &module.wgsl,
+    );
+    let ((pipeline, layout0, layout1), _) = gpu
+        .pipelines
+        .get_or_try(key, || gpu.scoped(|| material_pipeline(d, module, slots)))?;
     let with = Resources {
         images: &images,
         tables: tables.as_ref(),

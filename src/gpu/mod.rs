@@ -2,6 +2,7 @@
 //! queries. Every fallible wgpu call runs inside an error scope, so a device
 //! error becomes a [`GpuError`], never a panic.
 
+pub mod cache;
 pub mod compute;
 mod mesh;
 mod render;
@@ -69,6 +70,8 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// Whether GPU timestamps are available for frame timing.
     pub timestamps: bool,
+    /// The pipelines built on this device, by what they were built from.
+    pub pipelines: cache::Pipelines,
 }
 
 impl Gpu {
@@ -136,6 +139,7 @@ impl Gpu {
             queue,
             info,
             timestamps,
+            pipelines: cache::Pipelines::default(),
         })
     }
 

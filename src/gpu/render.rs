@@ -217,8 +217,10 @@ pub struct Renderer {
     /// The module's `tables` storage buffer, when it has one.
     tables: Option<wgpu::Buffer>,
     formats: [wgpu::TextureFormat; 4],
-    /// The time the pipeline took to create.
+    /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
+    /// Whether the pipeline came from the device's cache (`gpu::cache`).
+    pub pipeline_cached: bool,
 }
 
 /// The offscreen targets of one frame size and their readback buffers.
@@ -257,10 +259,13 @@ impl Renderer {
         let tables = scene_group::tables(gpu, module)?;
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
-        let (pipeline, layout) = gpu.scoped(|| {
-            let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
-            let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats);
-            (pipeline, layout)
+        let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
+        let ((pipeline, layout), pipeline_cached) = gpu.pipelines.get_or_try(key, || {
+            gpu.scoped(|| {
+                let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
+                let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats);
+                (pipeline, layout)
+            })
         })?;
         gpu.wait()?;
         Ok(Renderer {
@@ -271,6 +276,7 @@ impl Renderer {
             tables,
             formats,
             pipeline_time: started.elapsed(),
+            pipeline_cached,
         })
     }
 

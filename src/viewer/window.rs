@@ -298,10 +298,15 @@ impl App {
                     );
                 }
                 eprintln!(
-                    "loaded {}: compile {:.1} ms, pipeline {:.1} ms",
+                    "loaded {}: compile {:.1} ms, pipeline {:.1} ms{}",
                     self.name,
                     loaded.compile_time.as_secs_f64() * 1e3,
-                    loaded.pipeline.pipeline_time.as_secs_f64() * 1e3
+                    loaded.pipeline.pipeline_time.as_secs_f64() * 1e3,
+                    if loaded.pipeline.pipeline_cached {
+                        " (cached)"
+                    } else {
+                        ""
+                    }
                 );
                 if self.orbit.is_none() {
                     self.orbit = self.scene_orbit();

@@ -1,0 +1,148 @@
+//! The in-process pipeline cache: pipelines (with the layouts their bind groups need)
+//! keyed by everything they were built from (the WGSL text, the entry point, the binding
+//! table and the target formats), so that building the same module again (the viewer
+//! reloading a file whose edit left the generated WGSL unchanged, a view toggled back,
+//! repeated queries in the baker and the tests) costs a lookup instead of a shader
+//! compilation.
+//!
+//! The key holds the whole WGSL text, not only its hash, so two modules can never share
+//! a pipeline by a hash collision. The cache keeps the [`CAPACITY`] most recently used
+//! pipelines; only pipelines created without a device error are stored.
+//!
+//! Across processes, the drivers keep their own caches (Mesa's shader cache in
+//! `~/.cache/mesa_shader_cache`, NVIDIA's in `~/.nv`), which already make a second
+//! `sdfc render` of the same scene start warm; see the README's Performance.
+
+use std::any::Any;
+use std::sync::Mutex;
+
+/// The most pipelines kept.
+pub const CAPACITY: usize = 16;
+
+struct Entry {
+    key: String,
+    value: Box<dyn Any + Send + Sync>,
+}
+
+/// Pipelines by what they were built from, most recently used first.
+#[derive(Default)]
+pub struct Pipelines {
+    entries: Mutex<Vec<Entry>>,
+}
+
+impl Pipelines {
+    /// The cached value of `key`, or `make()`'s (stored when it succeeds), with whether
+    /// it came from the cache.
+    pub fn get_or_try<T, E>(
+        &self,
+        key: String,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<(T, bool), E>
+    where
+        T: Clone + Send + Sync + 'static,
+    {
+        if let Some(v) = self.lookup::<T>(&key) {
+            return Ok((v, true));
+        }
+        // Built outside the lock: a pipeline can take seconds.
+        let value = make()?;
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        entries.retain(|e| e.key != key);
+        entries.insert(
+            0,
+            Entry {
+                key,
+                value: Box::new(value.clone()),
+            },
+        );
+        entries.truncate(CAPACITY);
+        Ok((value, false))
+    }
+
+    fn lookup<T: Clone + 'static>(&self, key: &str) -> Option<T> {
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        let i = entries.iter().position(|e| e.key == key)?;
+        let entry = entries.remove(i);
+        let value = entry.value.downcast_ref::<T>().cloned();
+        entries.insert(0, entry);
+        value
+    }
+
+    /// How many pipelines are kept.
+    pub fn len(&self) -> usize {
+        self.entries.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Forgets every pipeline (`sdfc bench` measures real builds).
+    pub fn clear(&self) {
+        self.entries
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
+    }
+}
+
+/// The key of a pipeline: its kind and entry point, the description of its layouts and
+/// targets, and the WGSL text.
+pub fn key(kind: &str, layout: impl std::fmt::Debug, wgsl: &str) -> String {
+    format!("{kind}\u{0}{layout:?}\u{0}{wgsl}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_misses_failures_and_eviction() {
+        let cache = Pipelines::default();
+        let made = std::cell::Cell::new(0);
+        let make = |v: u32| {
+            made.set(made.get() + 1);
+            Ok::<u32, ()>(v)
+        };
+        assert_eq!(
+            cache.get_or_try(key("r", 1, "a"), || make(1)),
+            Ok((1, false))
+        );
+        assert_eq!(
+            cache.get_or_try(key("r", 1, "a"), || make(9)),
+            Ok((1, true))
+        );
+        // Another layout, kind or text is another pipeline.
+        assert_eq!(
+            cache.get_or_try(key("r", 2, "a"), || make(2)),
+            Ok((2, false))
+        );
+        assert_eq!(
+            cache.get_or_try(key("c", 1, "a"), || make(3)),
+            Ok((3, false))
+        );
+        assert_eq!(made.get(), 3);
+        // A failure is not stored.
+        assert_eq!(
+            cache.get_or_try::<u32, ()>(key("r", 1, "b"), || Err(())),
+            Err(())
+        );
+        assert_eq!(
+            cache.get_or_try(key("r", 1, "b"), || make(4)),
+            Ok((4, false))
+        );
+        // The least recently used go first.
+        for i in 0..CAPACITY as u32 {
+            cache.get_or_try(key("x", i, ""), || make(i)).unwrap();
+        }
+        assert_eq!(cache.len(), CAPACITY);
+        assert_eq!(
+            cache.get_or_try(key("r", 1, "a"), || make(5)),
+            Ok((5, false))
+        );
+        assert_eq!(
+            cache.get_or_try(key("x", CAPACITY as u32 - 1, ""), || make(0)),
+            Ok((CAPACITY as u32 - 1, true))
+        );
+    }
+}

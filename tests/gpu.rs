@@ -604,3 +604,59 @@ fn pipelines_are_built_once_per_module_and_device() {
     assert_eq!(gpu::eval_points(&gpu, &a.module, &points).unwrap(), built);
     assert_eq!(gpu.pipelines.len(), kept);
 }
+
+#[test]
+fn the_on_disk_pipeline_cache_is_written_and_survives_a_damaged_file() {
+    if gpu_for_tests().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.sdf");
+    std::fs::write(&scene, "render sphere(0.8);\n").unwrap();
+    let cache = dir.path().join("pipelines");
+    let render = |out: &str| {
+        let out = dir.path().join(out);
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+            .args([
+                "render",
+                "--size",
+                "32x24",
+                "--walk",
+                "loop",
+                "--timings",
+                "-o",
+            ])
+            .arg(&out)
+            .arg(&scene)
+            .env(sdfc::gpu::cache::DISK_VAR, &cache)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "{err}");
+        (std::fs::read(out).unwrap(), err)
+    };
+    let (first, err) = render("a.png");
+    let files: Vec<_> = std::fs::read_dir(&cache)
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    // Vulkan has pipeline caches (lavapipe's holds only wgpu's header); GL has none.
+    if err.contains("(Vulkan,") {
+        assert_eq!(files.len(), 1, "{files:?}\n{err}");
+    } else {
+        eprintln!("no Vulkan adapter: the on-disk cache is not used\n{err}");
+    }
+    let (second, _) = render("b.png");
+    assert_eq!(first, second);
+    // A damaged file is refused by its header and replaced, not handed to the driver.
+    for f in &files {
+        std::fs::write(f, b"not a pipeline cache, not even its header").unwrap();
+    }
+    let (third, _) = render("c.png");
+    assert_eq!(first, third);
+    for f in &files {
+        assert_ne!(
+            std::fs::read(f).unwrap(),
+            b"not a pipeline cache, not even its header"
+        );
+    }
+}

@@ -116,7 +116,8 @@ pub enum Command {
     /// (views color, albedo, normal, depth, uv, level; no shadows), framed on its bounds
     /// with the default light. Exit status: 0 on success, 1 when the scene has errors,
     /// 2 on usage or I/O problems (an unreadable .glb), 3 on an internal compiler error,
-    /// 4 when no GPU adapter can be used.
+    /// 4 when no GPU adapter can be used. With SDFC_PIPELINE_CACHE=DIR, wgpu's pipeline
+    /// cache (Vulkan) is kept in DIR between runs.
     Render(RenderArgs),
     /// Open a live viewer: orbit (left drag), pan (middle or shift drag), zoom (wheel);
     /// F frames the shape, R resets to the scene's camera; 1-9 switch views (colour,

@@ -132,6 +132,7 @@ fn query_pipeline(
     wgsl: &str,
     group0: &Bound,
     entry_name: &str,
+    cache: Option<&wgpu::PipelineCache>,
 ) -> (
     wgpu::ComputePipeline,
     wgpu::BindGroupLayout,
@@ -177,7 +178,7 @@ fn query_pipeline(
         module: &module,
         entry_point: Some(entry_name),
         compilation_options: Default::default(),
-        cache: None,
+        cache,
     });
     (pipeline, empty, layout1)
 }
@@ -193,9 +194,18 @@ fn create_queries(
     use wgpu::util::DeviceExt;
     let d = &gpu.device;
     let key = cache::key(entry_name, (group0.bindings, group0.stage), wgsl);
-    let ((pipeline, empty, layout1), _) = gpu.pipelines.get_or_try(key, || {
-        gpu.scoped(|| query_pipeline(d, wgsl, group0, entry_name))
-    })?;
+    let ((pipeline, empty, layout1), _) =
+        gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+            gpu.scoped(|| {
+                query_pipeline(
+                    d,
+                    wgsl,
+                    group0,
+                    entry_name,
+                    gpu.disk.as_ref().map(|d| &d.cache),
+                )
+            })
+        })?;
     let grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("grid"),
         contents: &[0u8; 48],
@@ -376,9 +386,10 @@ pub fn eval_materials(
         (&module.manifest.bindings, slots),
         &module.wgsl,
     );
-    let ((pipeline, layout0, layout1), _) = gpu
-        .pipelines
-        .get_or_try(key, || gpu.scoped(|| material_pipeline(d, module, slots)))?;
+    let ((pipeline, layout0, layout1), _) =
+        gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+            gpu.scoped(|| material_pipeline(d, module, slots, gpu.disk.as_ref().map(|d| &d.cache)))
+        })?;
     let with = Resources {
         images: &images,
         tables: tables.as_ref(),
@@ -477,6 +488,7 @@ fn material_pipeline(
     d: &wgpu::Device,
     module: &Module,
     slots: [u32; 3],
+    cache: Option<&wgpu::PipelineCache>,
 ) -> (
     wgpu::ComputePipeline,
     wgpu::BindGroupLayout,
@@ -521,7 +533,7 @@ fn material_pipeline(
         module: &shader,
         entry_point: Some("cs_material"),
         compilation_options: Default::default(),
-        cache: None,
+        cache,
     });
     (pipeline, layout0, layout1)
 }

@@ -72,6 +72,8 @@ pub struct Gpu {
     pub timestamps: bool,
     /// The pipelines built on this device, by what they were built from.
     pub pipelines: cache::Pipelines,
+    /// wgpu's pipeline cache, kept on disk (`SDFC_PIPELINE_CACHE`; Vulkan only).
+    pub disk: Option<cache::Disk>,
 }
 
 impl Gpu {
@@ -118,11 +120,17 @@ impl Gpu {
         }))
         .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let required_features = if timestamps {
+        let mut required_features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
             wgpu::Features::empty()
         };
+        // The on-disk pipeline cache, when asked for and the backend has one.
+        let disk_cache = std::env::var_os(cache::DISK_VAR).is_some_and(|d| !d.is_empty())
+            && adapter.features().contains(wgpu::Features::PIPELINE_CACHE);
+        if disk_cache {
+            required_features |= wgpu::Features::PIPELINE_CACHE;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("sdfc"),
             required_features,
@@ -133,6 +141,7 @@ impl Gpu {
         // Errors outside a scope are reported, not turned into panics.
         device.on_uncaptured_error(Arc::new(|e| eprintln!("wgpu: {e}")));
         let info = adapter.get_info();
+        let disk = cache::Disk::open(&device, &info, device.features());
         Ok(Gpu {
             adapter,
             device,
@@ -140,6 +149,7 @@ impl Gpu {
             info,
             timestamps,
             pipelines: cache::Pipelines::default(),
+            disk,
         })
     }
 

@@ -260,13 +260,15 @@ impl Renderer {
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
         let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
-        let ((pipeline, layout), pipeline_cached) = gpu.pipelines.get_or_try(key, || {
-            gpu.scoped(|| {
-                let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
-                let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats);
-                (pipeline, layout)
-            })
-        })?;
+        let ((pipeline, layout), pipeline_cached) =
+            gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+                gpu.scoped(|| {
+                    let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
+                    let cache = gpu.disk.as_ref().map(|d| &d.cache);
+                    let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats, cache);
+                    (pipeline, layout)
+                })
+            })?;
         gpu.wait()?;
         Ok(Renderer {
             pipeline,
@@ -503,6 +505,7 @@ fn pipeline(
     wgsl: &str,
     group0: &wgpu::BindGroupLayout,
     formats: &[wgpu::TextureFormat; 4],
+    cache: Option<&wgpu::PipelineCache>,
 ) -> wgpu::RenderPipeline {
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("scene"),
@@ -542,7 +545,7 @@ fn pipeline(
             targets: &targets,
         }),
         multiview_mask: None,
-        cache: None,
+        cache,
     })
 }
 

@@ -88,7 +88,9 @@ impl Analysis {
 /// A module that naga accepted, with naga's own form of it.
 pub struct Compiled {
     pub module: Module,
-    pub validated: Validated,
+    /// Shared with the analyses of later texts that differ only in trivia
+    /// ([`crate::incremental`]).
+    pub validated: Arc<Validated>,
 }
 
 impl std::fmt::Debug for Compiled {
@@ -313,7 +315,10 @@ pub fn compile(analysis: &Analysis, options: &codegen::Options) -> Result<Compil
     #[cfg(feature = "test-hooks")]
     let module = test_hooks::corrupt(module);
     match codegen::validate(&module.wgsl) {
-        Ok(validated) => Ok(Compiled { module, validated }),
+        Ok(validated) => Ok(Compiled {
+            module,
+            validated: Arc::new(validated),
+        }),
         Err(naga) => Err(CompileError::Internal {
             diagnostic: Box::new(module.internal_error(&naga)),
             naga,

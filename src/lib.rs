@@ -28,6 +28,7 @@ pub mod fsutil;
 pub mod gpu;
 mod id;
 pub mod ide;
+pub mod incremental;
 pub mod ir;
 pub mod lsp;
 pub mod sema;

@@ -320,11 +320,68 @@ fn front_end_diagnostics_come_first_then_the_full_set() {
     let mut all = codes(&full);
     all.sort();
     assert_eq!(all, ["N0001", "W0001", "W0004"]);
+    // Comments and whitespace only: the back end's diagnostics are carried over, moved
+    // with their tokens, in one publish (no front stage); they equal a fresh analysis's.
+    let line_of = |d: &Value, code: &str| -> Vec<Value> {
+        d["diagnostics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|x| x["code"] == code)
+            .map(|x| x["range"].clone())
+            .collect()
+    };
+    let trivia = format!("// a comment\n{}", text.replace("seed far", "seed   far"));
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 3 }, "contentChanges": [{ "text": trivia }] }));
+    let carried = c.publish();
+    assert_eq!(carried["version"], 3);
+    assert!(carried.get("sdfcStage").is_none(), "{carried}");
+    let fresh = sdfc::driver::check_all(&trivia, None);
+    assert_eq!(
+        carried["diagnostics"].as_array().unwrap().len(),
+        fresh.diagnostics.len()
+    );
+    for code in ["N0001", "W0001", "W0004"] {
+        let (before, after) = (line_of(&full, code), line_of(&carried, code));
+        assert_eq!(before.len(), after.len(), "{code}");
+        for (b, a) in before.iter().zip(&after) {
+            assert_eq!(
+                a["start"]["line"].as_u64().unwrap(),
+                b["start"]["line"].as_u64().unwrap() + 1,
+                "{code}: {b} then {a}"
+            );
+        }
+    }
+    // `seed   far`'s warning starts where the fresh analysis puts it.
+    let far = fresh
+        .diagnostics
+        .iter()
+        .find(|d| d.code == "W0004")
+        .unwrap()
+        .span()
+        .unwrap();
+    let start = &line_of(&carried, "W0004")[0]["start"];
+    let (line, col) = (
+        start["line"].as_u64().unwrap() as usize,
+        start["character"].as_u64().unwrap() as usize,
+    );
+    let offset: usize = trivia
+        .split_inclusive('\n')
+        .take(line)
+        .map(str::len)
+        .sum::<usize>()
+        + col;
+    assert_eq!(offset, far.start);
+    // A change of a token runs the back end again: the front stage comes first.
+    let moved = trivia.replace("[0, 50, 0]", "[0, 60, 0]");
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 4 }, "contentChanges": [{ "text": moved }] }));
+    assert_eq!(c.publish()["sdfcStage"], "front");
+    assert!(c.publish().get("sdfcStage").is_none());
     // A front-end error is the whole analysis: one publish, not marked.
     let broken = "let ball = spher(1);\nrender ball;\n";
-    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 2 }, "contentChanges": [{ "text": broken }] }));
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 5 }, "contentChanges": [{ "text": broken }] }));
     let only = c.publish();
-    assert_eq!(only["version"], 2);
+    assert_eq!(only["version"], 5);
     assert!(only.get("sdfcStage").is_none());
     assert_eq!(codes(&only), ["E0103"]);
     stop(c, handle);

@@ -24,6 +24,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
     if args.scale {
         return super::scale::run(&args);
     }
+    let sweep = args.seed_sweep || args.scene.is_none();
+    if args.plot.is_some() && (!sweep || args.lsp_latency || args.bake) {
+        eprintln!("error: --plot draws the charts of --scale and --seed-sweep only");
+        return ExitCode::from(super::exit::USAGE);
+    }
     let scene = match &args.scene {
         Some(s) if args.lsp_latency => {
             return super::latency::run(s, args.edits, args.json.as_deref())

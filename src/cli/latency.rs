@@ -59,7 +59,32 @@ pub(super) struct Latencies {
     pub full: Vec<Duration>,
 }
 
-pub(super) fn measure(path: &Path, text: &str, edits: u32) -> Result<(Latencies, usize), Error> {
+/// What each measured edit changes.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Edit {
+    /// A comment added at the end, as when typing one: only trivia changes, so the
+    /// server carries the last full analysis's back end over (`sdfc::incremental`).
+    Comment,
+    /// An unused `let` added at the end: the tokens change, so the whole analysis runs
+    /// again (front end, atlases' geometry, code generation, naga).
+    Token,
+}
+
+impl Edit {
+    fn apply(self, text: &str, i: i32) -> String {
+        match self {
+            Edit::Comment => format!("{text}\n// edit {i}\n"),
+            Edit::Token => format!("{text}\nlet sdfc_bench_edit = {i};\n"),
+        }
+    }
+}
+
+pub(super) fn measure(
+    path: &Path,
+    text: &str,
+    edits: u32,
+    kind: Edit,
+) -> Result<(Latencies, usize), Error> {
     let (server, client) = Connection::memory();
     let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
     let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
@@ -86,9 +111,7 @@ pub(super) fn measure(path: &Path, text: &str, edits: u32) -> Result<(Latencies,
         full: Vec::new(),
     };
     for i in 0..edits as i32 {
-        // An edit that changes the text but not the scene: a comment at the end, as when
-        // typing; each one is a full re-analysis.
-        let changed = format!("{text}\n// edit {i}\n");
+        let changed = kind.apply(text, i);
         let version = i + 2;
         let start = Instant::now();
         send_note(
@@ -120,54 +143,70 @@ pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
             return ExitCode::from(super::exit::USAGE);
         }
     };
-    let (times, count) = match measure(path, &text, edits.max(1)) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: the language server failed: {e}");
-            return ExitCode::from(super::exit::SCENE);
+    let mut measured = Vec::new();
+    for kind in [Edit::Token, Edit::Comment] {
+        match measure(path, &text, edits.max(1), kind) {
+            Ok(r) => measured.push((kind, r)),
+            Err(e) => {
+                eprintln!("error: the language server failed: {e}");
+                return ExitCode::from(super::exit::SCENE);
+            }
         }
-    };
+    }
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let count = measured.first().map_or(0, |(_, (_, n))| *n);
     println!(
         "scene:     {} ({} bytes, {} diagnostics)",
         path.display(),
         text.len(),
         count
     );
-    println!(
-        "didChange → publishDiagnostics over {} edits:",
-        times.full.len()
-    );
     let mut report = serde_json::json!({
         "bench": "lsp latency",
         "scene": path.display().to_string(),
-        "edits": times.full.len(),
+        "edits": edits.max(1),
         "diagnostics": count,
     });
-    for (name, what, list) in [
-        (
-            "front",
-            "the front end's (parse, names, types)",
-            times.front,
-        ),
-        (
-            "full",
-            "the full set (also the atlases' geometry, code generation, naga)",
-            times.full,
-        ),
-    ] {
-        let q = quantiles(list);
+    for (kind, (times, _)) in measured {
+        let (prefix, title) = match kind {
+            Edit::Token => (
+                "",
+                "a token edit (an unused `let` added): the whole analysis",
+            ),
+            Edit::Comment => (
+                "comment_",
+                "a comment edit (trivia only): the back end carried over",
+            ),
+        };
         println!(
-            "  {what}: p50 {:.2} ms   p95 {:.2} ms   min {:.2} ms   max {:.2} ms",
-            ms(q[1]),
-            ms(q[2]),
-            ms(q[0]),
-            ms(q[3])
+            "didChange → publishDiagnostics over {} edits, {title}:",
+            times.full.len()
         );
-        report[format!("{name}_p50_ms")] = ms(q[1]).into();
-        report[format!("{name}_p95_ms")] = ms(q[2]).into();
-        report[format!("{name}_min_ms")] = ms(q[0]).into();
-        report[format!("{name}_max_ms")] = ms(q[3]).into();
+        for (name, what, list) in [
+            (
+                "front",
+                "the front end's (parse, names, types)",
+                times.front,
+            ),
+            (
+                "full",
+                "the full set (also the atlases' geometry, code generation, naga)",
+                times.full,
+            ),
+        ] {
+            let q = quantiles(list);
+            println!(
+                "  {what}: p50 {:.2} ms   p95 {:.2} ms   min {:.2} ms   max {:.2} ms",
+                ms(q[1]),
+                ms(q[2]),
+                ms(q[0]),
+                ms(q[3])
+            );
+            report[format!("{prefix}{name}_p50_ms")] = ms(q[1]).into();
+            report[format!("{prefix}{name}_p95_ms")] = ms(q[2]).into();
+            report[format!("{prefix}{name}_min_ms")] = ms(q[0]).into();
+            report[format!("{prefix}{name}_max_ms")] = ms(q[3]).into();
+        }
     }
     if let Some(out) = json {
         if let Err(code) = super::bench::write_json(out, &report) {

@@ -8,6 +8,7 @@ pub mod eval;
 pub mod fit_height;
 pub mod fmt;
 pub mod latency;
+pub mod plot;
 pub mod render;
 pub mod render_mesh;
 pub mod scale;
@@ -226,12 +227,16 @@ pub struct BenchArgs {
     /// 1,200 spheres the same against the scene with its unions as code.
     #[arg(long, conflicts_with_all = ["scene", "shape", "seed_sweep"])]
     pub scale: bool,
-    /// With --scale: also draw the figures against the number of primitives, log-log,
-    /// as SVG to this file (written atomically).
-    #[arg(long, value_name = "PATH", requires = "scale")]
+    /// With --scale or --seed-sweep: also draw the chart, SVG or PNG by the extension,
+    /// to this file (written atomically): --scale's figures against the number of
+    /// primitives, log-log; the sweep's frame time ÷ constant uv against the number of
+    /// seeds (the paper's Fig. 15).
+    #[arg(long, value_name = "PATH", value_parser = plot::parse_path)]
     pub plot: Option<PathBuf>,
     /// The language server's didChange → publishDiagnostics latency on the scene
-    /// (p50/p95 over --edits edits), instead of frame times.
+    /// (p50/p95 over --edits edits), instead of frame times: for edits that change a
+    /// token (the whole analysis runs) and for comment edits (the back end is carried
+    /// over).
     #[arg(long, requires = "scene")]
     pub lsp_latency: bool,
     /// Bake the scene's atlas (2048 wide, full mip chain, the default grid, the loop

@@ -3,7 +3,7 @@
 //! seeds; for each: compile time (source → validated WGSL), WGSL lines, pipeline time,
 //! frame time and the language server's didChange → diagnostics latency, and up to
 //! 1,200 spheres the same scene with its unions as code (no groups), measured in one
-//! run on one adapter, with a log-log plot (`--plot`, SVG).
+//! run on one adapter, with a log-log plot (`--plot`, SVG or PNG).
 
 use super::BenchArgs;
 use sdfc::bench::{city, SCALE_COUNTS};
@@ -241,11 +241,16 @@ fn measure(
     };
     // The language server on the same text, in process (`--lsp-latency`'s loop).
     let file = std::env::temp_dir().join(format!("sdfc-scale-{n}-{seeds}.sdf"));
-    let (lsp, _) =
-        super::latency::measure(&file, &source, args.edits.clamp(1, 20)).map_err(|e| {
-            eprintln!("error: the language server failed: {e}");
-            ExitCode::from(super::exit::SCENE)
-        })?;
+    let (lsp, _) = super::latency::measure(
+        &file,
+        &source,
+        args.edits.clamp(1, 20),
+        super::latency::Edit::Token,
+    )
+    .map_err(|e| {
+        eprintln!("error: the language server failed: {e}");
+        ExitCode::from(super::exit::SCENE)
+    })?;
     let front = super::latency::quantiles(lsp.front);
     let full = super::latency::quantiles(lsp.full);
     Ok(Row {
@@ -263,38 +268,46 @@ fn measure(
 }
 
 /// The log-log plot of the primitive series: milliseconds against primitives.
-fn plot(path: &Path, rows: &[Row]) -> Result<(), ExitCode> {
-    use plotters::prelude::*;
-    let series: Vec<&Row> = rows
-        .iter()
-        .filter(|r| r.seeds == 0 && SCALE_COUNTS.contains(&r.primitives))
-        .collect();
-    type Line = (&'static str, RGBColor, fn(&Row) -> f64);
-    let lines: [Line; 4] = [
-        ("compile", RED, |r| ms(r.compile)),
-        ("pipeline", BLUE, |r| ms(r.pipeline)),
-        ("frame", GREEN, |r| ms(r.frame)),
-        ("LSP p95", MAGENTA, |r| ms(r.lsp_p95)),
-    ];
-    let (lo, hi) = series
-        .iter()
-        .flat_map(|r| lines.iter().map(move |(_, _, f)| f(r)))
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    let mut svg = String::new();
-    let drawn = (|| -> Result<(), Box<dyn std::error::Error>> {
-        let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
+/// The scale figures against the number of primitives, log-log.
+struct ScalePlot<'a>(&'a [Row]);
+
+impl super::plot::Figure for ScalePlot<'_> {
+    fn draw<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), Box<dyn std::error::Error>>
+    where
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+        let series: Vec<&Row> = self
+            .0
+            .iter()
+            .filter(|r| r.seeds == 0 && SCALE_COUNTS.contains(&r.primitives))
+            .collect();
+        type Line = (&'static str, RGBColor, fn(&Row) -> f64);
+        let lines: [Line; 4] = [
+            ("compile", RED, |r| ms(r.compile)),
+            ("pipeline", BLUE, |r| ms(r.pipeline)),
+            ("frame", GREEN, |r| ms(r.frame)),
+            ("LSP p95", MAGENTA, |r| ms(r.lsp_p95)),
+        ];
+        let (lo, hi) = series
+            .iter()
+            .flat_map(|r| lines.iter().map(move |(_, _, f)| f(r)))
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
         root.fill(&WHITE)?;
         let x_max = series.last().map_or(10.0, |r| r.primitives as f64);
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .caption("sdfc bench --scale", ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(
                 (5.0..x_max * 2.0).log_scale(),
-                ((lo / 2.0).max(1e-3)..hi * 2.0).log_scale(),
+                ((lo / 2.0).max(1e-3)..(hi * 2.0).max(1.0)).log_scale(),
             )?;
         chart
             .configure_mesh()
@@ -315,14 +328,13 @@ fn plot(path: &Path, rows: &[Row]) -> Result<(), ExitCode> {
             .border_style(BLACK)
             .background_style(WHITE.mix(0.8))
             .draw()?;
-        root.present()?;
         Ok(())
-    })();
-    drawn
-        .map_err(|e| e.to_string())
-        .and_then(|()| sdfc::fsutil::write_output(path, svg.as_bytes()).map_err(|e| e.to_string()))
-        .map_err(|e| {
-            eprintln!("error: cannot write the plot {}: {e}", path.display());
-            ExitCode::from(super::exit::USAGE)
-        })
+    }
+}
+
+fn plot(path: &Path, rows: &[Row]) -> Result<(), ExitCode> {
+    super::plot::write(path, &ScalePlot(rows)).map_err(|e| {
+        eprintln!("error: cannot write the plot {}: {e}", path.display());
+        ExitCode::from(super::exit::USAGE)
+    })
 }

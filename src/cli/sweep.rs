@@ -150,6 +150,18 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
     print_ratios(&rows, plain, "bare trace");
     print_speedups(&rows);
     let solves = print_solve_times();
+    if let Some(path) = &args.plot {
+        let figure = SweepPlot {
+            rows: &rows,
+            constant,
+            adapter: gpu.describe(),
+        };
+        super::plot::write(path, &figure).map_err(|e| {
+            eprintln!("error: cannot write the plot {}: {e}", path.display());
+            ExitCode::from(super::exit::USAGE)
+        })?;
+        println!("plot:      {}", path.display());
+    }
     if let Some(path) = &args.json {
         let json = serde_json::json!({
             "bench": "seed sweep",
@@ -313,4 +325,89 @@ fn print_solve_times() -> Vec<(u32, Duration)> {
         out.push((seeds, t));
     }
     out
+}
+
+/// Frame time ÷ constant uv against the number of seeds (the paper's Fig. 15): a line
+/// per N and merging, with the seed grid (solid) and without it (light).
+struct SweepPlot<'a> {
+    rows: &'a [Row],
+    constant: Duration,
+    adapter: String,
+}
+
+impl super::plot::Figure for SweepPlot<'_> {
+    fn draw<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), Box<dyn std::error::Error>>
+    where
+        DB::ErrorType: 'static,
+    {
+        use plotters::prelude::*;
+        let ratio = |r: &Row| ms(r.frame) / ms(self.constant);
+        let top = self.rows.iter().map(ratio).fold(1.0f64, f64::max);
+        let max_seeds = SEED_COUNTS.into_iter().max().unwrap_or(1) as f64;
+        root.fill(&WHITE)?;
+        let (title, subtitle) = root.split_vertically(48);
+        title.draw(&Text::new(
+            "sdfc bench --seed-sweep (Fig. 15): frame time ÷ constant uv",
+            (16, 8),
+            ("sans-serif", 20),
+        ))?;
+        title.draw(&Text::new(
+            self.adapter.clone(),
+            (16, 30),
+            ("sans-serif", 12),
+        ))?;
+        let mut chart = ChartBuilder::on(&subtitle)
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d((0.8..max_seeds * 1.25).log_scale(), 0.0..top * 1.1)?;
+        chart
+            .configure_mesh()
+            .x_desc("seeds")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_desc("frame time ÷ constant uv")
+            .draw()?;
+        let colours = [
+            ((10, false), BLUE),
+            ((10, true), RED),
+            ((20, false), GREEN),
+            ((20, true), MAGENTA),
+        ];
+        for grid in [true, false] {
+            for ((steps, merged), colour) in colours {
+                let points: Vec<(f64, f64)> = self
+                    .rows
+                    .iter()
+                    .filter(|r| {
+                        r.steps == steps && r.grid == grid && (r.merged == merged || r.seeds == 1)
+                    })
+                    .map(|r| (r.seeds as f64, ratio(r)))
+                    .collect();
+                let style = if grid {
+                    colour.stroke_width(2)
+                } else {
+                    colour.mix(0.35).stroke_width(1)
+                };
+                let label = format!(
+                    "N = {steps}, {}, grid {}",
+                    if merged { "merged" } else { "unmerged" },
+                    if grid { "on" } else { "off" }
+                );
+                chart
+                    .draw_series(LineSeries::new(points, style))?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()?;
+        Ok(())
+    }
 }

@@ -1,0 +1,108 @@
+//! Edits of comments and whitespace only: the back end's results carried over from
+//! the last full analysis (`sdfc::incremental`, what the language server does) equal a
+//! fresh analysis of the new text, for every example and UI scene.
+
+use sdfc::driver;
+use sdfc::incremental::carry_back_end;
+use sdfc::syntax::lexer;
+use std::path::Path;
+
+/// The text with comments and line breaks added between tokens, and spaces doubled.
+fn with_trivia(text: &str) -> String {
+    let lexed = lexer::lex(text, &mut Vec::new());
+    let mut out = String::from("// added\n");
+    let mut at = 0;
+    for (k, (_, span)) in lexed.tokens.iter().enumerate() {
+        out.push_str(&text[at..span.start].replace(' ', "  "));
+        match k % 4 {
+            0 => out.push_str("/* c */ "),
+            2 => out.push_str("\n  "),
+            _ => {}
+        }
+        out.push_str(&text[span.range()]);
+        at = span.end;
+    }
+    out.push_str(&text[at..]);
+    out
+}
+
+/// WGSL with the numbers after `height_` left out.
+fn unnumbered(wgsl: &str) -> String {
+    let mut out = String::with_capacity(wgsl.len());
+    let mut rest = wgsl;
+    while let Some(k) = rest.find("height_") {
+        out.push_str(&rest[..k + 7]);
+        rest = rest[k + 7..].trim_start_matches(|c: char| c.is_ascii_digit());
+    }
+    out.push_str(rest);
+    out
+}
+
+#[test]
+fn carried_back_ends_equal_fresh_analyses() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = ["examples", "tests/ui"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    files.sort();
+    let (mut carried_count, mut with_back_end_diagnostics) = (0, 0);
+    for path in &files {
+        let Ok(text) = std::fs::read_to_string(path) else {
+            continue; // not UTF-8: a decoding test
+        };
+        let dir = path.parent();
+        let old_front = driver::analyze(&text, dir);
+        if old_front.has_errors() {
+            continue;
+        }
+        let old = driver::check_all(&text, dir);
+        let new_text = with_trivia(&text);
+        let front = driver::analyze(&new_text, dir);
+        let fresh = driver::check_all(&new_text, dir);
+        let name = path.display();
+        let carried = carry_back_end(&text, &old_front.diagnostics, &old, &new_text, front)
+            .unwrap_or_else(|| panic!("{name}: not carried"));
+        carried_count += 1;
+        if old.diagnostics.len() > old_front.diagnostics.len() {
+            with_back_end_diagnostics += 1;
+        }
+        assert_eq!(carried.diagnostics, fresh.diagnostics, "{name}");
+        assert_eq!(carried.atlases.len(), fresh.atlases.len(), "{name}");
+        assert_eq!(carried.scene.is_some(), fresh.scene.is_some(), "{name}");
+        match (&carried.compiled, &fresh.compiled) {
+            (Some(c), Some(f)) => {
+                let (c, f) = (&c.module, &f.module);
+                assert_eq!(c.source_map.len(), f.source_map.len(), "{name}");
+                // The same code, but for the displacements' `height_ID` functions, named
+                // by their place in the text that was compiled.
+                let (cw, fw) = (unnumbered(&c.wgsl), unnumbered(&f.wgsl));
+                let first = cw.lines().zip(fw.lines()).position(|(a, b)| a != b);
+                assert!(
+                    first.is_none() && cw.len() == fw.len(),
+                    "{name}: line {first:?}: {:?} against {:?}",
+                    first.and_then(|k| cw.lines().nth(k)),
+                    first.and_then(|k| fw.lines().nth(k)),
+                );
+                for (a, b) in c.source_map.iter().zip(&f.source_map) {
+                    assert_eq!((a.span, &a.what), (b.span, &b.what), "{name}");
+                }
+            }
+            (None, None) => {}
+            _ => panic!("{name}: compiled in one analysis only"),
+        }
+        // A change of a token is not carried.
+        let changed = new_text.replacen("// added\n", "let added_by_the_test = 1;\n", 1);
+        let front = driver::analyze(&changed, dir);
+        assert!(
+            carry_back_end(&text, &old_front.diagnostics, &old, &changed, front).is_none(),
+            "{name}"
+        );
+    }
+    eprintln!(
+        "{carried_count} scenes carried over, {with_back_end_diagnostics} with back-end diagnostics"
+    );
+    assert!(carried_count >= 20 && with_back_end_diagnostics >= 5);
+}

@@ -126,6 +126,16 @@ pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {
 
 /// [`analyze`] with the folders the scene may read given explicitly.
 pub fn analyze_with(source: &str, access: &Access) -> Analysis {
+    analyze_reusing(source, access, None)
+}
+
+/// [`analyze_with`], reusing the unchanged items of the document's last parse
+/// ([`syntax::ItemCache`]; the language server keeps one per document).
+pub fn analyze_reusing(
+    source: &str,
+    access: &Access,
+    cache: Option<&mut syntax::ItemCache>,
+) -> Analysis {
     let mut diagnostics = Vec::new();
     if let Some(d) = syntax::source::too_large(source) {
         diagnostics.push(d);
@@ -138,7 +148,7 @@ pub fn analyze_with(source: &str, access: &Access) -> Analysis {
             compiled: None,
         };
     }
-    let parsed = syntax::parse(source, &mut diagnostics);
+    let parsed = syntax::parse_reusing(source, &mut diagnostics, cache);
     let program = sema::check(&parsed.file, access, &mut diagnostics);
     diagnostic::sort(&mut diagnostics);
     Analysis {
@@ -160,7 +170,16 @@ pub fn check(source: &str, base_dir: Option<&Path>) -> Analysis {
 
 /// [`check`] with the folders the scene may read given explicitly.
 pub fn check_with(source: &str, access: &Access) -> Analysis {
-    let mut analysis = analyze_with(source, access);
+    check_reusing(source, access, None)
+}
+
+/// [`check_with`], reusing the unchanged items of the document's last parse.
+pub fn check_reusing(
+    source: &str,
+    access: &Access,
+    cache: Option<&mut syntax::ItemCache>,
+) -> Analysis {
+    let mut analysis = analyze_reusing(source, access, cache);
     if !analysis.has_errors() {
         let (atlases, diags) = crate::uv::diagnose::prepare_all(&analysis.program);
         analysis.atlases = atlases;
@@ -284,7 +303,16 @@ pub fn check_all(source: &str, base_dir: Option<&Path>) -> Analysis {
 
 /// [`check_all`] with the folders the scene may read given explicitly.
 pub fn check_all_with(source: &str, access: &Access) -> Analysis {
-    let mut analysis = check_with(source, access);
+    check_all_reusing(source, access, None)
+}
+
+/// [`check_all_with`], reusing the unchanged items of the document's last parse.
+pub fn check_all_reusing(
+    source: &str,
+    access: &Access,
+    cache: Option<&mut syntax::ItemCache>,
+) -> Analysis {
+    let mut analysis = check_reusing(source, access, cache);
     let Some(scene) = &analysis.scene else {
         return analysis;
     };

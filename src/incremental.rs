@@ -4,7 +4,7 @@
 //! checked program, which comes from the significant tokens alone. When an edit changes
 //! only comments and whitespace, the new text has the same tokens in the same order,
 //! so the back end would compute the same atlases, scene and module, and the same
-//! diagnostics at the same tokens. [`carry_back_end`] then reuses them, moving their
+//! diagnostics at the same tokens. [`BackEnd::carry`] then reuses them, moving their
 //! spans token by token, instead of running the back end again: the language server's
 //! answer to such an edit takes the front end's milliseconds.
 //!
@@ -18,32 +18,37 @@ use crate::syntax::lexer;
 use std::sync::Arc;
 
 /// The significant tokens' spans of two texts, when their tokens are the same.
-struct TokenMap {
-    old: Vec<Span>,
+struct TokenMap<'a> {
+    old: &'a [Span],
     new: Vec<Span>,
     new_len: usize,
 }
 
-impl TokenMap {
-    fn new(old_text: &str, new_text: &str) -> Option<TokenMap> {
-        let (old, new) = (
-            lexer::lex(old_text, &mut Vec::new()),
-            lexer::lex(new_text, &mut Vec::new()),
-        );
-        if old.tokens.len() != new.tokens.len()
+/// The spans of a text's significant tokens.
+fn token_spans(text: &str) -> Vec<Span> {
+    lexer::lex(text, &mut Vec::new())
+        .tokens
+        .iter()
+        .map(|t| t.1)
+        .collect()
+}
+
+impl<'a> TokenMap<'a> {
+    /// The map from `old_text` (whose tokens are at `old`) to `new_text`. The lexer
+    /// reads no context beyond a token, so tokens of the same text are the same tokens.
+    fn new(old_text: &str, old: &'a [Span], new_text: &str) -> Option<TokenMap<'a>> {
+        let new = token_spans(new_text);
+        if old.len() != new.len()
             || old
-                .tokens
                 .iter()
-                .zip(&new.tokens)
-                .any(|((a, sa), (b, sb))| {
-                    a != b || old_text.get(sa.range()) != new_text.get(sb.range())
-                })
+                .zip(&new)
+                .any(|(a, b)| old_text.get(a.range()) != new_text.get(b.range()))
         {
             return None;
         }
         Some(TokenMap {
-            old: old.tokens.iter().map(|t| t.1).collect(),
-            new: new.tokens.iter().map(|t| t.1).collect(),
+            old,
+            new,
             new_len: new_text.len(),
         })
     }
@@ -84,49 +89,107 @@ impl TokenMap {
     }
 }
 
-/// The full analysis of `new_text`, from its front end's `front` and the full analysis
-/// `old` of `old_text` (whose front end gave `old_front`), when the two texts have the
-/// same significant tokens; None when they do not, or when `front` has errors.
-pub fn carry_back_end(
-    old_text: &str,
-    old_front: &[Diagnostic],
-    old: &Analysis,
-    new_text: &str,
-    mut front: Analysis,
-) -> Option<Analysis> {
-    if front.has_errors() {
-        return None;
-    }
-    let map = TokenMap::new(old_text, new_text)?;
-    // The back end's diagnostics: the full set less the front end's (as a multiset).
-    let mut front_left: Vec<&Diagnostic> = old_front.iter().collect();
-    let back: Vec<Diagnostic> = old
-        .diagnostics
-        .iter()
-        .filter(|d| match front_left.iter().position(|f| f == d) {
-            Some(k) => {
-                front_left.swap_remove(k);
-                false
-            }
-            None => true,
-        })
-        .map(|d| map.diagnostic(d.clone()))
-        .collect();
-    front.diagnostics.extend(back);
-    diagnostic::sort(&mut front.diagnostics);
-    front.atlases = old.atlases.clone();
-    front.scene = old.scene.clone();
-    front.compiled = old.compiled.as_ref().map(|c| {
-        let mut module = c.module.clone();
-        for region in &mut module.source_map {
-            region.span = map.span(region.span);
+/// What the back end of a document's last full analysis gave, kept for its next text.
+#[derive(Debug)]
+pub struct BackEnd {
+    text: String,
+    tokens: Vec<Span>,
+    /// The back end's diagnostics: the full set less the front end's.
+    diagnostics: Vec<Diagnostic>,
+    atlases: Vec<Option<crate::uv::Atlas>>,
+    scene: Option<crate::ir::Scene>,
+    compiled: Option<Arc<Compiled>>,
+}
+
+impl BackEnd {
+    /// The back end of `full`, the full analysis of `text`, whose front end reported
+    /// `front`.
+    pub fn of(text: &str, front: &[Diagnostic], full: &Analysis) -> BackEnd {
+        let mut front_left: Vec<&Diagnostic> = front.iter().collect();
+        let diagnostics = full
+            .diagnostics
+            .iter()
+            .filter(|d| match front_left.iter().position(|f| f == d) {
+                Some(k) => {
+                    front_left.swap_remove(k);
+                    false
+                }
+                None => true,
+            })
+            .cloned()
+            .collect();
+        BackEnd {
+            text: text.to_string(),
+            tokens: token_spans(text),
+            diagnostics,
+            atlases: full.atlases.clone(),
+            scene: full.scene.clone(),
+            compiled: full.compiled.clone(),
         }
-        Arc::new(Compiled {
-            module,
-            validated: Arc::clone(&c.validated),
+    }
+
+    /// The back end's results for `new_text`, when it has the same significant tokens
+    /// as this back end's text: the same results with their spans moved.
+    pub fn carried(&self, new_text: &str) -> Option<Carried> {
+        let map = TokenMap::new(&self.text, &self.tokens, new_text)?;
+        let diagnostics = self
+            .diagnostics
+            .iter()
+            .map(|d| map.diagnostic(d.clone()))
+            .collect();
+        let compiled = self.compiled.as_ref().map(|c| {
+            let mut module = c.module.clone();
+            for region in &mut module.source_map {
+                region.span = map.span(region.span);
+            }
+            Arc::new(Compiled {
+                module,
+                validated: Arc::clone(&c.validated),
+            })
+        });
+        Some(Carried {
+            diagnostics,
+            atlases: self.atlases.clone(),
+            scene: self.scene.clone(),
+            compiled,
         })
-    });
-    Some(front)
+    }
+
+    /// The full analysis of `new_text` from its front end's analysis `front`, when the
+    /// text has the same significant tokens as this back end's; `front` back when the
+    /// tokens differ or it has errors.
+    pub fn carry(&self, new_text: &str, mut front: Analysis) -> Result<Analysis, Analysis> {
+        if front.has_errors() {
+            return Err(front);
+        }
+        match self.carried(new_text) {
+            Some(c) => {
+                c.complete(&mut front);
+                Ok(front)
+            }
+            None => Err(front),
+        }
+    }
+}
+
+/// A back end's results moved to a new text ([`BackEnd::carried`]).
+pub struct Carried {
+    diagnostics: Vec<Diagnostic>,
+    atlases: Vec<Option<crate::uv::Atlas>>,
+    scene: Option<crate::ir::Scene>,
+    compiled: Option<Arc<Compiled>>,
+}
+
+impl Carried {
+    /// Makes `front`, the front end's analysis of the new text (without errors), the
+    /// full analysis.
+    pub fn complete(self, front: &mut Analysis) {
+        front.diagnostics.extend(self.diagnostics);
+        diagnostic::sort(&mut front.diagnostics);
+        front.atlases = self.atlases;
+        front.scene = self.scene;
+        front.compiled = self.compiled;
+    }
 }
 
 #[cfg(test)]
@@ -137,7 +200,8 @@ mod tests {
     fn offsets_follow_their_tokens() {
         let old = "let a = sphere(1); // x\nrender a;";
         let new = "/* c */ let  a=sphere( 1 );\n\n   render a ;";
-        let map = TokenMap::new(old, new).unwrap();
+        let tokens = token_spans(old);
+        let map = TokenMap::new(old, &tokens, new).unwrap();
         // `sphere` and the `1`, and the `a` of `render a`.
         let at = |s: &str, what: &str, n: usize| s.match_indices(what).nth(n).unwrap().0;
         assert_eq!(
@@ -163,8 +227,8 @@ mod tests {
             Span::new(at(new, "render", 0), at(new, "render", 0))
         );
         // Another token, another name, or a token moved: no map.
-        assert!(TokenMap::new(old, "let a = sphere(2); render a;").is_none());
-        assert!(TokenMap::new(old, "let b = sphere(1); render a;").is_none());
-        assert!(TokenMap::new(old, "let a = sphere(1);").is_none());
+        assert!(TokenMap::new(old, &tokens, "let a = sphere(2); render a;").is_none());
+        assert!(TokenMap::new(old, &tokens, "let b = sphere(1); render a;").is_none());
+        assert!(TokenMap::new(old, &tokens, "let a = sphere(1);").is_none());
     }
 }

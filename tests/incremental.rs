@@ -3,7 +3,7 @@
 //! fresh analysis of the new text, for every example and UI scene.
 
 use sdfc::driver;
-use sdfc::incremental::carry_back_end;
+use sdfc::incremental::BackEnd;
 use sdfc::syntax::lexer;
 use std::path::Path;
 
@@ -63,8 +63,10 @@ fn carried_back_ends_equal_fresh_analyses() {
         let front = driver::analyze(&new_text, dir);
         let fresh = driver::check_all(&new_text, dir);
         let name = path.display();
-        let carried = carry_back_end(&text, &old_front.diagnostics, &old, &new_text, front)
-            .unwrap_or_else(|| panic!("{name}: not carried"));
+        let back_end = BackEnd::of(&text, &old_front.diagnostics, &old);
+        let carried = back_end
+            .carry(&new_text, front)
+            .unwrap_or_else(|_| panic!("{name}: not carried"));
         carried_count += 1;
         if old.diagnostics.len() > old_front.diagnostics.len() {
             with_back_end_diagnostics += 1;
@@ -96,8 +98,16 @@ fn carried_back_ends_equal_fresh_analyses() {
         // A change of a token is not carried.
         let changed = new_text.replacen("// added\n", "let added_by_the_test = 1;\n", 1);
         let front = driver::analyze(&changed, dir);
-        assert!(
-            carry_back_end(&text, &old_front.diagnostics, &old, &changed, front).is_none(),
+        assert!(back_end.carry(&changed, front).is_err(), "{name}");
+        // Carried twice: from the first text to a third with the same tokens.
+        let third = format!("{new_text}\n// and another comment\n");
+        let front = driver::analyze(&third, dir);
+        let again = back_end
+            .carry(&third, front)
+            .unwrap_or_else(|_| panic!("{name}"));
+        assert_eq!(
+            again.diagnostics,
+            driver::check_all(&third, dir).diagnostics,
             "{name}"
         );
     }
@@ -105,4 +115,63 @@ fn carried_back_ends_equal_fresh_analyses() {
         "{carried_count} scenes carried over, {with_back_end_diagnostics} with back-end diagnostics"
     );
     assert!(carried_count >= 20 && with_back_end_diagnostics >= 5);
+}
+
+/// The parse of a document after an edit, reusing the unchanged items of the last,
+/// equals a fresh parse: same tree, same diagnostics.
+#[test]
+fn reused_items_parse_as_fresh_ones() {
+    use sdfc::syntax::{parse, parse_reusing, ItemCache};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = ["examples", "tests/ui"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    files.sort();
+    let mut reused = 0;
+    for path in &files {
+        let Ok(text) = std::fs::read_to_string(path) else {
+            continue;
+        };
+        let name = path.display();
+        let mut cache = ItemCache::default();
+        let check = |cache: &mut ItemCache, text: &str| {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let fresh = parse(text, &mut a);
+            let kept = parse_reusing(text, &mut b, Some(cache));
+            assert_eq!(kept.file, fresh.file, "{name}");
+            assert_eq!(kept.comments, fresh.comments, "{name}");
+            assert_eq!(b, a, "{name}");
+        };
+        check(&mut cache, &text);
+        // Edits: a new item first (every later item moves); trivia everywhere; a token
+        // changed in the middle; an error in the middle, then that error fixed.
+        let mid = text.len() / 2;
+        let mid = (mid..text.len())
+            .find(|&k| text.is_char_boundary(k))
+            .unwrap_or(text.len());
+        let edits = [
+            format!("let added_first = 2;\n{text}"),
+            with_trivia(&text),
+            format!("{}\n{}", &text[..mid], &text[mid..]),
+            format!("{} (( {}", &text[..mid], &text[mid..]),
+            text.clone(),
+        ];
+        let clean = {
+            let mut d = Vec::new();
+            let items = parse(&text, &mut d).file.items.len();
+            d.is_empty().then_some(items)
+        };
+        for (k, edit) in edits.iter().enumerate() {
+            check(&mut cache, edit);
+            reused += cache.reused();
+            // A new first item moves every other; each is reused, none parsed again.
+            if let (0, Some(items)) = (k, clean) {
+                assert_eq!(cache.reused(), items, "{name}");
+            }
+        }
+    }
+    assert!(reused > 200, "{reused} items reused");
 }

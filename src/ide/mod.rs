@@ -43,8 +43,29 @@ impl Document {
     /// A document with the front end's analysis only (parse, names, types): what the
     /// language server publishes at once, before the geometry and code generation.
     pub fn front(text: impl Into<String>, access: &crate::access::Access) -> Document {
+        Document::front_reusing(text, access, None)
+    }
+
+    /// [`Document::front`], reusing the unchanged items of the document's last parse.
+    pub fn front_reusing(
+        text: impl Into<String>,
+        access: &crate::access::Access,
+        cache: Option<&mut crate::syntax::ItemCache>,
+    ) -> Document {
         let text = text.into();
-        let analysis = crate::driver::analyze_with(&text, access);
+        let analysis = crate::driver::analyze_reusing(&text, access, cache);
+        Document { text, analysis }
+    }
+
+    /// [`Document::with_access`], reusing the unchanged items of the document's last
+    /// parse.
+    pub fn full_reusing(
+        text: impl Into<String>,
+        access: &crate::access::Access,
+        cache: Option<&mut crate::syntax::ItemCache>,
+    ) -> Document {
+        let text = text.into();
+        let analysis = crate::driver::check_all_reusing(&text, access, cache);
         Document { text, analysis }
     }
 }

@@ -209,14 +209,21 @@ enum Stage {
     Full,
 }
 
-fn open(uri: &lsp::Uri, text: String, version: i32, roots: &[PathBuf], stage: Stage) -> Open {
+fn open(
+    uri: &lsp::Uri,
+    text: String,
+    version: i32,
+    roots: &[PathBuf],
+    stage: Stage,
+    cache: Option<&mut crate::syntax::ItemCache>,
+) -> Open {
     let mut access = crate::access::Access::new(base_dir(uri).as_deref());
     for r in roots {
         access.allow(r);
     }
     let doc = match stage {
-        Stage::Front => Document::front(text, &access),
-        Stage::Full => Document::with_access(text, &access),
+        Stage::Front => Document::front_reusing(text, &access, cache),
+        Stage::Full => Document::full_reusing(text, &access, cache),
     };
     let index = LineIndex::new(&doc.text);
     Open {

@@ -4,12 +4,15 @@
 //! stages, each sent back as it finishes: the front end (parse, names, types: the
 //! diagnostics most edits change, in milliseconds), then the back end (the atlases'
 //! geometry, lowering, code generation and naga), which a newer text of the same
-//! document queued meanwhile cancels. An edit of comments and whitespace only skips
-//! the back end: the last full analysis's is carried over ([`crate::incremental`]). A
-//! panic inside an analysis comes back as its message.
+//! document queued meanwhile cancels. The worker keeps each document's last parse, so
+//! unchanged items are not parsed again ([`ItemCache`]), and an edit of comments and
+//! whitespace only skips the back end: the last full analysis's is carried over
+//! ([`crate::incremental`]). A panic inside an analysis comes back as its message.
 
 use super::{open, Open, Stage};
 use crate::diagnostic::Diagnostic;
+use crate::incremental::BackEnd;
+use crate::syntax::ItemCache;
 use crossbeam_channel::{unbounded, Receiver, Sender};
 use lsp_types as lsp;
 use std::collections::HashMap;
@@ -42,8 +45,7 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
         .stack_size(64 << 20)
         .spawn(move || {
             let mut batch: Vec<Job> = Vec::new();
-            // The last full analysis of each document, for edits of trivia only.
-            let mut last: HashMap<String, Last> = HashMap::new();
+            let mut docs: HashMap<String, Kept> = HashMap::new();
             loop {
                 if batch.is_empty() {
                     match inbox.recv() {
@@ -68,29 +70,41 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                         })
                         .is_ok()
                 };
+                let key = uri.as_str().to_string();
+                let kept = docs.entry(key.clone()).or_default();
+                if kept.roots != roots {
+                    *kept = Kept {
+                        roots: roots.clone(),
+                        ..Kept::default()
+                    };
+                }
                 let front = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    open(&uri, text.clone(), version, &roots, Stage::Front)
+                    let items = Some(&mut kept.items);
+                    open(&uri, text.clone(), version, &roots, Stage::Front, items)
                 }))
                 .map_err(|panic| super::server::panic_message(&panic));
-                // An edit of comments and whitespace only: the last full analysis's back
-                // end, carried over, is the whole analysis.
-                let key = uri.as_str().to_string();
-                let carried = match (&front, last.get(&key)) {
-                    (Ok(o), Some(l)) if l.roots == roots => {
-                        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| l.carry(o)))
-                            .ok()
-                            .flatten()
-                    }
-                    _ => None,
+                let front = match (front, &kept.back_end) {
+                    // An edit of comments and whitespace only: the last full analysis's
+                    // back end, carried over, makes this the whole analysis.
+                    (Ok(o), Some(back_end)) => match carry(back_end, o) {
+                        Ok(whole) => {
+                            if !send(Ok(whole), false) {
+                                return;
+                            }
+                            continue;
+                        }
+                        Err(o) => Ok(o),
+                    },
+                    (front, _) => front,
                 };
-                if let Some(o) = carried {
-                    last.insert(key, Last::new(&o, front_diagnostics(&front), roots));
-                    if !send(Ok(o), false) {
-                        return;
-                    }
-                    continue;
+                if front.is_err() {
+                    // A panic may have left the kept items half updated.
+                    docs.remove(&key);
                 }
-                let front_diags = front_diagnostics(&front);
+                let front_diags: Vec<Diagnostic> = front
+                    .as_ref()
+                    .map(|o| o.doc.analysis.diagnostics.clone())
+                    .unwrap_or_default();
                 // A front end with errors is the whole analysis: the back end needs a
                 // checked program.
                 let whole = front.as_ref().map_or(true, |o| o.doc.analysis.has_errors());
@@ -98,7 +112,6 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                     return;
                 }
                 if whole {
-                    last.remove(&key);
                     continue;
                 }
                 // A newer text of this document cancels its back end.
@@ -106,16 +119,20 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 if batch.iter().any(|j| j.uri == uri) {
                     continue;
                 }
+                let kept = docs.entry(key.clone()).or_default();
+                kept.roots = roots.clone();
                 let full = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    open(&uri, text, version, &roots, Stage::Full)
+                    let items = Some(&mut kept.items);
+                    open(&uri, text, version, &roots, Stage::Full, items)
                 }))
                 .map_err(|panic| super::server::panic_message(&panic));
                 match &full {
                     Ok(o) => {
-                        last.insert(key, Last::new(o, front_diags, roots));
+                        kept.back_end =
+                            Some(BackEnd::of(&o.doc.text, &front_diags, &o.doc.analysis));
                     }
                     Err(_) => {
-                        last.remove(&key);
+                        docs.remove(&key);
                     }
                 }
                 if !send(full, false) {
@@ -127,51 +144,30 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
     (jobs, done)
 }
 
-/// A document's last full analysis, with its front end's diagnostics and the folders it
-/// could read.
-struct Last {
-    text: String,
-    front: Vec<Diagnostic>,
-    analysis: crate::driver::Analysis,
+/// What the worker keeps of each document between its texts: the items of its last
+/// parse ([`ItemCache`]) and the back end of its last full analysis, for the folders it
+/// could read then.
+#[derive(Default)]
+struct Kept {
     roots: Vec<PathBuf>,
+    items: ItemCache,
+    back_end: Option<BackEnd>,
 }
 
-impl Last {
-    fn new(o: &Open, front: Vec<Diagnostic>, roots: Vec<PathBuf>) -> Last {
-        Last {
-            text: o.doc.text.clone(),
-            front,
-            analysis: o.doc.analysis.clone(),
-            roots,
+/// The whole analysis of `front`'s text when it differs from the back end's only in
+/// trivia ([`crate::incremental`]); else `front` back.
+fn carry(back_end: &BackEnd, mut front: Open) -> Result<Open, Open> {
+    if front.doc.analysis.has_errors() {
+        return Err(front);
+    }
+    let text = &front.doc.text;
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| back_end.carried(text))) {
+        Ok(Some(carried)) => {
+            carried.complete(&mut front.doc.analysis);
+            Ok(front)
         }
+        Ok(None) | Err(_) => Err(front),
     }
-
-    /// The full analysis of `front`'s text, when it differs from this one's only in
-    /// trivia ([`crate::incremental`]).
-    fn carry(&self, front: &Open) -> Option<Open> {
-        let analysis = crate::incremental::carry_back_end(
-            &self.text,
-            &self.front,
-            &self.analysis,
-            &front.doc.text,
-            front.doc.analysis.clone(),
-        )?;
-        Some(Open {
-            version: front.version,
-            doc: crate::ide::Document {
-                text: front.doc.text.clone(),
-                analysis,
-            },
-            index: front.index.clone(),
-        })
-    }
-}
-
-fn front_diagnostics(front: &Result<Open, String>) -> Vec<Diagnostic> {
-    front
-        .as_ref()
-        .map(|o| o.doc.analysis.diagnostics.clone())
-        .unwrap_or_default()
 }
 
 /// Moves the jobs waiting in `inbox` into `batch`: the latest text per document, in the

@@ -355,14 +355,15 @@ impl Checker<'_> {
             }
             return true;
         };
-        let shown = value.display();
+        // Rendered only for a message: numbers are formatted exactly, which costs.
+        let shown = || value.display();
         match check {
             Check::Positive if c.iter().any(|x| *x <= 0.0) => {
                 self.error(Diagnostic::error(
                     codes::E_NOT_POSITIVE,
                     format!("`{name}` must be positive"),
                     span,
-                    format!("this is {shown}"),
+                    format!("this is {}", shown()),
                 ));
                 false
             }
@@ -371,7 +372,7 @@ impl Checker<'_> {
                     codes::E_NOT_POSITIVE,
                     format!("`{name}` must not be negative"),
                     span,
-                    format!("this is {shown}"),
+                    format!("this is {}", shown()),
                 ));
                 false
             }

@@ -8,6 +8,7 @@
 
 use super::ast::*;
 use super::lexer::{lex, unescape, Comment, Token};
+use super::reuse::ItemCache;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::span::Span;
@@ -31,6 +32,16 @@ pub struct Parsed {
 
 /// Lexes and parses a whole file. Never fails and never panics: problems become diagnostics.
 pub fn parse(src: &str, diags: &mut Vec<Diagnostic>) -> Parsed {
+    parse_reusing(src, diags, None)
+}
+
+/// [`parse`], reusing the items of `cache` whose text is unchanged (and keeping this
+/// parse's items in it for the next). The result is the same as [`parse`]'s.
+pub fn parse_reusing(
+    src: &str,
+    diags: &mut Vec<Diagnostic>,
+    mut cache: Option<&mut ItemCache>,
+) -> Parsed {
     let lexed = lex(src, diags);
     // Invalid characters were reported by the lexer; the parser works around them.
     let tokens: Vec<(Token, SimpleSpan)> = lexed
@@ -77,10 +88,28 @@ pub fn parse(src: &str, diags: &mut Vec<Diagnostic>) -> Parsed {
                     "a scene file is a sequence of `let`, `atlas`, `material` and `render` items",
                 ),
             );
-        } else if let Some(item) = parse_item(chunk, eoi, next, &mut item_diags) {
-            items.push(item);
+        } else {
+            let (at, last) = (chunk[0].1.start, chunk[chunk.len() - 1].1.end);
+            let text = &src[at..last];
+            match cache.as_deref_mut().and_then(|c| c.take(text, at)) {
+                Some(item) => items.push(item),
+                None => {
+                    let before = item_diags.len();
+                    if let Some(item) = parse_item(chunk, eoi, next, &mut item_diags) {
+                        let clean = item_diags.len() == before
+                            && !matches!(item.kind, ItemKind::Error { .. });
+                        if let Some(c) = cache.as_deref_mut().filter(|_| clean) {
+                            c.keep(text, at, &item);
+                        }
+                        items.push(item);
+                    }
+                }
+            }
         }
         start = end;
+    }
+    if let Some(c) = cache {
+        c.finish();
     }
     diags.extend(item_diags.into_iter().filter(|d| {
         !(d.code == codes::E_SYNTAX && d.span().is_some_and(|s| after_error.contains(&s.start)))

@@ -312,6 +312,7 @@ impl super::plot::Figure for ScalePlot<'_> {
         chart
             .configure_mesh()
             .x_desc("primitives")
+            .x_label_formatter(&|v| format!("{v:.0}"))
             .y_desc("milliseconds")
             .draw()?;
         for (label, colour, f) in lines {

@@ -96,6 +96,7 @@ pub enum Ended {
 /// those the client cancelled (`$/cancelRequest`), which get `RequestCancelled` without
 /// being computed. A cancellation that arrives during the wait still counts.
 pub fn serve(conn: Connection) -> Result<Ended, Error> {
+    tune_allocator();
     let inbox = queue(&conn);
     let (jobs, done) = worker::start();
     let mut server = Server {
@@ -267,7 +268,17 @@ impl Server {
             .on::<DidCloseTextDocument, Error>(|s, p| {
                 let uri = p.text_document.uri;
                 s.changed.retain(|(u, _, _)| *u != uri);
-                s.docs.remove(uri.as_str());
+                if let Some(old) = s.docs.remove(uri.as_str()) {
+                    discard(old);
+                }
+                // The worker forgets what it kept of the document.
+                let _ = s.jobs.send(Job {
+                    uri: uri.clone(),
+                    text: String::new(),
+                    version: 0,
+                    roots: Vec::new(),
+                    closed: true,
+                });
                 s.analysing.remove(uri.as_str());
                 publish(&s.conn, &uri, None, false)
             })?
@@ -306,6 +317,7 @@ impl Server {
                 text,
                 version,
                 roots: self.roots.clone(),
+                closed: false,
             };
             // The worker only stops when the server does.
             let _ = self.jobs.send(job);
@@ -368,7 +380,9 @@ impl Server {
                     return Ok(());
                 }
                 publish(&self.conn, &d.uri, Some(&o), d.partial)?;
-                self.docs.insert(key, o);
+                if let Some(old) = self.docs.insert(key, o) {
+                    discard(old);
+                }
             }
             Err(why) => {
                 eprintln!(
@@ -382,6 +396,48 @@ impl Server {
             }
         }
         Ok(())
+    }
+}
+
+/// The server keeps and frees a large document's texts and analyses on every edit. With
+/// glibc's default thresholds each text over 128 KiB is a fresh mapping and freed memory
+/// goes back to the kernel, so every edit page-faults its memory in again: measured on a
+/// 5,000-line scene, the front end's p95 went from 41 to 23 ms with these (the heap
+/// keeps up to 128 MiB free; blocks up to 32 MiB come from the heap). Process-wide.
+fn tune_allocator() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets two of glibc's tuning parameters; it takes the arena
+    // locks itself and is safe to call at any time.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 128 << 20);
+    }
+}
+
+/// Drops `value` on a thread of its own: the analysis of a large document takes
+/// milliseconds to free, which the server's loop should not wait for.
+pub(super) fn discard<T: Send + 'static>(value: T) {
+    type Garbage = Box<dyn Send>;
+    static BIN: std::sync::OnceLock<Option<crossbeam_channel::Sender<Garbage>>> =
+        std::sync::OnceLock::new();
+    let bin = BIN.get_or_init(|| {
+        let (tx, rx) = crossbeam_channel::unbounded::<Garbage>();
+        std::thread::Builder::new()
+            .name(String::from("sdfc-lsp-drop"))
+            // Dropping a deep tree recurses.
+            .stack_size(64 << 20)
+            .spawn(move || rx.iter().for_each(drop))
+            .ok()
+            .map(|_| tx)
+    });
+    match bin {
+        Some(tx) => {
+            // The thread lives as long as the process; if it is gone, drop here.
+            if let Err(e) = tx.send(Box::new(value)) {
+                drop(e.into_inner());
+            }
+        }
+        None => drop(value),
     }
 }
 

@@ -24,6 +24,8 @@ pub(super) struct Job {
     pub text: String,
     pub version: i32,
     pub roots: Vec<PathBuf>,
+    /// The document was closed: forget what is kept of it (nothing is analysed).
+    pub closed: bool,
 }
 
 /// A finished analysis: the document, or the message of the panic that ended it.
@@ -59,7 +61,14 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                     text,
                     version,
                     roots,
+                    closed,
                 } = batch.remove(0);
+                if closed {
+                    if let Some(old) = docs.remove(uri.as_str()) {
+                        super::server::discard(old);
+                    }
+                    continue;
+                }
                 let send = |result, partial| {
                     results
                         .send(Done {
@@ -128,8 +137,10 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 .map_err(|panic| super::server::panic_message(&panic));
                 match &full {
                     Ok(o) => {
-                        kept.back_end =
-                            Some(BackEnd::of(&o.doc.text, &front_diags, &o.doc.analysis));
+                        let back_end = BackEnd::of(&o.doc.text, &front_diags, &o.doc.analysis);
+                        if let Some(old) = kept.back_end.replace(back_end) {
+                            super::server::discard(old);
+                        }
                     }
                     Err(_) => {
                         docs.remove(&key);

@@ -176,3 +176,45 @@ atlas skin on scene {
     let pruned = check_exact("synthetic", &atlas, &pr, &mut rng);
     assert!(pruned >= 300, "only {pruned} points pruned");
 }
+
+/// A stretched operand's field grows more slowly than its distance (a non-uniform scale
+/// multiplies by the smallest factor): at the end of its long axis it is far below the
+/// distance to its box (0.09 against 4.7 here). Its limit divides by its bound L, so
+/// only short walks skip it, and along the axis, next to the seed, the pruned field
+/// stays the full one.
+#[test]
+fn stretched_operands_are_pruned_only_as_far_as_their_stretch_allows() {
+    let src = "let ball = sphere(1);
+let rod = sphere(1).scale([10, 0.2, 0.2]).translate([16, 0, 0]);
+let body = ball | rod;
+atlas skin on body {
+    max_distance = 3.5;
+    seed s = [1, 0, 0];
+}
+render body;
+";
+    let atlas = atlases(src).remove(0);
+    let shape = &atlas.shape;
+    let c = DVec3::new(1.0, 0.0, 0.0);
+    // The rod's field next to the seed, against its box's distance (5).
+    let rod = eval::distance(shape, DVec3::new(1.3, 0.0, 0.0));
+    assert!(rod < 0.1, "{rod}");
+    let pr = atlas.pruning().expect("the rod is a candidate");
+    // Short walks skip it (its bound accounts for the stretch); longer ones do not.
+    assert_eq!(pr.mask(0, 0.5).count_zeros(), 1);
+    assert_eq!(pr.mask(0, 3.5).count_zeros(), 0);
+    for reach in [0.25, 0.5, 0.75, 1.0, 2.0, 3.5] {
+        let mask = pr.mask(0, reach);
+        for k in 0..=40 {
+            let y = c + DVec3::new(0.01 * k as f64, 0.0, 0.0);
+            let full = eval::distance(shape, y);
+            let v = pr.pruned(shape, y, mask);
+            if (y - c).length() <= GUARD * reach + pr.eps && v.abs() < WINDOW * reach + pr.eps {
+                assert!(
+                    (v - full).abs() <= 1e-12,
+                    "reach {reach}, mask {mask:#x}: pruned f = {v}, full f = {full} at {y}"
+                );
+            }
+        }
+    }
+}

@@ -1,8 +1,9 @@
-//! Carrying the back end's results over an edit that changes only trivia.
+//! Carrying the back end's results over an edit that changes nothing it reads.
 //!
 //! The back end (the atlases' geometry, lowering, code generation and naga) reads the
-//! checked program, which comes from the significant tokens alone. When an edit changes
-//! only comments and whitespace, the new text has the same tokens in the same order,
+//! checked program, which comes from the significant tokens alone, and never looks at
+//! a `let` of a plain constant that nothing uses. When an edit changes only comments,
+//! whitespace and such inert `let`s, the other tokens are the same in the same order,
 //! so the back end would compute the same atlases, scene and module, and the same
 //! diagnostics at the same tokens. [`BackEnd::carry`] then reuses them, moving their
 //! spans token by token, instead of running the back end again: the language server's
@@ -24,20 +25,67 @@ struct TokenMap<'a> {
     new_len: usize,
 }
 
-/// The spans of a text's significant tokens.
-fn token_spans(text: &str) -> Vec<Span> {
+/// The spans of a text's significant tokens, but for those inside `inert` items
+/// (sorted, disjoint spans).
+fn token_spans(text: &str, inert: &[Span]) -> Vec<Span> {
+    let mut k = 0;
     lexer::lex(text, &mut Vec::new())
         .tokens
         .iter()
         .map(|t| t.1)
+        .filter(|s| {
+            while k < inert.len() && inert[k].end <= s.start {
+                k += 1;
+            }
+            !inert
+                .get(k)
+                .is_some_and(|i| i.start <= s.start && s.end <= i.end)
+        })
         .collect()
+}
+
+/// The items of an analysed text that the back end never reads: `let`s of a number,
+/// vector, boolean or string that nothing uses (the front end's `W0001`). Adding,
+/// removing or changing one leaves the atlases, the scene and the module as they were.
+/// Sorted by position.
+fn inert_items(analysis: &Analysis) -> Vec<Span> {
+    let unused: std::collections::HashSet<Span> = analysis
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == crate::codes::W_UNUSED)
+        .filter_map(Diagnostic::span)
+        .collect();
+    let mut spans: Vec<Span> = analysis
+        .program
+        .defs
+        .iter()
+        .filter(|d| {
+            d.kind == crate::sema::DefKind::Let
+                && unused.contains(&d.span)
+                && matches!(
+                    d.ty,
+                    crate::sema::types::Ty::Float
+                        | crate::sema::types::Ty::Vec(_)
+                        | crate::sema::types::Ty::Bool
+                        | crate::sema::types::Ty::Str
+                )
+        })
+        .map(|d| d.item_span)
+        .collect();
+    spans.sort();
+    spans
 }
 
 impl<'a> TokenMap<'a> {
     /// The map from `old_text` (whose tokens are at `old`) to `new_text`. The lexer
     /// reads no context beyond a token, so tokens of the same text are the same tokens.
-    fn new(old_text: &str, old: &'a [Span], new_text: &str) -> Option<TokenMap<'a>> {
-        let new = token_spans(new_text);
+    fn new(
+        old_text: &str,
+        old: &'a [Span],
+        new_text: &str,
+        new_inert: &[Span],
+    ) -> Option<TokenMap<'a>> {
+        let new = token_spans(new_text, new_inert);
         if old.len() != new.len()
             || old
                 .iter()
@@ -120,7 +168,7 @@ impl BackEnd {
             .collect();
         BackEnd {
             text: text.to_string(),
-            tokens: token_spans(text),
+            tokens: token_spans(text, &inert_items(full)),
             diagnostics,
             atlases: full.atlases.clone(),
             scene: full.scene.clone(),
@@ -128,10 +176,11 @@ impl BackEnd {
         }
     }
 
-    /// The back end's results for `new_text`, when it has the same significant tokens
-    /// as this back end's text: the same results with their spans moved.
-    pub fn carried(&self, new_text: &str) -> Option<Carried> {
-        let map = TokenMap::new(&self.text, &self.tokens, new_text)?;
+    /// The back end's results for `new_text`, whose front end's analysis is `front`,
+    /// when it has the same significant tokens as this back end's text, but for inert
+    /// items ([`inert_items`]): the same results with their spans moved.
+    pub fn carried(&self, new_text: &str, front: &Analysis) -> Option<Carried> {
+        let map = TokenMap::new(&self.text, &self.tokens, new_text, &inert_items(front))?;
         let diagnostics = self
             .diagnostics
             .iter()
@@ -162,7 +211,7 @@ impl BackEnd {
         if front.has_errors() {
             return Err(front);
         }
-        match self.carried(new_text) {
+        match self.carried(new_text, &front) {
             Some(c) => {
                 c.complete(&mut front);
                 Ok(front)
@@ -200,8 +249,8 @@ mod tests {
     fn offsets_follow_their_tokens() {
         let old = "let a = sphere(1); // x\nrender a;";
         let new = "/* c */ let  a=sphere( 1 );\n\n   render a ;";
-        let tokens = token_spans(old);
-        let map = TokenMap::new(old, &tokens, new).unwrap();
+        let tokens = token_spans(old, &[]);
+        let map = TokenMap::new(old, &tokens, new, &[]).unwrap();
         // `sphere` and the `1`, and the `a` of `render a`.
         let at = |s: &str, what: &str, n: usize| s.match_indices(what).nth(n).unwrap().0;
         assert_eq!(
@@ -227,8 +276,8 @@ mod tests {
             Span::new(at(new, "render", 0), at(new, "render", 0))
         );
         // Another token, another name, or a token moved: no map.
-        assert!(TokenMap::new(old, &tokens, "let a = sphere(2); render a;").is_none());
-        assert!(TokenMap::new(old, &tokens, "let b = sphere(1); render a;").is_none());
-        assert!(TokenMap::new(old, &tokens, "let a = sphere(1);").is_none());
+        assert!(TokenMap::new(old, &tokens, "let a = sphere(2); render a;", &[]).is_none());
+        assert!(TokenMap::new(old, &tokens, "let b = sphere(1); render a;", &[]).is_none());
+        assert!(TokenMap::new(old, &tokens, "let a = sphere(1);", &[]).is_none());
     }
 }

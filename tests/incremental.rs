@@ -95,10 +95,28 @@ fn carried_back_ends_equal_fresh_analyses() {
             (None, None) => {}
             _ => panic!("{name}: compiled in one analysis only"),
         }
-        // A change of a token is not carried.
-        let changed = new_text.replacen("// added\n", "let added_by_the_test = 1;\n", 1);
+        // A change the back end reads is not carried: here a shape, which the module
+        // emits even unused.
+        let changed = new_text.replacen("// added\n", "let added_by_the_test = sphere(1);\n", 1);
         let front = driver::analyze(&changed, dir);
         assert!(back_end.carry(&changed, front).is_err(), "{name}");
+        // An unused constant is inert: carried, and equal to a fresh analysis.
+        let inert = new_text.replacen("// added\n", "let added_by_the_test = [1, 2, 3];\n", 1);
+        let front = driver::analyze(&inert, dir);
+        if !front.has_errors() {
+            let carried = back_end
+                .carry(&inert, front)
+                .unwrap_or_else(|_| panic!("{name}: an unused constant was not carried"));
+            let fresh = driver::check_all(&inert, dir);
+            assert_eq!(carried.diagnostics, fresh.diagnostics, "{name}");
+            if let (Some(c), Some(f)) = (&carried.compiled, &fresh.compiled) {
+                assert_eq!(
+                    unnumbered(&c.module.wgsl),
+                    unnumbered(&f.module.wgsl),
+                    "{name}"
+                );
+            }
+        }
         // Carried twice: from the first text to a third with the same tokens.
         let third = format!("{new_text}\n// and another comment\n");
         let front = driver::analyze(&third, dir);

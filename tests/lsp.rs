@@ -372,16 +372,26 @@ fn front_end_diagnostics_come_first_then_the_full_set() {
         .sum::<usize>()
         + col;
     assert_eq!(offset, far.start);
-    // A change of a token runs the back end again: the front stage comes first.
+    // An unused constant is never read by the back end: carried too, in one publish,
+    // with the front end's new warning.
+    let inert = format!("{trivia}let spare = [1, 2];\n");
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 4 }, "contentChanges": [{ "text": inert }] }));
+    let carried = c.publish();
+    assert_eq!(carried["version"], 4);
+    assert!(carried.get("sdfcStage").is_none(), "{carried}");
+    let mut all = codes(&carried);
+    all.sort();
+    assert_eq!(all, ["N0001", "W0001", "W0001", "W0004"]);
+    // A change the back end reads runs it again: the front stage comes first.
     let moved = trivia.replace("[0, 50, 0]", "[0, 60, 0]");
-    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 4 }, "contentChanges": [{ "text": moved }] }));
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 6 }, "contentChanges": [{ "text": moved }] }));
     assert_eq!(c.publish()["sdfcStage"], "front");
     assert!(c.publish().get("sdfcStage").is_none());
     // A front-end error is the whole analysis: one publish, not marked.
     let broken = "let ball = spher(1);\nrender ball;\n";
-    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 5 }, "contentChanges": [{ "text": broken }] }));
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 7 }, "contentChanges": [{ "text": broken }] }));
     let only = c.publish();
-    assert_eq!(only["version"], 5);
+    assert_eq!(only["version"], 7);
     assert!(only.get("sdfcStage").is_none());
     assert_eq!(codes(&only), ["E0103"]);
     stop(c, handle);

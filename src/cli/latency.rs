@@ -68,8 +68,9 @@ pub(super) enum Edit {
     /// A comment added at the end, as when typing one: only trivia changes, so the
     /// server carries the last full analysis's back end over (`sdfc::incremental`).
     Comment,
-    /// An unused `let` added at the end: the tokens change, so the whole analysis runs
-    /// again (front end, atlases' geometry, code generation, naga).
+    /// An unused shape added at the end: the tokens change and code generation emits
+    /// the shape, so the whole analysis runs again (front end, atlases' geometry, code
+    /// generation, naga).
     Token,
 }
 
@@ -77,7 +78,9 @@ impl Edit {
     fn apply(self, text: &str, i: i32) -> String {
         match self {
             Edit::Comment => format!("{text}\n// edit {i}\n"),
-            Edit::Token => format!("{text}\nlet sdfc_bench_edit = {i};\n"),
+            Edit::Token => {
+                format!("{text}\nlet sdfc_bench_edit = sphere(1).translate([{i}, 0, 0]);\n")
+            }
         }
     }
 }
@@ -178,7 +181,7 @@ pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
         let (prefix, title) = match kind {
             Edit::Token => (
                 "",
-                "a token edit (an unused `let` added): the whole analysis",
+                "a token edit (an unused shape added): the whole analysis",
             ),
             Edit::Comment => (
                 "comment_",

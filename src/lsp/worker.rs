@@ -171,8 +171,10 @@ fn carry(back_end: &BackEnd, mut front: Open) -> Result<Open, Open> {
     if front.doc.analysis.has_errors() {
         return Err(front);
     }
-    let text = &front.doc.text;
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| back_end.carried(text))) {
+    let (text, analysis) = (&front.doc.text, &front.doc.analysis);
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        back_end.carried(text, analysis)
+    })) {
         Ok(Some(carried)) => {
             carried.complete(&mut front.doc.analysis);
             Ok(front)

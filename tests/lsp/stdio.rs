@@ -193,7 +193,7 @@ fn a_burst_of_changes_is_analysed_once_over_the_pipe() {
     // Twenty keystrokes, written at once: the server reads them all while it analyses
     // the first, so it analyses (and publishes) once or twice, not twenty times.
     let burst: Vec<Value> = (2..=21)
-        .map(|v| did_change(&uri, v, &format!("{text}\nlet edit = {v};\n")))
+        .map(|v| did_change(&uri, v, &format!("{text}\nlet edit = sphere({v});\n")))
         .collect();
     p.write(&burst);
     let mut versions = Vec::new();
@@ -212,14 +212,14 @@ fn a_request_cancelled_while_the_server_is_busy_is_cancelled_over_the_pipe() {
     p.initialize();
     p.send(did_open(&uri, &text));
     p.diagnostics();
-    // A change of a token (a comment alone would be carried over at once) keeps the
+    // A change the back end reads (a comment would be carried over at once) keeps the
     // server analysing while the request and its cancellation
     // arrive. The server reads everything that arrived during an analysis before it
     // answers, so the cancellation counts unless the pipe's reader thread has not even
     // parsed these few hundred bytes by the end of a whole analysis of the robot: the
     // one race left, inherent to cancelling over a stream.
     p.write(&[
-        did_change(&uri, 2, &format!("{text}\nlet edit = 1;\n")),
+        did_change(&uri, 2, &format!("{text}\nlet edit = sphere(1);\n")),
         json!({ "jsonrpc": "2.0", "id": 7, "method": "textDocument/hover", "params": { "textDocument": { "uri": uri }, "position": { "line": 0, "character": 0 } } }),
         json!({ "jsonrpc": "2.0", "method": "$/cancelRequest", "params": { "id": 7 } }),
     ]);

@@ -44,8 +44,9 @@ fn token_spans(text: &str, inert: &[Span]) -> Vec<Span> {
         .collect()
 }
 
-/// The items of an analysed text that the back end never reads: `let`s of a number,
-/// vector, boolean or string that nothing uses (the front end's `W0001`). Adding,
+/// The items of an analysed text that the back end never reads: `let`s of a constant
+/// number, vector, boolean or string that nothing uses (the front end's `W0001`) and
+/// that load no texture. Adding,
 /// removing or changing one leaves the atlases, the scene and the module as they were.
 /// Sorted by position.
 fn inert_items(analysis: &Analysis) -> Vec<Span> {
@@ -55,6 +56,16 @@ fn inert_items(analysis: &Analysis) -> Vec<Span> {
         .filter(|d| d.code == crate::codes::W_UNUSED)
         .filter_map(Diagnostic::span)
         .collect();
+    use crate::sema::types::Value;
+    // Every `image(…)` is a texture of the program, which the back end may decode (for
+    // displacements), used or not: an item holding one is never inert.
+    let reads_texture = |item: Span| {
+        analysis
+            .program
+            .textures
+            .iter()
+            .any(|t| item.start <= t.span.start && t.span.end <= item.end)
+    };
     let mut spans: Vec<Span> = analysis
         .program
         .defs
@@ -62,13 +73,12 @@ fn inert_items(analysis: &Analysis) -> Vec<Span> {
         .filter(|d| {
             d.kind == crate::sema::DefKind::Let
                 && unused.contains(&d.span)
+                // A folded constant: not a surface field of the same type.
                 && matches!(
-                    d.ty,
-                    crate::sema::types::Ty::Float
-                        | crate::sema::types::Ty::Vec(_)
-                        | crate::sema::types::Ty::Bool
-                        | crate::sema::types::Ty::Str
+                    d.value,
+                    Value::Float(_) | Value::Vec(_) | Value::Bool(_) | Value::Str(_)
                 )
+                && !reads_texture(d.item_span)
         })
         .map(|d| d.item_span)
         .collect();

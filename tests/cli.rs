@@ -268,3 +268,24 @@ fn render_refuses_a_glb_that_is_not_a_baked_mesh() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("no steps view"), "{err}");
 }
+
+#[test]
+fn a_chart_without_a_font_is_refused_before_measuring() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+        .args(["bench", "--seed-sweep", "--plot", "sweep.png"])
+        .env("SDFC_PLOT_FONT", "/no/such/font.ttf")
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot read the font /no/such/font.ttf"),
+        "{err}"
+    );
+    assert!(!err.contains("adapter"), "measured first: {err}");
+    // A chart is .svg or .png.
+    let (code, _, err) = sdfc(&["bench", "--seed-sweep", "--plot", "sweep.pdf"]);
+    assert_eq!(code, 2);
+    assert!(err.contains(".svg or .png"), "{err}");
+}

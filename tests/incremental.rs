@@ -193,3 +193,30 @@ fn reused_items_parse_as_fresh_ones() {
     }
     assert!(reused > 200, "{reused} items reused");
 }
+
+/// Unused `let`s that are surface fields or load a texture are not inert: the back end
+/// may read their textures (a displacement decodes every one), so an edit adding one
+/// runs it again; an unused number is carried.
+#[test]
+fn only_unused_constants_are_inert() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let base = "let ball = sphere(1);\nrender ball;\n";
+    let front = driver::analyze(base, Some(&dir));
+    let full = driver::check_all(base, Some(&dir));
+    let back_end = BackEnd::of(base, &front.diagnostics, &full);
+    for (added, inert) in [
+        ("let k = 2;", true),
+        ("let v = [1, 2, 3];", true),
+        ("let n = normal;", false),
+        (
+            "let c = image(\"textures/bricks.png\").sample([0.5, 0.5]);",
+            false,
+        ),
+        ("let s = sphere(2);", false),
+    ] {
+        let text = format!("{base}{added}\n");
+        let front = driver::analyze(&text, Some(&dir));
+        assert!(!front.has_errors(), "{added}: {:?}", front.diagnostics);
+        assert_eq!(back_end.carry(&text, front).is_ok(), inert, "{added}");
+    }
+}

@@ -21,13 +21,21 @@ fn median(mut v: Vec<Duration>) -> Duration {
 }
 
 pub fn run(args: BenchArgs) -> ExitCode {
-    if args.scale {
-        return super::scale::run(&args);
-    }
     let sweep = args.seed_sweep || args.scene.is_none();
-    if args.plot.is_some() && (!sweep || args.lsp_latency || args.bake) {
+    if args.plot.is_some() && !args.scale && (!sweep || args.lsp_latency || args.bake) {
         eprintln!("error: --plot draws the charts of --scale and --seed-sweep only");
         return ExitCode::from(super::exit::USAGE);
+    }
+    // The chart's font, before minutes of measuring.
+    if let (Some(path), Err(e)) = (
+        &args.plot,
+        args.plot.as_ref().map_or(Ok(()), |_| super::plot::font()),
+    ) {
+        eprintln!("error: cannot draw the plot {}: {e}", path.display());
+        return ExitCode::from(super::exit::USAGE);
+    }
+    if args.scale {
+        return super::scale::run(&args);
     }
     let scene = match &args.scene {
         Some(s) if args.lsp_latency => {

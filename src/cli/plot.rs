@@ -66,8 +66,9 @@ pub fn format_of(path: &Path) -> Result<Format, String> {
     }
 }
 
-/// Registers the chart font once; the error names where it looked.
-fn font() -> Result<(), String> {
+/// Registers the chart font once; the error names where it looked. The benchmarks call
+/// it before measuring, so a missing font is reported at once.
+pub fn font() -> Result<(), String> {
     static FONT: OnceLock<Result<(), String>> = OnceLock::new();
     FONT.get_or_init(|| {
         let named = std::env::var_os(FONT_VAR).map(PathBuf::from);

@@ -132,10 +132,11 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
     println!("  lines    {}", growth(&|r| r.lines as f64));
     println!("  pipeline {}", growth(&|r| ms(r.pipeline)));
     println!("  frame    {}", growth(&|r| ms(r.frame)));
-    if let Some(path) = &args.plot {
-        plot(path, &rows)?;
-        println!("plot:      {}", path.display());
-    }
+    // A chart that cannot be written does not lose the JSON: its error comes last.
+    let plotted = match &args.plot {
+        Some(path) => plot(path, &rows).map(|()| println!("plot:      {}", path.display())),
+        None => Ok(()),
+    };
     if let Some(path) = &args.json {
         let json = serde_json::json!({
             "bench": "scale",
@@ -160,7 +161,7 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
         });
         super::bench::write_json(path, &json)?;
     }
-    Ok(())
+    plotted
 }
 
 fn measure(

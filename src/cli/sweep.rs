@@ -150,18 +150,23 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
     print_ratios(&rows, plain, "bare trace");
     print_speedups(&rows);
     let solves = print_solve_times();
-    if let Some(path) = &args.plot {
-        let figure = SweepPlot {
-            rows: &rows,
-            constant,
-            adapter: gpu.describe(),
-        };
-        super::plot::write(path, &figure).map_err(|e| {
-            eprintln!("error: cannot write the plot {}: {e}", path.display());
-            ExitCode::from(super::exit::USAGE)
-        })?;
-        println!("plot:      {}", path.display());
-    }
+    // A chart that cannot be written does not lose the JSON: its error comes last.
+    let plotted = match &args.plot {
+        Some(path) => {
+            let figure = SweepPlot {
+                rows: &rows,
+                constant,
+                adapter: gpu.describe(),
+            };
+            super::plot::write(path, &figure)
+                .map(|()| println!("plot:      {}", path.display()))
+                .map_err(|e| {
+                    eprintln!("error: cannot write the plot {}: {e}", path.display());
+                    ExitCode::from(super::exit::USAGE)
+                })
+        }
+        None => Ok(()),
+    };
     if let Some(path) = &args.json {
         let json = serde_json::json!({
             "bench": "seed sweep",
@@ -188,7 +193,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
         });
         super::bench::write_json(path, &json)?;
     }
-    Ok(())
+    plotted
 }
 
 /// Measures every configuration, printing a line for each. The untextured baseline is

@@ -278,6 +278,7 @@ impl Server {
                     version: 0,
                     roots: Vec::new(),
                     closed: true,
+                    forget: false,
                 });
                 s.analysing.remove(uri.as_str());
                 publish(&s.conn, &uri, None, false)
@@ -318,6 +319,7 @@ impl Server {
                 version,
                 roots: self.roots.clone(),
                 closed: false,
+                forget: false,
             };
             // The worker only stops when the server does.
             let _ = self.jobs.send(job);

@@ -26,6 +26,9 @@ pub(super) struct Job {
     pub roots: Vec<PathBuf>,
     /// The document was closed: forget what is kept of it (nothing is analysed).
     pub closed: bool,
+    /// Forget what is kept of the document before analysing this text (it was closed
+    /// since the last text analysed).
+    pub forget: bool,
 }
 
 /// A finished analysis: the document, or the message of the panic that ended it.
@@ -62,12 +65,15 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                     version,
                     roots,
                     closed,
+                    forget,
                 } = batch.remove(0);
-                if closed {
+                if closed || forget {
                     if let Some(old) = docs.remove(uri.as_str()) {
                         super::server::discard(old);
                     }
-                    continue;
+                    if closed {
+                        continue;
+                    }
                 }
                 let send = |result, partial| {
                     results
@@ -186,9 +192,13 @@ fn carry(back_end: &BackEnd, mut front: Open) -> Result<Open, Open> {
 /// Moves the jobs waiting in `inbox` into `batch`: the latest text per document, in the
 /// order documents first appear.
 fn take_newer(batch: &mut Vec<Job>, inbox: &Receiver<Job>) {
-    for job in inbox.try_iter() {
+    for mut job in inbox.try_iter() {
         match batch.iter_mut().find(|j| j.uri == job.uri) {
-            Some(j) => *j = job,
+            Some(j) => {
+                // A document closed and opened again starts afresh.
+                job.forget |= j.closed || j.forget;
+                *j = job;
+            }
             None => batch.push(job),
         }
     }

@@ -8,15 +8,10 @@ mod targets;
 
 use std::path::{Path, PathBuf};
 
+mod common;
+
 fn corpus() -> Vec<Vec<u8>> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<PathBuf> = ["examples", "tests/ui"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
-        .collect();
-    files.sort();
+    let files = common::scene_files();
     let mut out = Vec::new();
     for (i, f) in files.iter().enumerate() {
         let bytes = std::fs::read(f).unwrap();

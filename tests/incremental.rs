@@ -7,6 +7,8 @@ use sdfc::incremental::BackEnd;
 use sdfc::syntax::lexer;
 use std::path::Path;
 
+mod common;
+
 /// The text with comments and line breaks added between tokens, and spaces doubled.
 fn with_trivia(text: &str) -> String {
     let lexed = lexer::lex(text, &mut Vec::new());
@@ -40,14 +42,7 @@ fn unnumbered(wgsl: &str) -> String {
 
 #[test]
 fn carried_back_ends_equal_fresh_analyses() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<_> = ["examples", "tests/ui"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
-        .collect();
-    files.sort();
+    let files = common::scene_files();
     let (mut carried_count, mut with_back_end_diagnostics) = (0, 0);
     for path in &files {
         let Ok(text) = std::fs::read_to_string(path) else {
@@ -140,14 +135,7 @@ fn carried_back_ends_equal_fresh_analyses() {
 #[test]
 fn reused_items_parse_as_fresh_ones() {
     use sdfc::syntax::{parse, parse_reusing, ItemCache};
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<_> = ["examples", "tests/ui"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
-        .collect();
-    files.sort();
+    let files = common::scene_files();
     let mut reused = 0;
     for path in &files {
         let Ok(text) = std::fs::read_to_string(path) else {

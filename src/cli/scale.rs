@@ -269,7 +269,6 @@ fn measure(
     })
 }
 
-/// The log-log plot of the primitive series: milliseconds against primitives.
 /// The scale figures against the number of primitives, log-log.
 struct ScalePlot<'a>(&'a [Row]);
 

@@ -4,6 +4,20 @@
 use std::io::Write;
 use std::process::{Command, Stdio};
 
+/// Every scene of `examples/` and `tests/ui/`, sorted: the corpus of the tests that run
+/// something over all of them.
+pub fn scene_files() -> Vec<std::path::PathBuf> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<std::path::PathBuf> = ["examples", "tests/ui"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    files.sort();
+    files
+}
+
 /// Runs `sdfc` in the package root; (exit code, stdout, stderr).
 pub fn sdfc(args: &[&str]) -> (i32, String, String) {
     sdfc_with_input(args, b"")

@@ -184,6 +184,41 @@ fn the_front_end_stage_comes_first_over_the_pipe() {
 }
 
 #[test]
+fn a_comment_edit_is_one_publish_over_the_pipe() {
+    // The unused `let`'s warning (front end); a seed far off the sphere, which the atlas
+    // geometry warns about and moves (back end).
+    let uri = super::URI;
+    let text = "let unused = 1;\nlet ball = sphere(1);\natlas skin on ball {\n    seed a = [0, 1, 0];\n    seed far = [0, 50, 0];\n}\nrender ball;\n";
+    let mut p = Pipe::spawn();
+    p.initialize();
+    p.send(did_open(uri, text));
+    let full = p.diagnostics();
+    assert_eq!(full["version"], 1);
+    // The back end is carried over: the next publish is the whole set, at once, with
+    // every diagnostic one line further down.
+    p.send(did_change(uri, 2, &format!("// a comment\n{text}")));
+    let carried = p.publish();
+    assert_eq!(carried["version"], 2);
+    assert!(carried.get("sdfcStage").is_none(), "{carried}");
+    let lines = |d: &Value| -> Vec<(String, u64)> {
+        d["diagnostics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| {
+                let line = x["range"]["start"]["line"].as_u64().unwrap();
+                (x["code"].as_str().unwrap().to_string(), line)
+            })
+            .collect()
+    };
+    let moved: Vec<(String, u64)> = lines(&full).into_iter().map(|(c, l)| (c, l + 1)).collect();
+    assert!(moved.iter().any(|(c, _)| c == "W0001"), "{moved:?}");
+    assert!(moved.iter().any(|(c, _)| c == "W0004"), "{moved:?}");
+    assert_eq!(lines(&carried), moved);
+    assert!(p.stop().success());
+}
+
+#[test]
 fn a_burst_of_changes_is_analysed_once_over_the_pipe() {
     let (uri, text) = robot();
     let mut p = Pipe::spawn();

@@ -106,10 +106,15 @@ pub fn run(args: CompileArgs) -> ExitCode {
         Ok(x) => x,
         Err(code) => return code,
     };
-    // Users get only what their scene uses: the library's unused code goes.
-    let output = codegen::compact(&compiled.validated).and_then(|compact| {
-        codegen::translate(&compact, &compiled.module.header, args.target, &args.entry)
-    });
+    // Users get only what their scene uses: the library's unused functions are already
+    // gone (codegen::shake), so WGSL is the very text naga validated, and the other
+    // targets are written from the validated module, compacted.
+    let output = match args.target {
+        Target::Wgsl => Ok(Output::Text(compiled.module.wgsl.clone())),
+        _ => codegen::compact(&compiled.validated).and_then(|compact| {
+            codegen::translate(&compact, &compiled.module.header, args.target, &args.entry)
+        }),
+    };
     let output = match output {
         Ok(o) => o,
         Err(e) => {

@@ -3,7 +3,8 @@
 //! sees it.
 //!
 //! The module is the shared library (`shaders/sdf.wgsl`, `shaders/render.wgsl`,
-//! `shaders/uv.wgsl`) followed by the scene: an `sdf_NAME(p) -> f32` per named shape,
+//! `shaders/uv.wgsl`, less the functions the scene does not reach: [`shake`]) followed
+//! by the scene: an `sdf_NAME(p) -> f32` per named shape,
 //! the render target's `scene_map`, its atlases (from the template
 //! `shaders/atlas.wgsl.in`), its materials, the bindings of the one binding table
 //! ([`bindings`]) and the entry points (`shaders/entry.wgsl.in`). Its header
@@ -14,6 +15,7 @@ pub mod bindings;
 mod emit;
 mod group;
 pub mod mesh;
+pub mod shake;
 pub mod targets;
 pub mod template;
 
@@ -652,10 +654,9 @@ impl Generator<'_> {
             GLOBALS_LAYOUT.join(", ")
         );
         let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
-        let wgsl = format!(
-            "{header}{SDF_LIBRARY}\n{RENDER_LIBRARY}\n{UV_LIBRARY}\n{}",
-            self.out
-        );
+        // Only the library functions the scene's code reaches (shake.rs): naga parses
+        // every byte of the module, and what it validates is what `compile` writes.
+        let wgsl = format!("{header}{}{}", shake::library_for(&self.out), self.out);
         // The regions were recorded in `out`, which ends the module.
         let shift = wgsl.len() - self.out.len();
         let mut source_map = self.source_map;

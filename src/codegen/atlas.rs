@@ -90,7 +90,7 @@ pub fn emit(
     groups.append(&mut w.groups);
     let (walk_begin, walk_end) = if pruning.is_some() {
         (
-            format!("            atlas_{k}_centre = ATLAS_{k}_P[j];\n            atlas_{k}_reach = min(dmax, {} * length(x - atlas_{k}_centre));\n            atlas_{k}_mask = atlas_{k}_walk_mask(j, atlas_{k}_reach);\n", lit(prune::CHORD_REACH)),
+            format!("            atlas_{k}_centre = atlas_{k}_p(j);\n            atlas_{k}_reach = min(dmax, {} * length(x - atlas_{k}_centre));\n            atlas_{k}_mask = atlas_{k}_walk_mask(j, atlas_{k}_reach);\n", lit(prune::CHORD_REACH)),
             format!("            atlas_{k}_mask = 0xffffffffu;\n"),
         )
     } else {
@@ -322,82 +322,72 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     out
 }
 
-/// The atlas's constants: seeds (position, normal, e1, offset) and the merge graph's
-/// adjacency (CSR, with edge lengths), baked in as arrays; and the seed grid's lists,
-/// whose size grows with seeds × cells, appended to `words` (the module's `tables`
-/// storage buffer) with their offsets baked in. Large baked arrays compile super-linearly
-/// on some drivers (Mesa's lavapipe: the robot's 1,788-entry grid took 111 s to its
-/// cs_atlas pipeline and 68 s to its render pipeline; 2.2 s and 2.8 s without it) and are copied into every invocation's private memory.
+/// Words per seed record in the `tables` buffer: position, normal and e1 (3 each),
+/// then the offset (2).
+pub const SEED_WORDS: usize = 11;
+
+/// The atlas's data in the module's `tables` storage buffer (`words`), with their
+/// offsets baked in as constants and accessors to read them: per seed a record of
+/// position, normal, e1 and offset ([`SEED_WORDS`] floats); the merge graph's
+/// adjacency (CSR: starts, neighbours, edge lengths); and the seed grid's lists, whose
+/// size grows with seeds × cells.
+///
+/// Baked-in arrays cost more: a `var<private>` array is copied into every invocation's
+/// private memory (plate.sdf's 64 seeds: about 5 KB per invocation), large ones compile
+/// super-linearly on some drivers (Mesa's lavapipe: the robot's 1,788-entry grid took
+/// 111 s to its cs_atlas pipeline and 68 s to its render pipeline; 2.2 s and 2.8 s
+/// without it), a `const` array is copied at each dynamic access by naga's SPIR-V
+/// (35× slower frames), and their text is most of what naga parses for a many-seed
+/// atlas.
 fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, words: &mut Vec<u32>) -> String {
     let n = atlas.seeds.len();
-    let arr = |name: &str, ty: &str, items: Vec<String>| {
-        // WGSL has no empty arrays: pad with one unused element.
-        let items = if items.is_empty() {
-            vec![match ty {
-                "u32" => "0u".to_string(),
-                "f32" => "0.0".to_string(),
-                _ => format!("{ty}()"),
-            }]
-        } else {
-            items
-        };
-        format!(
-            "var<private> {name}: array<{ty}, {}> = array<{ty}, {}>({});\n",
-            items.len(),
-            items.len(),
-            items.join(", ")
-        )
-    };
-    let seeds = &atlas.seeds;
     let mut text = String::new();
-    text += &arr(
-        &format!("ATLAS_{k}_P"),
-        "vec3<f32>",
-        seeds.iter().map(|s| vec3(s.seed.p)).collect(),
-    );
-    text += &arr(
-        &format!("ATLAS_{k}_N"),
-        "vec3<f32>",
-        seeds.iter().map(|s| vec3(s.seed.n)).collect(),
-    );
-    text += &arr(
-        &format!("ATLAS_{k}_E1"),
-        "vec3<f32>",
-        seeds.iter().map(|s| vec3(s.seed.e1)).collect(),
-    );
-    text += &arr(
-        &format!("ATLAS_{k}_OFFSET"),
-        "vec2<f32>",
-        seeds
-            .iter()
-            .map(|s| format!("vec2<f32>({}, {})", lit(s.offset.x), lit(s.offset.y)))
-            .collect(),
+    let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
+        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
+        words.extend(values);
+    };
+    let f = |v: f64| (v as f32).to_bits();
+    put(
+        "SEEDS",
+        &mut atlas.seeds.iter().flat_map(|s| {
+            let (p, nn, e1) = (s.seed.p, s.seed.n, s.seed.e1);
+            [
+                p.x, p.y, p.z, nn.x, nn.y, nn.z, e1.x, e1.y, e1.z, s.offset.x, s.offset.y,
+            ]
+            .map(f)
+        }),
     );
     let mut adj_start = vec![0u32];
     let (mut adj, mut adj_d) = (Vec::new(), Vec::new());
     for i in 0..n {
         for &(j, d) in &atlas.graph.neighbors[i] {
-            adj.push(format!("{j}u"));
-            adj_d.push(lit(d));
+            adj.push(j as u32);
+            adj_d.push(f(d));
         }
         adj_start.push(adj.len() as u32);
     }
-    text += &arr(
-        &format!("ATLAS_{k}_ADJ_START"),
-        "u32",
-        adj_start.iter().map(|v| format!("{v}u")).collect(),
-    );
-    text += &arr(&format!("ATLAS_{k}_ADJ"), "u32", adj);
-    text += &arr(&format!("ATLAS_{k}_ADJ_D"), "f32", adj_d);
-    let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
-        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
-        words.extend(values);
-    };
+    put("ADJ_START", &mut adj_start.into_iter());
+    put("ADJ", &mut adj.into_iter());
+    put("ADJ_D", &mut adj_d.into_iter());
     put("START", &mut grid.start.iter().copied());
     put("ITEMS", &mut grid.items.iter().copied());
     put(
         "BOUND",
         &mut grid.bound.iter().map(|&v| (v as f32).to_bits()),
+    );
+    let w = SEED_WORDS;
+    text += &format!(
+        "fn atlas_{k}_word(i: u32) -> f32 {{\n    return bitcast<f32>(tables[i]);\n}}\n\n\
+fn atlas_{k}_vec3(i: u32) -> vec3<f32> {{\n    return vec3<f32>(bitcast<f32>(tables[i]), bitcast<f32>(tables[i + 1u]), bitcast<f32>(tables[i + 2u]));\n}}\n\n\
+// Seed j's position, normal, e1 and uv offset.\n\
+fn atlas_{k}_p(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j);\n}}\n\n\
+fn atlas_{k}_n(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j + 3u);\n}}\n\n\
+fn atlas_{k}_e1(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j + 6u);\n}}\n\n\
+fn atlas_{k}_offset(j: u32) -> vec2<f32> {{\n    let a = ATLAS_{k}_SEEDS_AT + {w}u * j + 9u;\n    return vec2<f32>(atlas_{k}_word(a), atlas_{k}_word(a + 1u));\n}}\n\n\
+// Seed i's merged neighbours are entries adj_start(i) .. adj_start(i + 1) of the adjacency.\n\
+fn atlas_{k}_adj_start(i: u32) -> u32 {{\n    return tables[ATLAS_{k}_ADJ_START_AT + i];\n}}\n\n\
+fn atlas_{k}_adj(t: u32) -> u32 {{\n    return tables[ATLAS_{k}_ADJ_AT + t];\n}}\n\n\
+fn atlas_{k}_adj_d(t: u32) -> f32 {{\n    return atlas_{k}_word(ATLAS_{k}_ADJ_D_AT + t);\n}}\n\n"
     );
     text
 }

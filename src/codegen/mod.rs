@@ -19,6 +19,8 @@ pub mod shake;
 pub mod targets;
 pub mod template;
 
+pub use atlas::SEED_WORDS;
+
 pub use atlas::{SeedGridChoice, WalkForm};
 pub use bindings::Binding;
 pub use emit::{lit, TextureUse};

@@ -64,7 +64,7 @@ pub(crate) struct Checker<'d> {
 }
 
 /// The most seeds one atlas may have.
-pub const MAX_SEEDS: usize = 256;
+pub const MAX_SEEDS: usize = 1024;
 /// The most merges one atlas may have.
 pub const MAX_MERGES: usize = 1024;
 

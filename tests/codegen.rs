@@ -220,7 +220,7 @@ fn table_at(m: &codegen::Module, name: &str) -> usize {
 }
 
 #[test]
-fn atlas_data_lives_in_the_tables_buffer() {
+fn seed_grids_live_in_the_tables_buffer() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
     let a = driver::check(&src, Some(&dir));
@@ -251,41 +251,9 @@ fn atlas_data_lives_in_the_tables_buffer() {
         .map(|&l| (l as f32).to_bits())
         .collect();
     assert_eq!(at("ATLAS_0_PRUNE_AT", limits.len()), limits);
-    // The seeds' records and the merge graph's adjacency, before the grid.
-    let n = atlas.seeds.len();
-    let f = |v: f64| (v as f32).to_bits();
-    let records: Vec<u32> = atlas
-        .seeds
-        .iter()
-        .flat_map(|s| {
-            let (p, q, e) = (s.seed.p, s.seed.n, s.seed.e1);
-            [
-                p.x, p.y, p.z, q.x, q.y, q.z, e.x, e.y, e.z, s.offset.x, s.offset.y,
-            ]
-            .map(f)
-        })
-        .collect();
-    assert_eq!(at("ATLAS_0_SEEDS_AT", n * codegen::SEED_WORDS), records);
-    let edges: Vec<(usize, f64)> = atlas.graph.neighbors.iter().flatten().copied().collect();
-    let mut starts = vec![0u32];
-    for list in &atlas.graph.neighbors {
-        starts.push(starts.last().unwrap() + list.len() as u32);
-    }
-    assert_eq!(at("ATLAS_0_ADJ_START_AT", n + 1), starts);
-    let adj: Vec<u32> = edges.iter().map(|&(j, _)| j as u32).collect();
-    assert_eq!(at("ATLAS_0_ADJ_AT", edges.len()), adj);
-    let adj_d: Vec<u32> = edges.iter().map(|&(_, d)| f(d)).collect();
-    assert_eq!(at("ATLAS_0_ADJ_D_AT", edges.len()), adj_d);
-    assert!(!edges.is_empty());
     assert_eq!(
         words.len(),
-        n * codegen::SEED_WORDS
-            + n
-            + 1
-            + 2 * edges.len()
-            + grid.start.len()
-            + 2 * grid.items.len()
-            + limits.len()
+        grid.start.len() + 2 * grid.items.len() + limits.len()
     );
     assert!(grid.items.len() > 1000, "{}", grid.items.len());
     // One read-only storage binding in the render group, declared and documented.
@@ -304,13 +272,23 @@ fn atlas_data_lives_in_the_tables_buffer() {
         "@group(0) @binding({}) var<storage, read> tables: array<u32>;",
         tables[0].binding
     )));
-    // Nothing of the atlas is baked in as an array: per-invocation copies of them
-    // grew with the seeds, and their text was most of what naga parsed.
-    assert!(
-        !m.wgsl.lines().any(|l| l.starts_with("var<private> ATLAS_")
-            || (l.starts_with("const ATLAS_") && l.contains("array"))),
-        "a baked array is left"
-    );
+    // No baked array grows with seeds × cells: the largest is per seed (or per edge).
+    let longest = m
+        .wgsl
+        .lines()
+        .filter(|l| l.starts_with("var<private> ATLAS_"))
+        .map(|l| {
+            let ty = l.split(" = ").next().unwrap();
+            ty.rsplit(", ")
+                .next()
+                .unwrap()
+                .trim_end_matches('>')
+                .parse::<usize>()
+                .unwrap()
+        })
+        .max()
+        .unwrap();
+    assert!(longest <= 2 * atlas.seeds.len(), "{longest}");
     // The manifest JSON carries the words; a module without an atlas has no tables.
     let json = serde_json::to_value(&m.manifest).unwrap();
     assert_eq!(json["tables"].as_array().unwrap().len(), words.len());
@@ -318,6 +296,65 @@ fn atlas_data_lives_in_the_tables_buffer() {
     assert!(plain.manifest.tables.is_empty());
     assert!(plain.manifest.bindings.iter().all(|b| b.name != "tables"));
     assert!(!plain.wgsl.contains("tables"));
+}
+
+/// With `--seeds-in-buffer`, the seeds' records (position, normal, e1, offset) and the
+/// merge graph's adjacency go to the tables buffer, word for word, before the grid,
+/// and nothing of the atlas is baked in as an array.
+#[test]
+fn seeds_in_buffer_move_the_atlas_data_to_the_tables() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
+    let a = driver::check(&src, Some(&dir));
+    let atlas = a.atlases[0].as_ref().unwrap();
+    let options = codegen::Options {
+        seed_grid: codegen::SeedGridChoice::On,
+        walk: codegen::WalkForm::Loop,
+        seeds_in_buffer: true,
+        ..Default::default()
+    };
+    let m = driver::generate(&a, &options).unwrap();
+    let words = &m.manifest.tables;
+    let at = |name: &str, len: usize| {
+        let k = table_at(&m, name);
+        words[k..k + len].to_vec()
+    };
+    let n = atlas.seeds.len();
+    let f = |v: f64| (v as f32).to_bits();
+    let records: Vec<u32> = atlas
+        .seeds
+        .iter()
+        .flat_map(|s| {
+            let (p, q, e) = (s.seed.p, s.seed.n, s.seed.e1);
+            [
+                p.x, p.y, p.z, q.x, q.y, q.z, e.x, e.y, e.z, s.offset.x, s.offset.y,
+            ]
+            .map(f)
+        })
+        .collect();
+    assert_eq!(at("ATLAS_0_SEEDS_AT", n * codegen::SEED_WORDS), records);
+    let edges: Vec<(usize, f64)> = atlas.graph.neighbors.iter().flatten().copied().collect();
+    assert!(!edges.is_empty());
+    let mut starts = vec![0u32];
+    for list in &atlas.graph.neighbors {
+        starts.push(starts.last().unwrap() + list.len() as u32);
+    }
+    assert_eq!(at("ATLAS_0_ADJ_START_AT", n + 1), starts);
+    let adj: Vec<u32> = edges.iter().map(|&(j, _)| j as u32).collect();
+    assert_eq!(at("ATLAS_0_ADJ_AT", edges.len()), adj);
+    let adj_d: Vec<u32> = edges.iter().map(|&(_, d)| f(d)).collect();
+    assert_eq!(at("ATLAS_0_ADJ_D_AT", edges.len()), adj_d);
+    let grid = atlas.seed_grid();
+    assert_eq!(at("ATLAS_0_START_AT", grid.start.len()), grid.start);
+    assert_eq!(
+        words.len(),
+        n * codegen::SEED_WORDS + n + 1 + 2 * edges.len() + grid.start.len() + 2 * grid.items.len()
+    );
+    assert!(
+        !m.wgsl.lines().any(|l| l.starts_with("var<private> ATLAS_")),
+        "a baked array is left"
+    );
+    codegen::validate(&m.wgsl).unwrap();
 }
 
 #[test]

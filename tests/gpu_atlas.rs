@@ -70,7 +70,8 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
             let scale = sdfc::uv::atlas::scale(&atlas.shape);
             let mut results = Vec::new();
             // The grid (for more than 4 seeds, as by default) with pruned walks, and the
-            // plain scan with whole ones.
+            // plain scan with whole ones and the seeds read from the tables buffer
+            // (--seeds-in-buffer) instead of baked in.
             let choices: &[SeedGridChoice] = if atlas.seeds.len() > 4 {
                 &[SeedGridChoice::On, SeedGridChoice::Off]
             } else {
@@ -84,6 +85,7 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                     // The first variant with the walks pruned per seed (uv::prune,
                     // opt-in), checked against the CPU and the unpruned plain scan.
                     prune: grid == choices[0],
+                    seeds_in_buffer: choices.len() > 1 && grid != choices[0],
                     ..Default::default()
                 };
                 let module = sdfc::driver::compile(&analysis, &options).unwrap().module;
@@ -107,17 +109,21 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                     continue;
                 }
                 compared += 1;
-                let gpu_uv = DVec2::new(g.uv[0] as f64, g.uv[1] as f64);
-                // Relative to the uv's size, floored at a tenth of the shape's size.
-                let err = (cpu.uv - gpu_uv).length() / cpu.uv.length().max(0.1 * scale);
-                worst = worst.max(err);
-                assert!(
-                    err <= 1e-3,
-                    "{name} `{}`: at {x}: CPU {} vs GPU {gpu_uv} (relative {err:.2e})",
-                    def.name,
-                    cpu.uv
-                );
-                assert!((cpu.weight - g.weight as f64).abs() < 1e-2);
+                // Every variant's uv against the CPU's.
+                for r in &results {
+                    let g = &r[i];
+                    let gpu_uv = DVec2::new(g.uv[0] as f64, g.uv[1] as f64);
+                    // Relative to the uv's size, floored at a tenth of the shape's size.
+                    let err = (cpu.uv - gpu_uv).length() / cpu.uv.length().max(0.1 * scale);
+                    worst = worst.max(err);
+                    assert!(
+                        err <= 1e-3,
+                        "{name} `{}`: at {x}: CPU {} vs GPU {gpu_uv} (relative {err:.2e})",
+                        def.name,
+                        cpu.uv
+                    );
+                    assert!((cpu.weight - g.weight as f64).abs() < 1e-2);
+                }
             }
             let ok = points
                 .iter()

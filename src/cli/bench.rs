@@ -113,6 +113,20 @@ pub fn run(args: BenchArgs) -> ExitCode {
     } else {
         None
     };
+    // The seeds and merge graphs in the tables buffer instead of baked in, against the
+    // default loop.
+    let in_buffer = if analysis.atlases.iter().flatten().next().is_some() {
+        match variant(Options {
+            walk: WalkForm::Loop,
+            seeds_in_buffer: true,
+            ..base.clone()
+        }) {
+            Ok(m) => Some(m),
+            Err(code) => return code,
+        }
+    } else {
+        None
+    };
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
@@ -238,6 +252,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         pruned_row = Some(rows.len());
         rows.push(("shaded, loop walk, pruned", m, ViewMode::Color));
     }
+    let mut in_buffer_row = None;
+    if let Some(m) = &in_buffer {
+        in_buffer_row = Some(rows.len());
+        rows.push(("shaded, loop walk, seeds in buffer", m, ViewMode::Color));
+    }
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
         undisplaced_row = Some(rows.len());
@@ -294,6 +313,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("textured ÷ constant uv, unrolled", 1, 4),
         ("textured ÷ constant uv, loop", 2, 4),
     ];
+    if let Some(k) = in_buffer_row {
+        pairs.push(("seeds in buffer ÷ baked, loop", k, 2));
+    }
     if let Some(k) = pruned_row {
         pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
     }

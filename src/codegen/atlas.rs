@@ -153,7 +153,10 @@ pub fn emit(
         ("fd_floor", lit(p.fd_floor)),
         ("theta0", lit(sharp_angle(p.sharp_tolerance))),
         ("cells", cells.to_string()),
-        ("tables", tables(k, atlas, grid, words)),
+        (
+            "tables",
+            tables(k, atlas, grid, words, options.seeds_in_buffer),
+        ),
         (
             "walk_form",
             String::from(match form {
@@ -322,25 +325,135 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     out
 }
 
-/// Words per seed record in the `tables` buffer: position, normal and e1 (3 each),
-/// then the offset (2).
+/// Words per seed record in the `tables` buffer (`--seeds-in-buffer`): position,
+/// normal and e1 (3 each), then the offset (2).
 pub const SEED_WORDS: usize = 11;
 
-/// The atlas's data in the module's `tables` storage buffer (`words`), with their
-/// offsets baked in as constants and accessors to read them: per seed a record of
-/// position, normal, e1 and offset ([`SEED_WORDS`] floats); the merge graph's
-/// adjacency (CSR: starts, neighbours, edge lengths); and the seed grid's lists, whose
-/// size grows with seeds × cells.
+/// The atlas's constants, read by the walk through small accessors (`atlas_K_p(j)`,
+/// `_n`, `_e1`, `_offset`, `_adj_start`, `_adj`, `_adj_d`).
 ///
-/// Baked-in arrays cost more: a `var<private>` array is copied into every invocation's
-/// private memory (plate.sdf's 64 seeds: about 5 KB per invocation), large ones compile
+/// The seeds (position, normal, e1, offset) and the merge graph's adjacency (CSR, with
+/// edge lengths) are baked in as `var<private>` arrays, as the design asks; with
+/// `in_buffer` (`--seeds-in-buffer`) they go to the `tables` buffer instead, a record of
+/// [`SEED_WORDS`] floats per seed. Measured on lavapipe (README, Performance): baked,
+/// the driver folds them and few-seed atlases render faster (sphere.sdf's loop walk
+/// 18.5–19.0 against 22.6 ms), but naga parses every literal (about 13,000 instructions
+/// each), so the buffer compiles faster (robot 10.5 → 9.5 ms, plate 11.8 → 9.1 ms). A
+/// `const` array is worse than either: naga's SPIR-V copies it at each dynamic access.
+/// On a GPU a private array lives in per-invocation local memory; a GPU should decide.
+///
+/// The seed grid's lists, whose size grows with seeds × cells, always go to `words`
+/// (the `tables` buffer) with their offsets baked in: large baked arrays compile
 /// super-linearly on some drivers (Mesa's lavapipe: the robot's 1,788-entry grid took
 /// 111 s to its cs_atlas pipeline and 68 s to its render pipeline; 2.2 s and 2.8 s
-/// without it), a `const` array is copied at each dynamic access by naga's SPIR-V
-/// (35× slower frames), and their text is most of what naga parses for a many-seed
-/// atlas.
-fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, words: &mut Vec<u32>) -> String {
-    let n = atlas.seeds.len();
+/// without it).
+fn tables(
+    k: usize,
+    atlas: &Atlas,
+    grid: &SeedGrid,
+    words: &mut Vec<u32>,
+    in_buffer: bool,
+) -> String {
+    let mut text = if in_buffer {
+        seeds_in_buffer(k, atlas, words)
+    } else {
+        seeds_baked(k, atlas)
+    };
+    let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
+        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
+        words.extend(values);
+    };
+    put("START", &mut grid.start.iter().copied());
+    put("ITEMS", &mut grid.items.iter().copied());
+    put(
+        "BOUND",
+        &mut grid.bound.iter().map(|&v| (v as f32).to_bits()),
+    );
+    text
+}
+
+/// The merge graph's adjacency as CSR: starts (one per seed, and the end), neighbours
+/// and edge lengths.
+fn adjacency(atlas: &Atlas) -> (Vec<u32>, Vec<u32>, Vec<f64>) {
+    let mut start = vec![0u32];
+    let (mut adj, mut adj_d) = (Vec::new(), Vec::new());
+    for list in &atlas.graph.neighbors {
+        for &(j, d) in list {
+            adj.push(j as u32);
+            adj_d.push(d);
+        }
+        start.push(adj.len() as u32);
+    }
+    (start, adj, adj_d)
+}
+
+/// The seeds and the adjacency as `var<private>` arrays, with their accessors.
+fn seeds_baked(k: usize, atlas: &Atlas) -> String {
+    let arr = |name: &str, ty: &str, items: Vec<String>| {
+        // WGSL has no empty arrays: pad with one unused element.
+        let items = if items.is_empty() {
+            vec![match ty {
+                "u32" => "0u".to_string(),
+                "f32" => "0.0".to_string(),
+                _ => format!("{ty}()"),
+            }]
+        } else {
+            items
+        };
+        format!(
+            "var<private> ATLAS_{k}_{name}: array<{ty}, {0}> = array<{ty}, {0}>({1});\n",
+            items.len(),
+            items.join(", ")
+        )
+    };
+    let seeds = &atlas.seeds;
+    let (start, adj, adj_d) = adjacency(atlas);
+    let mut text = String::new();
+    text += &arr(
+        "P",
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.p)).collect(),
+    );
+    text += &arr(
+        "N",
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.n)).collect(),
+    );
+    text += &arr(
+        "E1",
+        "vec3<f32>",
+        seeds.iter().map(|s| vec3(s.seed.e1)).collect(),
+    );
+    text += &arr(
+        "OFFSET",
+        "vec2<f32>",
+        seeds
+            .iter()
+            .map(|s| format!("vec2<f32>({}, {})", lit(s.offset.x), lit(s.offset.y)))
+            .collect(),
+    );
+    let u = |v: Vec<u32>| v.into_iter().map(|x| format!("{x}u")).collect();
+    text += &arr("ADJ_START", "u32", u(start));
+    text += &arr("ADJ", "u32", u(adj));
+    text += &arr("ADJ_D", "f32", adj_d.into_iter().map(lit).collect());
+    text += &accessors(
+        k,
+        [
+            format!("ATLAS_{k}_P[j]"),
+            format!("ATLAS_{k}_N[j]"),
+            format!("ATLAS_{k}_E1[j]"),
+            format!("ATLAS_{k}_OFFSET[j]"),
+            format!("ATLAS_{k}_ADJ_START[i]"),
+            format!("ATLAS_{k}_ADJ[t]"),
+            format!("ATLAS_{k}_ADJ_D[t]"),
+        ],
+    );
+    text
+}
+
+/// The seeds' records and the adjacency appended to `words` (the `tables` buffer), with
+/// their offsets and accessors.
+fn seeds_in_buffer(k: usize, atlas: &Atlas, words: &mut Vec<u32>) -> String {
     let mut text = String::new();
     let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
         text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
@@ -350,44 +463,77 @@ fn tables(k: usize, atlas: &Atlas, grid: &SeedGrid, words: &mut Vec<u32>) -> Str
     put(
         "SEEDS",
         &mut atlas.seeds.iter().flat_map(|s| {
-            let (p, nn, e1) = (s.seed.p, s.seed.n, s.seed.e1);
+            let (p, n, e1) = (s.seed.p, s.seed.n, s.seed.e1);
             [
-                p.x, p.y, p.z, nn.x, nn.y, nn.z, e1.x, e1.y, e1.z, s.offset.x, s.offset.y,
+                p.x, p.y, p.z, n.x, n.y, n.z, e1.x, e1.y, e1.z, s.offset.x, s.offset.y,
             ]
             .map(f)
         }),
     );
-    let mut adj_start = vec![0u32];
-    let (mut adj, mut adj_d) = (Vec::new(), Vec::new());
-    for i in 0..n {
-        for &(j, d) in &atlas.graph.neighbors[i] {
-            adj.push(j as u32);
-            adj_d.push(f(d));
-        }
-        adj_start.push(adj.len() as u32);
-    }
-    put("ADJ_START", &mut adj_start.into_iter());
+    let (start, adj, adj_d) = adjacency(atlas);
+    put("ADJ_START", &mut start.into_iter());
     put("ADJ", &mut adj.into_iter());
-    put("ADJ_D", &mut adj_d.into_iter());
-    put("START", &mut grid.start.iter().copied());
-    put("ITEMS", &mut grid.items.iter().copied());
-    put(
-        "BOUND",
-        &mut grid.bound.iter().map(|&v| (v as f32).to_bits()),
-    );
+    put("ADJ_D", &mut adj_d.into_iter().map(f));
     let w = SEED_WORDS;
-    text += &format!(
-        "fn atlas_{k}_word(i: u32) -> f32 {{\n    return bitcast<f32>(tables[i]);\n}}\n\n\
-fn atlas_{k}_vec3(i: u32) -> vec3<f32> {{\n    return vec3<f32>(bitcast<f32>(tables[i]), bitcast<f32>(tables[i + 1u]), bitcast<f32>(tables[i + 2u]));\n}}\n\n\
-// Seed j's position, normal, e1 and uv offset.\n\
-fn atlas_{k}_p(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j);\n}}\n\n\
-fn atlas_{k}_n(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j + 3u);\n}}\n\n\
-fn atlas_{k}_e1(j: u32) -> vec3<f32> {{\n    return atlas_{k}_vec3(ATLAS_{k}_SEEDS_AT + {w}u * j + 6u);\n}}\n\n\
-fn atlas_{k}_offset(j: u32) -> vec2<f32> {{\n    let a = ATLAS_{k}_SEEDS_AT + {w}u * j + 9u;\n    return vec2<f32>(atlas_{k}_word(a), atlas_{k}_word(a + 1u));\n}}\n\n\
-// Seed i's merged neighbours are entries adj_start(i) .. adj_start(i + 1) of the adjacency.\n\
-fn atlas_{k}_adj_start(i: u32) -> u32 {{\n    return tables[ATLAS_{k}_ADJ_START_AT + i];\n}}\n\n\
-fn atlas_{k}_adj(t: u32) -> u32 {{\n    return tables[ATLAS_{k}_ADJ_AT + t];\n}}\n\n\
-fn atlas_{k}_adj_d(t: u32) -> f32 {{\n    return atlas_{k}_word(ATLAS_{k}_ADJ_D_AT + t);\n}}\n\n"
+    let word = |at: String| format!("bitcast<f32>(tables[{at}])");
+    let vec3 = |at: &str| {
+        format!(
+            "vec3<f32>({}, {}, {})",
+            word(at.to_string()),
+            word(format!("{at} + 1u")),
+            word(format!("{at} + 2u"))
+        )
+    };
+    let seed = |field: usize| format!("ATLAS_{k}_SEEDS_AT + {w}u * j + {field}u");
+    text += &accessors(
+        k,
+        [
+            vec3(&seed(0)),
+            vec3(&seed(3)),
+            vec3(&seed(6)),
+            format!("vec2<f32>({}, {})", word(seed(9)), word(seed(10))),
+            format!("tables[ATLAS_{k}_ADJ_START_AT + i]"),
+            format!("tables[ATLAS_{k}_ADJ_AT + t]"),
+            word(format!("ATLAS_{k}_ADJ_D_AT + t")),
+        ],
     );
     text
+}
+
+/// The accessors of an atlas's seeds and adjacency, given their bodies' expressions
+/// (of `j` for the seeds, `i` for the starts, `t` for the entries).
+fn accessors(k: usize, [p, n, e1, offset, start, adj, adj_d]: [String; 7]) -> String {
+    format!(
+        "// Seed j's position, normal, e1 and uv offset.
+fn atlas_{k}_p(j: u32) -> vec3<f32> {{
+    return {p};
+}}
+
+fn atlas_{k}_n(j: u32) -> vec3<f32> {{
+    return {n};
+}}
+
+fn atlas_{k}_e1(j: u32) -> vec3<f32> {{
+    return {e1};
+}}
+
+fn atlas_{k}_offset(j: u32) -> vec2<f32> {{
+    return {offset};
+}}
+
+// Seed i's merged neighbours are entries adj_start(i) .. adj_start(i + 1) of the adjacency.
+fn atlas_{k}_adj_start(i: u32) -> u32 {{
+    return {start};
+}}
+
+fn atlas_{k}_adj(t: u32) -> u32 {{
+    return {adj};
+}}
+
+fn atlas_{k}_adj_d(t: u32) -> f32 {{
+    return {adj_d};
+}}
+
+"
+    )
 }

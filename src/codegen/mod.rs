@@ -195,6 +195,10 @@ pub struct Options {
     /// software adapter its branches cost more than the primitives they skip (1.57×
     /// slower on the robot, `sdfc bench`); a GPU may decide otherwise (`--prune`).
     pub prune: bool,
+    /// The atlases' seeds and merge graphs in the `tables` buffer instead of baked in as
+    /// `var<private>` arrays (faster to compile, slower to render few-seed atlases on
+    /// the software adapter; a GPU may decide otherwise: `--seeds-in-buffer`).
+    pub seeds_in_buffer: bool,
 }
 
 /// A material field, for messages and for the colour space of its textures.

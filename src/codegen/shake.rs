@@ -13,6 +13,7 @@
 //! (naga would reject the module, an internal compiler error the tests would catch).
 
 use std::collections::HashMap;
+use std::ops::ControlFlow;
 use std::sync::OnceLock;
 
 /// One top-level item of the library, with the comments and blank lines before it.
@@ -177,16 +178,17 @@ fn split(text: &str) -> Vec<std::ops::Range<usize>> {
 /// The name of a function item without attributes (`fn NAME(`); None for anything
 /// else, which is always kept (attributes mark entry points and bindings).
 fn function_name(item: &str) -> Option<String> {
-    let mut words = Vec::with_capacity(2);
-    let mut attribute = false;
+    let mut words: Vec<&str> = Vec::with_capacity(2);
     for_each_token(item, |t| {
-        if words.len() < 2 {
-            attribute |= words.is_empty() && t == "@";
-            words.push(t.to_string());
+        words.push(t);
+        if words.len() == 2 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
     });
-    match (attribute, words.first().map(String::as_str)) {
-        (false, Some("fn")) => words.get(1).cloned(),
+    match words.as_slice() {
+        ["fn", name] => Some(name.to_string()),
         _ => None,
     }
 }
@@ -197,12 +199,13 @@ fn for_each_identifier(text: &str, mut f: impl FnMut(&str)) {
         if t.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
             f(t)
         }
+        ControlFlow::Continue(())
     });
 }
 
 /// Calls `f` with each word (identifier or number) and each other non-space character
-/// of WGSL text, outside comments.
-fn for_each_token(text: &str, mut f: impl FnMut(&str)) {
+/// of WGSL text, outside comments, until it breaks.
+fn for_each_token<'a>(text: &'a str, mut f: impl FnMut(&'a str) -> ControlFlow<()>) {
     let bytes = text.as_bytes();
     let mut i = 0;
     while i < bytes.len() {
@@ -232,10 +235,12 @@ fn for_each_token(text: &str, mut f: impl FnMut(&str)) {
             while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
                 i += 1;
             }
-            f(&text[start..i]);
+            if f(&text[start..i]).is_break() {
+                return;
+            }
         } else {
-            if !c.is_ascii_whitespace() && c.is_ascii() {
-                f(&text[i..i + 1]);
+            if !c.is_ascii_whitespace() && c.is_ascii() && f(&text[i..i + 1]).is_break() {
+                return;
             }
             i += 1;
         }

@@ -298,7 +298,7 @@ fn seed_grids_live_in_the_tables_buffer() {
     assert!(!plain.wgsl.contains("tables"));
 }
 
-/// With `--seeds-in-buffer`, the seeds' records (position, normal, e1, offset) and the
+/// With `--seed-data buffer` (and by default above 64 seeds), the seeds' records (position, normal, e1, offset) and the
 /// merge graph's adjacency go to the tables buffer, word for word, before the grid,
 /// and nothing of the atlas is baked in as an array.
 #[test]
@@ -310,7 +310,7 @@ fn seeds_in_buffer_move_the_atlas_data_to_the_tables() {
     let options = codegen::Options {
         seed_grid: codegen::SeedGridChoice::On,
         walk: codegen::WalkForm::Loop,
-        seeds_in_buffer: true,
+        seed_data: codegen::SeedData::Buffer,
         ..Default::default()
     };
     let m = driver::generate(&a, &options).unwrap();
@@ -355,6 +355,32 @@ fn seeds_in_buffer_move_the_atlas_data_to_the_tables() {
         "a baked array is left"
     );
     codegen::validate(&m.wgsl).unwrap();
+    // By default, atlases of up to 64 seeds are baked in and larger ones are not.
+    for n in [codegen::AUTO_BAKED_SEEDS, codegen::AUTO_BAKED_SEEDS + 1] {
+        let seeds: String = (0..n)
+            .map(|i| {
+                let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let (r, t) = ((1.0 - y * y).sqrt(), 2.4 * i as f64);
+                format!(
+                    "seed s{i} = [{:.4}, {y:.4}, {:.4}];\n",
+                    r * t.cos(),
+                    r * t.sin()
+                )
+            })
+            .collect();
+        let src = format!(
+            "let s = sphere(1);\natlas a on s {{\n{seeds}}}\nmaterial m {{ color = [a.uv.x, a.uv.y, 0]; }}\nrender s.paint(m);"
+        );
+        let m = generate(&src, None).unwrap();
+        let baked = m.wgsl.contains("var<private> ATLAS_0_P:");
+        assert_eq!(baked, n <= codegen::AUTO_BAKED_SEEDS, "{n} seeds");
+        assert_eq!(
+            m.wgsl.contains("const ATLAS_0_SEEDS_AT"),
+            !baked,
+            "{n} seeds"
+        );
+        codegen::validate(&m.wgsl).unwrap();
+    }
 }
 
 #[test]

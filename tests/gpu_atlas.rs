@@ -71,7 +71,7 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
             let mut results = Vec::new();
             // The grid (for more than 4 seeds, as by default) with pruned walks, and the
             // plain scan with whole ones and the seeds read from the tables buffer
-            // (--seeds-in-buffer) instead of baked in.
+            // (--seed-data buffer) instead of baked in.
             let choices: &[SeedGridChoice] = if atlas.seeds.len() > 4 {
                 &[SeedGridChoice::On, SeedGridChoice::Off]
             } else {
@@ -85,7 +85,11 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                     // The first variant with the walks pruned per seed (uv::prune,
                     // opt-in), checked against the CPU and the unpruned plain scan.
                     prune: grid == choices[0],
-                    seeds_in_buffer: choices.len() > 1 && grid != choices[0],
+                    seed_data: if choices.len() > 1 && grid != choices[0] {
+                        codegen::SeedData::Buffer
+                    } else {
+                        codegen::SeedData::Baked
+                    },
                     ..Default::default()
                 };
                 let module = sdfc::driver::compile(&analysis, &options).unwrap().module;

@@ -224,7 +224,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         constant_uv: false,
         unions_as_code: false,
         prune: false,
-        seeds_in_buffer: false,
+        seed_data: sdfc::codegen::SeedData::Auto,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

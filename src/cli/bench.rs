@@ -1,7 +1,7 @@
 //! `sdfc bench`: frame-time ratios measured in one run on one adapter.
 
 use super::{compile, BenchArgs};
-use sdfc::codegen::{Options, WalkForm};
+use sdfc::codegen::{Options, SeedData, WalkForm};
 use sdfc::gpu::{self, ViewMode};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -113,19 +113,31 @@ pub fn run(args: BenchArgs) -> ExitCode {
     } else {
         None
     };
-    // The seeds and merge graphs in the tables buffer instead of baked in, against the
-    // default loop.
-    let in_buffer = if analysis.atlases.iter().flatten().next().is_some() {
-        match variant(Options {
+    // The seeds and merge graphs in the tables buffer against baked in, whichever the
+    // default picks for the scene's largest atlas, measured against the default loop.
+    let most_seeds = analysis
+        .atlases
+        .iter()
+        .flatten()
+        .map(|a| a.seeds.len())
+        .max();
+    let other_seed_data = most_seeds.map(|n| {
+        if SeedData::Auto.in_buffer(n) {
+            SeedData::Baked
+        } else {
+            SeedData::Buffer
+        }
+    });
+    let in_buffer = match other_seed_data {
+        Some(seed_data) => match variant(Options {
             walk: WalkForm::Loop,
-            seeds_in_buffer: true,
+            seed_data,
             ..base.clone()
         }) {
             Ok(m) => Some(m),
             Err(code) => return code,
-        }
-    } else {
-        None
+        },
+        None => None,
     };
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
@@ -255,7 +267,15 @@ pub fn run(args: BenchArgs) -> ExitCode {
     let mut in_buffer_row = None;
     if let Some(m) = &in_buffer {
         in_buffer_row = Some(rows.len());
-        rows.push(("shaded, loop walk, seeds in buffer", m, ViewMode::Color));
+        rows.push((
+            if other_seed_data == Some(SeedData::Buffer) {
+                "shaded, loop walk, seeds in buffer"
+            } else {
+                "shaded, loop walk, seeds baked in"
+            },
+            m,
+            ViewMode::Color,
+        ));
     }
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
@@ -314,7 +334,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("textured ÷ constant uv, loop", 2, 4),
     ];
     if let Some(k) = in_buffer_row {
-        pairs.push(("seeds in buffer ÷ baked, loop", k, 2));
+        pairs.push(if other_seed_data == Some(SeedData::Buffer) {
+            ("seeds in buffer ÷ baked, loop", k, 2)
+        } else {
+            ("seeds baked ÷ in buffer, loop", k, 2)
+        });
     }
     if let Some(k) = pruned_row {
         pairs.push(("pruned ÷ unpruned walks, loop", k, 2));

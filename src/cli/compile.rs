@@ -92,7 +92,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         constant_uv: false,
         unions_as_code: args.unions_as_code,
         prune: args.prune,
-        seeds_in_buffer: args.seeds_in_buffer,
+        seed_data: args.seed_data,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

@@ -299,11 +299,11 @@ pub struct RenderArgs {
     /// default, as it measured slower on the software adapter: see the README's Performance).
     #[arg(long)]
     pub prune: bool,
-    /// Put the atlases' seeds and merge graphs in the `tables` buffer instead of baking
-    /// them into the shader (faster to compile, slower to render few-seed atlases on the
-    /// software adapter: see the README's Performance).
-    #[arg(long)]
-    pub seeds_in_buffer: bool,
+    /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
+    /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
+    /// baked up to 64 seeds; see the README's Performance).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub seed_data: sdfc::codegen::SeedData,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
@@ -420,11 +420,11 @@ pub struct CompileArgs {
     /// default, as it measured slower on the software adapter: see the README's Performance).
     #[arg(long)]
     pub prune: bool,
-    /// Put the atlases' seeds and merge graphs in the `tables` buffer instead of baking
-    /// them into the shader (faster to compile, slower to render few-seed atlases on the
-    /// software adapter: see the README's Performance).
-    #[arg(long)]
-    pub seeds_in_buffer: bool,
+    /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
+    /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
+    /// baked up to 64 seeds; see the README's Performance).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub seed_data: sdfc::codegen::SeedData,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,

@@ -103,7 +103,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         constant_uv: false,
         unions_as_code: false,
         prune: args.prune,
-        seeds_in_buffer: args.seeds_in_buffer,
+        seed_data: args.seed_data,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

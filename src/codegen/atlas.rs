@@ -27,6 +27,37 @@ impl SeedGridChoice {
     }
 }
 
+/// Where an atlas's seeds (positions, frames, offsets) and merge graph live.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SeedData {
+    /// Baked in for atlases of up to [`AUTO_BAKED_SEEDS`] seeds, in the buffer above
+    /// (the default).
+    #[default]
+    Auto,
+    /// Baked into the shader as `var<private>` arrays.
+    Baked,
+    /// In the `tables` storage buffer.
+    Buffer,
+}
+
+/// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (README,
+/// Performance): baked renders faster up to here (sphere.sdf 1.27×, robot.sdf's 42 seeds
+/// 1.07×, plate.sdf's 64 seeds even); above, the buffer wins everything (a 1,200-sphere
+/// city with 200 seeds: pipeline 1.74 → 0.99 s, frame 1.10 → 0.79 s, the language
+/// server's full analysis p95 46 → 28 ms).
+pub const AUTO_BAKED_SEEDS: usize = 64;
+
+impl SeedData {
+    /// Whether an atlas of `seeds` seeds has them in the buffer.
+    pub fn in_buffer(self, seeds: usize) -> bool {
+        match self {
+            SeedData::Auto => seeds > AUTO_BAKED_SEEDS,
+            SeedData::Baked => false,
+            SeedData::Buffer => true,
+        }
+    }
+}
+
 use super::emit::{lit, point_expr, vec3, Writer};
 use super::template;
 use crate::uv::grid::SeedGrid;
@@ -155,7 +186,13 @@ pub fn emit(
         ("cells", cells.to_string()),
         (
             "tables",
-            tables(k, atlas, grid, words, options.seeds_in_buffer),
+            tables(
+                k,
+                atlas,
+                grid,
+                words,
+                options.seed_data.in_buffer(atlas.seeds.len()),
+            ),
         ),
         (
             "walk_form",
@@ -325,7 +362,7 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     out
 }
 
-/// Words per seed record in the `tables` buffer (`--seeds-in-buffer`): position,
+/// Words per seed record in the `tables` buffer ([`SeedData`]): position,
 /// normal and e1 (3 each), then the offset (2).
 pub const SEED_WORDS: usize = 11;
 
@@ -334,8 +371,8 @@ pub const SEED_WORDS: usize = 11;
 ///
 /// The seeds (position, normal, e1, offset) and the merge graph's adjacency (CSR, with
 /// edge lengths) are baked in as `var<private>` arrays, as the design asks; with
-/// `in_buffer` (`--seeds-in-buffer`) they go to the `tables` buffer instead, a record of
-/// [`SEED_WORDS`] floats per seed. Measured on lavapipe (README, Performance): baked,
+/// `in_buffer` ([`SeedData`]: large atlases, or `--seed-data buffer`) they go to the
+/// `tables` buffer instead, a record of [`SEED_WORDS`] floats per seed. Measured on lavapipe (README, Performance): baked,
 /// the driver folds them and few-seed atlases render faster (sphere.sdf's loop walk
 /// 18.5–19.0 against 22.6 ms), but naga parses every literal (about 13,000 instructions
 /// each), so the buffer compiles faster (robot 10.5 → 9.5 ms, plate 11.8 → 9.1 ms). A

@@ -21,7 +21,7 @@ pub mod template;
 
 pub use atlas::SEED_WORDS;
 
-pub use atlas::{SeedGridChoice, WalkForm};
+pub use atlas::{SeedData, SeedGridChoice, WalkForm, AUTO_BAKED_SEEDS};
 pub use bindings::Binding;
 pub use emit::{lit, TextureUse};
 pub use targets::{compact, translate, validate, NagaError, Target, Validated};
@@ -195,10 +195,9 @@ pub struct Options {
     /// software adapter its branches cost more than the primitives they skip (1.57×
     /// slower on the robot, `sdfc bench`); a GPU may decide otherwise (`--prune`).
     pub prune: bool,
-    /// The atlases' seeds and merge graphs in the `tables` buffer instead of baked in as
-    /// `var<private>` arrays (faster to compile, slower to render few-seed atlases on
-    /// the software adapter; a GPU may decide otherwise: `--seeds-in-buffer`).
-    pub seeds_in_buffer: bool,
+    /// Where the atlases' seeds and merge graphs live: baked in as `var<private>` arrays
+    /// or in the `tables` buffer (auto: baked up to [`AUTO_BAKED_SEEDS`] seeds).
+    pub seed_data: SeedData,
 }
 
 /// A material field, for messages and for the colour space of its textures.

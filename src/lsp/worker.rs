@@ -1,13 +1,16 @@
-//! Analyses run on a worker thread, so the server keeps answering while a large
-//! document is being checked. The worker takes the latest text of each document that
-//! changed (older texts queued behind a newer one are skipped) and analyses it in two
-//! stages, each sent back as it finishes: the front end (parse, names, types: the
-//! diagnostics most edits change, in milliseconds), then the back end (the atlases'
-//! geometry, lowering, code generation and naga), which a newer text of the same
-//! document queued meanwhile cancels. The worker keeps each document's last parse, so
-//! unchanged items are not parsed again ([`ItemCache`]), and an edit of comments and
-//! whitespace only skips the back end: the last full analysis's is carried over
-//! ([`crate::incremental`]). A panic inside an analysis comes back as its message.
+//! Analyses run on worker threads, so the server keeps answering while a large
+//! document is being checked. The front-end worker takes the latest text of each
+//! document that changed (older texts queued behind a newer one are skipped), runs the
+//! front end (parse, names, types: the diagnostics most edits change, in milliseconds)
+//! and sends it back at once; the back end (the atlases' geometry, lowering, code
+//! generation and naga) runs on a thread of its own, so the next edit's front end does
+//! not wait for the last edit's back end. A newer text of the same document queued
+//! meanwhile cancels a back end not yet started; one that finishes late is not
+//! published over a newer version (the server keeps the newest). Both threads keep
+//! each document's last parse, so unchanged items are not parsed again
+//! ([`ItemCache`]), and an edit of comments and whitespace only skips the back end: the
+//! last full analysis's is carried over ([`crate::incremental`]). A panic inside an
+//! analysis comes back as its message.
 
 use super::{open, Open, Stage};
 use crate::diagnostic::Diagnostic;
@@ -44,6 +47,7 @@ pub(super) struct Done {
 pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
     let (jobs, inbox) = unbounded::<Job>();
     let (results, done) = unbounded::<Done>();
+    let (back_jobs, finished) = start_back_end(results.clone());
     std::thread::Builder::new()
         .name(String::from("sdfc-lsp-analysis"))
         // Deep (but valid) scenes recurse; the passes also grow their stacks on demand.
@@ -59,6 +63,14 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                     }
                 }
                 take_newer(&mut batch, &inbox);
+                // The back ends finished meanwhile, for the trivia edits to carry over.
+                for f in finished.try_iter() {
+                    if let Some(kept) = docs.get_mut(&f.key).filter(|k| k.roots == f.roots) {
+                        if let Some(old) = std::mem::replace(&mut kept.back_end, f.back_end) {
+                            super::server::discard(old);
+                        }
+                    }
+                }
                 let Job {
                     uri,
                     text,
@@ -70,6 +82,17 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 if closed || forget {
                     if let Some(old) = docs.remove(uri.as_str()) {
                         super::server::discard(old);
+                    }
+                    let forget = BackJob {
+                        uri: uri.clone(),
+                        text: String::new(),
+                        version,
+                        roots: roots.clone(),
+                        front_diags: Vec::new(),
+                        forget: true,
+                    };
+                    if back_jobs.send(forget).is_err() {
+                        return;
                     }
                     if closed {
                         continue;
@@ -134,31 +157,116 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 if batch.iter().any(|j| j.uri == uri) {
                     continue;
                 }
-                let kept = docs.entry(key.clone()).or_default();
-                kept.roots = roots.clone();
-                let full = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    let items = Some(&mut kept.items);
-                    open(&uri, text, version, &roots, Stage::Full, items)
-                }))
-                .map_err(|panic| super::server::panic_message(&panic));
-                match &full {
-                    Ok(o) => {
-                        let back_end = BackEnd::of(&o.doc.text, &front_diags, &o.doc.analysis);
-                        if let Some(old) = kept.back_end.replace(back_end) {
-                            super::server::discard(old);
-                        }
-                    }
-                    Err(_) => {
-                        docs.remove(&key);
-                    }
-                }
-                if !send(full, false) {
+                let job = BackJob {
+                    uri,
+                    text,
+                    version,
+                    roots,
+                    front_diags,
+                    forget: false,
+                };
+                if back_jobs.send(job).is_err() {
                     return;
                 }
             }
         })
         .expect("a thread for analyses");
     (jobs, done)
+}
+
+/// A back end to run: a text whose front end was published; or, with `forget`, a
+/// document closed or reopened, whose kept parse goes.
+struct BackJob {
+    uri: lsp::Uri,
+    text: String,
+    version: i32,
+    roots: Vec<PathBuf>,
+    front_diags: Vec<Diagnostic>,
+    forget: bool,
+}
+
+/// A finished back end, for the front-end worker to carry over trivia edits (None: it
+/// panicked, and nothing is carried).
+struct Finished {
+    key: String,
+    roots: Vec<PathBuf>,
+    back_end: Option<BackEnd>,
+}
+
+/// Starts the back-end thread: it sends full analyses to `results` and what the front
+/// end carries over back to the front-end worker. It ends when the job sender is
+/// dropped.
+fn start_back_end(results: Sender<Done>) -> (Sender<BackJob>, Receiver<Finished>) {
+    let (jobs, inbox) = unbounded::<BackJob>();
+    let (finished, finished_rx) = unbounded::<Finished>();
+    std::thread::Builder::new()
+        .name(String::from("sdfc-lsp-back-end"))
+        .stack_size(64 << 20)
+        .spawn(move || {
+            // Each document's parse, as of the last back end run on it, and its roots.
+            let mut items: HashMap<String, (Vec<PathBuf>, ItemCache)> = HashMap::new();
+            while let Ok(first) = inbox.recv() {
+                // The latest text per document: older back ends not started are cancelled.
+                let mut batch: Vec<BackJob> = vec![first];
+                for job in inbox.try_iter() {
+                    // A text replaces the document's last queued text, unless a forget
+                    // came between them.
+                    match batch.iter_mut().rev().find(|j| j.uri == job.uri) {
+                        Some(j) if !j.forget && !job.forget => *j = job,
+                        _ => batch.push(job),
+                    }
+                }
+                for job in batch {
+                    let key = job.uri.as_str().to_string();
+                    if job.forget {
+                        if let Some(old) = items.remove(&key) {
+                            super::server::discard(old);
+                        }
+                        continue;
+                    }
+                    let kept = items.entry(key.clone()).or_default();
+                    if kept.0 != job.roots {
+                        *kept = (job.roots.clone(), ItemCache::default());
+                    }
+                    let full = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        let cache = Some(&mut kept.1);
+                        open(
+                            &job.uri,
+                            job.text,
+                            job.version,
+                            &job.roots,
+                            Stage::Full,
+                            cache,
+                        )
+                    }))
+                    .map_err(|panic| super::server::panic_message(&panic));
+                    let back_end = match &full {
+                        Ok(o) => Some(BackEnd::of(&o.doc.text, &job.front_diags, &o.doc.analysis)),
+                        Err(_) => {
+                            // A panic may have left the kept items half updated.
+                            items.remove(&key);
+                            None
+                        }
+                    };
+                    let done = Done {
+                        uri: job.uri,
+                        version: job.version,
+                        result: full,
+                        partial: false,
+                    };
+                    let carried = Finished {
+                        key,
+                        roots: job.roots,
+                        back_end,
+                    };
+                    if results.send(done).is_err() || finished.send(carried).is_err() {
+                        return;
+                    }
+                }
+            }
+        })
+        .expect("a thread for back ends");
+    (jobs, finished_rx)
 }
 
 /// What the worker keeps of each document between its texts: the items of its last

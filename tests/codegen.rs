@@ -219,19 +219,28 @@ fn table_at(m: &codegen::Module, name: &str) -> usize {
         .unwrap()
 }
 
-#[test]
-fn seed_grids_live_in_the_tables_buffer() {
+/// The robot example checked, and its module with the seed grid on, the loop walk and
+/// `options` (the seed data, the pruning).
+fn robot_with(options: codegen::Options) -> (driver::Analysis, codegen::Module) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
     let a = driver::check(&src, Some(&dir));
-    let atlas = a.atlases[0].as_ref().unwrap();
     let options = codegen::Options {
         seed_grid: codegen::SeedGridChoice::On,
         walk: codegen::WalkForm::Loop,
-        prune: true,
-        ..Default::default()
+        ..options
     };
     let m = driver::generate(&a, &options).unwrap();
+    (a, m)
+}
+
+#[test]
+fn seed_grids_live_in_the_tables_buffer() {
+    let (a, m) = robot_with(codegen::Options {
+        prune: true,
+        ..Default::default()
+    });
+    let atlas = a.atlases[0].as_ref().unwrap();
     // The grid's lists, word for word, at the offsets the module bakes in.
     let grid = atlas.seed_grid();
     let words = &m.manifest.tables;
@@ -298,22 +307,17 @@ fn seed_grids_live_in_the_tables_buffer() {
     assert!(!plain.wgsl.contains("tables"));
 }
 
-/// With `--seed-data buffer` (and by default above 64 seeds), the seeds' records (position, normal, e1, offset) and the
-/// merge graph's adjacency go to the tables buffer, word for word, before the grid,
-/// and nothing of the atlas is baked in as an array.
+/// With `--seed-data buffer` (and by default above 64 seeds), the seeds' records
+/// (position, normal, e1, offset) and the merge graph's adjacency go to the tables
+/// buffer, word for word, before the grid, and nothing of the atlas is baked in as an
+/// array.
 #[test]
 fn seeds_in_buffer_move_the_atlas_data_to_the_tables() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let src = std::fs::read_to_string(dir.join("robot.sdf")).unwrap();
-    let a = driver::check(&src, Some(&dir));
-    let atlas = a.atlases[0].as_ref().unwrap();
-    let options = codegen::Options {
-        seed_grid: codegen::SeedGridChoice::On,
-        walk: codegen::WalkForm::Loop,
+    let (a, m) = robot_with(codegen::Options {
         seed_data: codegen::SeedData::Buffer,
         ..Default::default()
-    };
-    let m = driver::generate(&a, &options).unwrap();
+    });
+    let atlas = a.atlases[0].as_ref().unwrap();
     let words = &m.manifest.tables;
     let at = |name: &str, len: usize| {
         let k = table_at(&m, name);

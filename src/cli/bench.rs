@@ -128,7 +128,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
             SeedData::Buffer
         }
     });
-    let in_buffer = match other_seed_data {
+    let other_form = match other_seed_data {
         Some(seed_data) => match variant(Options {
             walk: WalkForm::Loop,
             seed_data,
@@ -264,9 +264,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
         pruned_row = Some(rows.len());
         rows.push(("shaded, loop walk, pruned", m, ViewMode::Color));
     }
-    let mut in_buffer_row = None;
-    if let Some(m) = &in_buffer {
-        in_buffer_row = Some(rows.len());
+    let mut other_form_row = None;
+    if let Some(m) = &other_form {
+        other_form_row = Some(rows.len());
         rows.push((
             if other_seed_data == Some(SeedData::Buffer) {
                 "shaded, loop walk, seeds in buffer"
@@ -333,7 +333,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ("textured ÷ constant uv, unrolled", 1, 4),
         ("textured ÷ constant uv, loop", 2, 4),
     ];
-    if let Some(k) = in_buffer_row {
+    if let Some(k) = other_form_row {
         pairs.push(if other_seed_data == Some(SeedData::Buffer) {
             ("seeds in buffer ÷ baked, loop", k, 2)
         } else {

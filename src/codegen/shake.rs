@@ -122,29 +122,8 @@ fn split(text: &str) -> Vec<std::ops::Range<usize>> {
     let mut seen_code = false;
     while i < bytes.len() {
         match bytes[i] {
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
-                continue;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                // Block comments nest in WGSL.
-                let mut nest = 0usize;
-                while i < bytes.len() {
-                    if bytes[i..].starts_with(b"/*") {
-                        nest += 1;
-                        i += 2;
-                    } else if bytes[i..].starts_with(b"*/") {
-                        nest -= 1;
-                        i += 2;
-                        if nest == 0 {
-                            break;
-                        }
-                    } else {
-                        i += 1;
-                    }
-                }
+            b'/' if matches!(bytes.get(i + 1), Some(b'/' | b'*')) => {
+                i = comment_end(bytes, i);
                 continue;
             }
             b'{' => depth += 1,
@@ -173,6 +152,33 @@ fn split(text: &str) -> Vec<std::ops::Range<usize>> {
         ranges.push(start..bytes.len());
     }
     ranges
+}
+
+/// The end of the comment starting at `i` (`//` to the end of its line; `/*` to its
+/// closing `*/`, nested as WGSL nests them), or of the text.
+fn comment_end(bytes: &[u8], mut i: usize) -> usize {
+    if bytes[i..].starts_with(b"//") {
+        while i < bytes.len() && bytes[i] != b'\n' {
+            i += 1;
+        }
+        return i;
+    }
+    let mut nest = 0usize;
+    while i < bytes.len() {
+        if bytes[i..].starts_with(b"/*") {
+            nest += 1;
+            i += 2;
+        } else if bytes[i..].starts_with(b"*/") {
+            nest -= 1;
+            i += 2;
+            if nest == 0 {
+                break;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    i
 }
 
 /// The name of a function item without attributes (`fn NAME(`); None for anything
@@ -210,26 +216,8 @@ fn for_each_token<'a>(text: &'a str, mut f: impl FnMut(&'a str) -> ControlFlow<(
     let mut i = 0;
     while i < bytes.len() {
         let c = bytes[i];
-        if c == b'/' && bytes.get(i + 1) == Some(&b'/') {
-            while i < bytes.len() && bytes[i] != b'\n' {
-                i += 1;
-            }
-        } else if c == b'/' && bytes.get(i + 1) == Some(&b'*') {
-            let mut nest = 0usize;
-            while i < bytes.len() {
-                if bytes[i..].starts_with(b"/*") {
-                    nest += 1;
-                    i += 2;
-                } else if bytes[i..].starts_with(b"*/") {
-                    nest -= 1;
-                    i += 2;
-                    if nest == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
+        if c == b'/' && matches!(bytes.get(i + 1), Some(b'/' | b'*')) {
+            i = comment_end(bytes, i);
         } else if c.is_ascii_alphanumeric() || c == b'_' {
             let start = i;
             while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {

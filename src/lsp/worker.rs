@@ -259,7 +259,9 @@ fn start_back_end(results: Sender<Done>) -> (Sender<BackJob>, Receiver<Finished>
                         roots: job.roots,
                         back_end,
                     };
-                    if results.send(done).is_err() || finished.send(carried).is_err() {
+                    // The carry first: once the client sees this publish, an edit it
+                    // sends finds the back end there to carry over.
+                    if finished.send(carried).is_err() || results.send(done).is_err() {
                         return;
                     }
                 }

@@ -660,3 +660,60 @@ fn the_on_disk_pipeline_cache_is_written_and_survives_a_damaged_file() {
         );
     }
 }
+
+/// Unions' operands skipped by their boxes (`--bounds all`) leave the GPU's field as
+/// it was, to the bit: where a box is skipped the union is its first operand exactly
+/// (`op_union` of 1e30). And both agree with the CPU reference, which skips too.
+#[test]
+fn node_bounds_leave_the_gpu_field_unchanged() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let src = "let column = smooth_union(cylinder(0.3, 2), torus(0.6, 0.12).rotate_x(90deg).translate([0, 1.2, 0]), 0.2);\n\
+        let twisted = octahedron(0.5).twist(rate: 1.5);\n\
+        render box([12, 0.2, 4]).translate([0, -1.1, 0]) | column.translate([-4, 0, 0]) | twisted.translate([-2, 0, 1]) | column | twisted.translate([2, 0, 1]) | column.translate([4, 0, 0]);";
+    let a = sdfc::driver::check(src, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics);
+    let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
+    let module = |bounds| {
+        let options = codegen::Options {
+            bounds,
+            walk: codegen::WalkForm::Loop,
+            ..Default::default()
+        };
+        sdfc::driver::compile(&a, &options).unwrap().module
+    };
+    let (off, all) = (module(codegen::Bounds::Off), module(codegen::Bounds::All));
+    assert!(all.wgsl.matches("if (sd_box(p - ").count() >= 5);
+    let points: Vec<DVec3> = random_points(4000, 1.0, 0xB0B0_5EED)
+        .into_iter()
+        .map(|p| p * DVec3::new(6.0, 2.0, 2.5))
+        .collect();
+    let (v_off, v_all) = (
+        gpu::eval_points(&gpu, &off, &points).unwrap(),
+        gpu::eval_points(&gpu, &all, &points).unwrap(),
+    );
+    let mut skipped = 0;
+    for (i, p) in points.iter().enumerate() {
+        assert_eq!(
+            v_off[i][0].to_bits(),
+            v_all[i][0].to_bits(),
+            "at {p}: {} without bounds, {} with",
+            v_off[i][0],
+            v_all[i][0]
+        );
+        let cpu = eval::distance(&shape, *p);
+        assert!(
+            (cpu - v_all[i][0] as f64).abs() <= 1e-5,
+            "at {p}: GPU {} vs CPU {cpu}",
+            v_all[i][0]
+        );
+        let skips = (0..shape.nodes.len()).filter_map(|n| shape.guard(ir::NodeId::new(n)));
+        if skips
+            .into_iter()
+            .any(|g| !g.needed(*p, eval::node_distance(&shape, g.first, *p)))
+        {
+            skipped += 1;
+        }
+    }
+    // The points test skipping, not only evaluation.
+    assert!(skipped > 1000, "{skipped}");
+}

@@ -225,6 +225,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         unions_as_code: false,
         prune: false,
         seed_data: sdfc::codegen::SeedData::Auto,
+        bounds: sdfc::codegen::Bounds::Off,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
         Ok(x) => x,

@@ -1,7 +1,7 @@
 //! `sdfc bench`: frame-time ratios measured in one run on one adapter.
 
 use super::{compile, BenchArgs};
-use sdfc::codegen::{Options, SeedData, WalkForm};
+use sdfc::codegen::{Bounds, Options, SeedData, WalkForm};
 use sdfc::gpu::{self, ViewMode};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -139,6 +139,27 @@ pub fn run(args: BenchArgs) -> ExitCode {
         },
         None => None,
     };
+    // Unions' operands skipped by their boxes (ir::guard, opt-in): the costly ones, and
+    // every one, against none (the default), where the forms differ.
+    let mut bounded = Vec::new();
+    for (plain, bounds) in [
+        (true, Bounds::Costly),
+        (false, Bounds::Costly),
+        (false, Bounds::All),
+    ] {
+        match variant(Options {
+            walk: WalkForm::Loop,
+            plain,
+            bounds,
+            ..base.clone()
+        }) {
+            Ok(m) => bounded.push(m),
+            Err(code) => return code,
+        }
+    }
+    if bounded[1].wgsl == rolled.wgsl && bounded[2].wgsl == rolled.wgsl {
+        bounded.clear();
+    }
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
@@ -277,6 +298,13 @@ pub fn run(args: BenchArgs) -> ExitCode {
             ViewMode::Color,
         ));
     }
+    let mut bounded_rows = None;
+    if let [plain_costly, costly, all] = &bounded[..] {
+        bounded_rows = Some((rows.len(), rows.len() + 1, rows.len() + 2));
+        rows.push(("plain, node bounds (costly)", plain_costly, ViewMode::Color));
+        rows.push(("shaded, loop walk, node bounds", costly, ViewMode::Color));
+        rows.push(("shaded, loop walk, all bounded", all, ViewMode::Color));
+    }
     let mut undisplaced_row = None;
     if let Some(m) = &undisplaced {
         undisplaced_row = Some(rows.len());
@@ -342,6 +370,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
     }
     if let Some(k) = pruned_row {
         pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
+    }
+    if let Some((plain_costly, costly, all)) = bounded_rows {
+        pairs.push(("node bounds ÷ none, plain", plain_costly, 0));
+        pairs.push(("node bounds ÷ none, loop", costly, 2));
+        pairs.push(("all bounded ÷ none, loop", all, 2));
     }
     if let Some((one, two)) = refined_rows {
         pairs.push(("refine = 1 ÷ 0, loop", one, 2));
@@ -422,6 +455,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
         ));
     }
     ratios.extend(alternated);
+    if let Some(r) = analysis
+        .scene
+        .as_ref()
+        .and_then(|scene| sdfc::driver::pick_shape(scene, args.shape.as_deref()).ok())
+        .and_then(cpu_bounds_ratio)
+    {
+        ratios.push(("CPU reference, node bounds ÷ none", r, "f64, alternated"));
+    }
     for (label, value, how) in &ratios {
         let how = if how.is_empty() {
             String::new()
@@ -468,4 +509,36 @@ pub fn write_json(path: &std::path::Path, json: &serde_json::Value) -> Result<()
     }
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// The CPU reference with its unions' guards (`ir::guard`, always on) against every
+/// operand evaluated: 100,000 points of the shape's framing box, five rounds alternated,
+/// the ratio of the medians. None when no union is guarded.
+fn cpu_bounds_ratio(shape: &sdfc::ir::Shape) -> Option<f64> {
+    use glam::DVec3;
+    use sdfc::ir::{eval, NodeId};
+    (0..shape.nodes.len()).find(|&i| shape.guard(NodeId::new(i)).is_some())?;
+    let b = shape.framing_bounds();
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut unit = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let points: Vec<DVec3> = (0..100_000)
+        .map(|_| b.min + (b.max - b.min) * DVec3::new(unit(), unit(), unit()))
+        .collect();
+    let time = |f: &dyn Fn(DVec3) -> f64| {
+        let t = Instant::now();
+        let sum: f64 = points.iter().map(|p| f(*p)).sum();
+        std::hint::black_box(sum);
+        t.elapsed()
+    };
+    let (mut guarded, mut full) = (Vec::new(), Vec::new());
+    for _ in 0..5 {
+        guarded.push(time(&|p| eval::eval_blend(shape, p).0));
+        full.push(time(&|p| eval::eval_unguarded(shape, p).0));
+    }
+    Some(median(guarded).as_secs_f64() / median(full).as_secs_f64())
 }

@@ -93,6 +93,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         unions_as_code: args.unions_as_code,
         prune: args.prune,
         seed_data: args.seed_data,
+        bounds: args.bounds,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

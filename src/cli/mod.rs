@@ -304,6 +304,11 @@ pub struct RenderArgs {
     /// baked up to 64 seeds; see the README's Performance).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
+    /// Skip unions' operands by their bounding boxes where they cannot change the union
+    /// (exact; costly: operands of several primitives; off by default, as the software
+    /// adapter's `if` never skips work: see the README's Performance).
+    #[arg(long, value_enum, default_value = "off")]
+    pub bounds: sdfc::codegen::Bounds,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
@@ -425,6 +430,11 @@ pub struct CompileArgs {
     /// baked up to 64 seeds; see the README's Performance).
     #[arg(long, value_enum, default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
+    /// Skip unions' operands by their bounding boxes where they cannot change the union
+    /// (exact; costly: operands of several primitives; off by default, as the software
+    /// adapter's `if` never skips work: see the README's Performance).
+    #[arg(long, value_enum, default_value = "off")]
+    pub bounds: sdfc::codegen::Bounds,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,

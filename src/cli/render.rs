@@ -104,6 +104,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         unions_as_code: false,
         prune: args.prune,
         seed_data: args.seed_data,
+        bounds: args.bounds,
     };
     let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
         Ok(x) => x,

@@ -90,6 +90,7 @@ pub fn emit(
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
     w.unions_as_code = options.unions_as_code;
+    w.guard_cost = options.bounds.min_cost();
     let pruning = (options.prune && !options.constant_uv)
         .then(|| atlas.pruning())
         .flatten();
@@ -105,6 +106,7 @@ pub fn emit(
             // The whole field, for points outside the guard or the window.
             let mut whole = Writer::new(&format!("atlas_{k}_whole"));
             whole.unions_as_code = options.unions_as_code;
+            whole.guard_cost = options.bounds.min_cost();
             let whole_result = whole.shape(&atlas.shape, atlas.shape.root(), "p");
             w.prune = Some((format!("atlas_{k}_mask"), std::sync::Arc::new(pr.clone())));
             w.indent(1);

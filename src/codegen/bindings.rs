@@ -2,7 +2,7 @@
 //! the manifest's `bindings` and, through [`Resource`], what the runtime binds at each
 //! slot, so the three can never disagree.
 
-use super::emit::TextureUse;
+use super::field::TextureUse;
 use serde::Serialize;
 use std::fmt::Write;
 

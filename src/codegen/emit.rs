@@ -1,11 +1,8 @@
-//! The WGSL emitter: IR shapes and surface fields → WGSL source, with every
-//! constant folded in. Only this file writes WGSL text from Rust; the shared
-//! functions it calls live in `shaders/*.wgsl`.
+//! The WGSL emitter: IR shapes → WGSL source, with every constant folded in. With
+//! `field` (surface fields), the only code that writes WGSL expressions from Rust; the
+//! shared functions it calls live in `shaders/*.wgsl`.
 
 use crate::ir::{Csg, NodeId, Op, Prim, Shape};
-use crate::sema::builtins::BuiltinId;
-use crate::sema::{AtlasAttr, AtlasId, FieldExpr, SurfaceInput, Ty, Value};
-use crate::syntax::ast::{BinaryOp, UnaryOp};
 use glam::{DMat3, DVec3};
 use std::fmt::Write;
 
@@ -79,6 +76,9 @@ pub struct Writer {
     /// mask, and which union operands its bits guard. Only the top writer has it: the
     /// union chain is never inside a helper.
     pub prune: Option<(String, std::sync::Arc<crate::uv::prune::Pruning>)>,
+    /// The cost from which unions' operands are guarded by their boxes
+    /// (`ir::guard`); None for none.
+    pub guard_cost: Option<f64>,
 }
 
 impl Writer {
@@ -98,6 +98,7 @@ impl Writer {
             blend: false,
             unions_as_code: false,
             prune: None,
+            guard_cost: None,
         }
     }
 
@@ -106,6 +107,7 @@ impl Writer {
         let mut w = Writer::new(name);
         w.blend = self.blend;
         w.unions_as_code = self.unions_as_code;
+        w.guard_cost = self.guard_cost;
         w
     }
 
@@ -235,8 +237,19 @@ impl Writer {
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Csg { op, k, a, b } => {
+                let guard = shape
+                    .guard(id)
+                    .filter(|g| self.guard_cost.is_some_and(|c| g.cost >= c));
                 let (da, db) = if self.on_chain(id) {
                     (self.operand(shape, *a, p), self.operand(shape, *b, p))
+                } else if let Some(g) = guard {
+                    let first = self.shape(shape, g.first, p);
+                    let other = self.guarded(shape, g, &first, p);
+                    if g.first == *a {
+                        (first, other)
+                    } else {
+                        (other, first)
+                    }
                 } else {
                     (self.shape(shape, *a, p), self.shape(shape, *b, p))
                 };
@@ -419,6 +432,35 @@ impl Writer {
         d
     }
 
+    /// A union's guarded operand (`ir::guard`): evaluated where its box comes within
+    /// reach of the first operand's distance `first` (1e30 elsewhere, which leaves the
+    /// union the first operand).
+    fn guarded(
+        &mut self,
+        shape: &Shape,
+        g: &crate::ir::guard::Guard,
+        first: &str,
+        p: &str,
+    ) -> String {
+        let d = self.fresh("d");
+        let far = self.leaf("1e30", "0.0");
+        self.line(&format!("var {d} = {far};"));
+        self.line(&format!(
+            "if (sd_box({p} - {}, {}) <= max({first}.x, 0.0) + {}) {{",
+            vec3(g.center),
+            vec3(g.half),
+            lit(g.slack)
+        ));
+        self.indent += 1;
+        // In a helper function: guards nested in the operand do not nest blocks (naga
+        // limits brace nesting).
+        let helper = self.helper_fn(shape, g.guarded, "g");
+        self.line(&format!("{d} = {helper}({p});"));
+        self.indent -= 1;
+        self.line("}");
+        d
+    }
+
     fn helper_fn(&mut self, shape: &Shape, child: NodeId, tag: &str) -> String {
         let helper = self.fresh(&format!("{}_{tag}", self.prefix));
         let mut inner_w = self.sub(&helper);
@@ -495,356 +537,4 @@ pub fn point_expr(op: &Op, p: &str) -> Option<String> {
         Op::Elongate { h, .. } => format!("op_elongate({p}, {})", vec3(*h)),
         _ => return None,
     })
-}
-
-/// What a surface field needs that the generator cannot give yet.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Unsupported(pub String);
-
-fn wgsl_ty(t: &Ty) -> String {
-    match t {
-        Ty::Vec(n) => format!("vec{n}<f32>"),
-        Ty::Bool => String::from("bool"),
-        _ => String::from("f32"),
-    }
-}
-
-/// A texture binding the module needs: an image file with a wrap mode.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
-pub struct TextureUse {
-    pub path: String,
-    pub wrap: String,
-    /// Colour (decoded from sRGB) or data (linear).
-    pub srgb: bool,
-}
-
-/// What surface fields need from the module: textures in binding order (texture `i`
-/// binds at 1 + 2i, its sampler at 2 + 2i) and the atlases they sample.
-#[derive(Debug, Default)]
-pub struct Uses {
-    pub textures: Vec<TextureUse>,
-    /// Atlas indices read by the expressions generated since the last reset.
-    pub atlases: std::collections::BTreeSet<AtlasId>,
-    /// While set, atlas uv and position are generated displaced by these WGSL
-    /// expressions: the footprint of a pixel, for texture derivatives.
-    pub offset: Option<(String, String)>,
-    /// Whether textures sampled now hold colour (sRGB) rather than data (linear).
-    pub srgb: bool,
-    /// `let` statements of the function being generated, which long expressions are
-    /// bound to: generated expressions stay shallow (within naga's recursion limit)
-    /// however deep the field, and a value shared by `let`s in the scene is computed once.
-    pub lets: Vec<String>,
-    /// The bound name of each shared field value already generated (by node and offset).
-    bound: std::collections::HashMap<BoundKey, String>,
-}
-
-/// A field node as generated under one footprint offset.
-type BoundKey = (*const FieldExpr, Option<(String, String)>);
-
-/// Expressions longer than this are bound to a `let` (which bounds their nesting).
-const MAX_INLINE_EXPRESSION: usize = 160;
-
-impl Uses {
-    /// Starts the statements of a new function.
-    pub fn start_function(&mut self) {
-        self.lets.clear();
-        self.bound.clear();
-        self.atlases.clear();
-    }
-
-    fn index(&mut self, path: &str, wrap: &str) -> usize {
-        let u = TextureUse {
-            path: path.to_string(),
-            wrap: wrap.to_string(),
-            srgb: self.srgb,
-        };
-        if let Some(i) = self.textures.iter().position(|x| *x == u) {
-            return i;
-        }
-        self.textures.push(u);
-        self.textures.len() - 1
-    }
-}
-
-/// A surface field (or constant) as a WGSL expression over `p` (position) and `n`
-/// (normal), with the statements it needs in [`Uses::lets`].
-pub fn field(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
-    let Value::Field(expr, _) = v else {
-        return field_expr(v, tex);
-    };
-    let key = (std::sync::Arc::as_ptr(expr), tex.offset.clone());
-    if let Some(name) = tex.bound.get(&key) {
-        return Ok(name.clone());
-    }
-    let e = field_expr(v, tex)?;
-    let shared = std::sync::Arc::strong_count(expr) > 1;
-    if e.len() <= MAX_INLINE_EXPRESSION && !(shared && e.len() > 24) {
-        return Ok(e);
-    }
-    let name = format!("v{}", tex.lets.len());
-    tex.lets.push(format!("let {name} = {e};"));
-    tex.bound.insert(key, name.clone());
-    Ok(name)
-}
-
-fn field_expr(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
-    stacker::maybe_grow(64 * 1024, 1024 * 1024, || field_expr_inner(v, tex))
-}
-
-fn field_expr_inner(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
-    Ok(match v {
-        Value::Float(x) => lit(*x),
-        Value::Bool(b) => b.to_string(),
-        Value::Vec(c) => format!(
-            "vec{}<f32>({})",
-            c.len(),
-            c.iter().map(|x| lit(*x)).collect::<Vec<_>>().join(", ")
-        ),
-        Value::Field(expr, ty) => match &**expr {
-            FieldExpr::Input(SurfaceInput::Position) => match &tex.offset {
-                Some((_, dp)) => format!("(p + {dp})"),
-                None => String::from("p"),
-            },
-            FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
-            FieldExpr::Atlas { atlas, attr } => {
-                tex.atlases.insert(*atlas);
-                let name = match attr {
-                    AtlasAttr::Uv => "uv",
-                    AtlasAttr::Distance => "distance",
-                    AtlasAttr::Status => "status",
-                    AtlasAttr::Transport => "transport",
-                    AtlasAttr::Seed => "seed",
-                };
-                match (&tex.offset, attr) {
-                    (Some((du, _)), AtlasAttr::Uv) => {
-                        format!("(atlas_sample_{}.uv + {du})", atlas.index())
-                    }
-                    _ => format!("atlas_sample_{}.{name}", atlas.index()),
-                }
-            }
-            FieldExpr::Unary { op, operand } => {
-                let o = field(operand, tex)?;
-                match op {
-                    UnaryOp::Neg => format!("(-{o})"),
-                    UnaryOp::Not => format!("(!{o})"),
-                }
-            }
-            FieldExpr::Binary { op, lhs, rhs } => binary(*op, lhs, rhs, ty, tex)?,
-            FieldExpr::Swizzle { base, components } => {
-                let s: String = components
-                    .iter()
-                    .map(|c| ['x', 'y', 'z', 'w'][*c as usize])
-                    .collect();
-                format!("({}).{s}", field(base, tex)?)
-            }
-            FieldExpr::Call { builtin, args } => call(*builtin, args, tex)?,
-            FieldExpr::Vector(args) => format!(
-                "{}({})",
-                wgsl_ty(ty),
-                args.iter()
-                    .map(|a| field(a, tex))
-                    .collect::<Result<Vec<_>, _>>()?
-                    .join(", ")
-            ),
-        },
-        other => {
-            return Err(Unsupported(format!(
-                "a {} cannot be used per point",
-                other.ty()
-            )))
-        }
-    })
-}
-
-/// Broadcasts a float operand to the vector type of the result where WGSL needs it.
-fn widen(v: &Value, to: &Ty, tex: &mut Uses) -> Result<String, Unsupported> {
-    let e = field(v, tex)?;
-    Ok(match (v.ty().base(), to) {
-        (Ty::Float, Ty::Vec(n)) => format!("vec{n}<f32>({e})"),
-        _ => e,
-    })
-}
-
-fn binary(
-    op: BinaryOp,
-    l: &Value,
-    r: &Value,
-    ty: &Ty,
-    tex: &mut Uses,
-) -> Result<String, Unsupported> {
-    let numeric = match (l.ty().base(), r.ty().base()) {
-        (Ty::Vec(n), _) | (_, Ty::Vec(n)) => Ty::Vec(*n),
-        _ => Ty::Float,
-    };
-    let (a, b) = (widen(l, &numeric, tex)?, widen(r, &numeric, tex)?);
-    Ok(match op {
-        BinaryOp::Or => format!("({a} || {b})"),
-        BinaryOp::And => format!("({a} && {b})"),
-        BinaryOp::Rem => format!("({a} - {b} * floor({a} / {b}))"),
-        BinaryOp::Eq | BinaryOp::Ne if matches!(numeric, Ty::Vec(_)) && *ty == Ty::Bool => {
-            format!("all({a} {} {b})", op.symbol())
-        }
-        _ => format!("({a} {} {b})", op.symbol()),
-    })
-}
-
-fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Unsupported> {
-    use BuiltinId as B;
-    let name = builtin.name();
-    let t_ty = args
-        .iter()
-        .map(|a| a.ty().base().clone())
-        .find(|t| matches!(t, Ty::Vec(_)))
-        .unwrap_or(Ty::Float);
-    let mut f = |v: &Value| field(v, tex);
-    Ok(match builtin {
-        B::Checker => format!("sdfc_checker({}, {})", f(&args[0])?, f(&args[1])?),
-        B::Grid => format!(
-            "sdfc_grid({}, {}, {})",
-            f(&args[0])?,
-            f(&args[1])?,
-            f(&args[2])?
-        ),
-        B::Sample => sample(args, 2, tex)?,
-        B::SampleNormal => {
-            let [_, uv, strength, Value::Str(convention), _] = args else {
-                return Err(Unsupported(String::from(
-                    "a normal map needs a texture, uv, strength, convention and wrap mode",
-                )));
-            };
-            let atlases = uv.atlases();
-            let (Some(k), 1) = (atlases.first(), atlases.len()) else {
-                return Err(Unsupported(String::from(
-                    "a normal map's uv must read one atlas",
-                )));
-            };
-            // Normal maps are data: sampled linear whatever field they are used in.
-            let saved = std::mem::replace(&mut tex.srgb, false);
-            let texel = sample(args, 4, tex);
-            tex.srgb = saved;
-            let texel = texel?;
-            tex.atlases.insert(*k);
-            let strength = field(strength, tex)?;
-            let green = lit(crate::ir::material::green_sign(convention));
-            let a = format!("atlas_sample_{}", k.index());
-            format!("sdfc_normal_map({texel}, {a}.tangent, {a}.bitangent, n, {strength}, {green})")
-        }
-        B::Cross => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
-        // WGSL's normalize takes only vectors; a float's is its sign.
-        B::Normalize if args[0].ty().base() == &Ty::Float => format!("sign({})", f(&args[0])?),
-        B::Length | B::Normalize => format!("{name}({})", f(&args[0])?),
-        // WGSL's dot takes only vectors; two floats' is their product.
-        B::Dot if t_ty == Ty::Float => format!("({} * {})", f(&args[0])?, f(&args[1])?),
-        // The WGSL builtin of the same name, on arguments widened to the call's type.
-        B::Sin
-        | B::Cos
-        | B::Tan
-        | B::Asin
-        | B::Acos
-        | B::Atan
-        | B::Atan2
-        | B::Sqrt
-        | B::Abs
-        | B::Floor
-        | B::Ceil
-        | B::Fract
-        | B::Sign
-        | B::Exp
-        | B::Log
-        | B::Pow
-        | B::Min
-        | B::Max
-        | B::Clamp
-        | B::Mix
-        | B::Smoothstep
-        | B::Step
-        | B::Distance
-        | B::Dot
-        | B::Radians
-        | B::Degrees => format!(
-            "{name}({})",
-            args.iter()
-                .map(|a| widen(a, &t_ty, tex))
-                .collect::<Result<Vec<_>, _>>()?
-                .join(", ")
-        ),
-        B::Sphere
-        | B::Box
-        | B::RoundBox
-        | B::BoxFrame
-        | B::Torus
-        | B::Capsule
-        | B::Cylinder
-        | B::Cone
-        | B::CappedCone
-        | B::Plane
-        | B::Ellipsoid
-        | B::Octahedron
-        | B::HexPrism
-        | B::TriPrism
-        | B::Pyramid
-        | B::Link
-        | B::Union
-        | B::Intersection
-        | B::Difference
-        | B::SmoothUnion
-        | B::SmoothIntersection
-        | B::SmoothDifference
-        | B::Translate
-        | B::Rotate
-        | B::RotateX
-        | B::RotateY
-        | B::RotateZ
-        | B::Scale
-        | B::Paint
-        | B::Displace
-        | B::ShellMap
-        | B::Twist
-        | B::Bend
-        | B::Repeat
-        | B::Mirror
-        | B::Elongate
-        | B::Round
-        | B::Shell
-        | B::Image
-        | B::Orbit
-        | B::LookAt
-        | B::Sun => return Err(Unsupported(format!("`{name}` is not a surface field"))),
-    })
-}
-
-/// `textureSampleGrad` of `args[0]` at uv `args[1]` with the wrap mode `args[wrap]`,
-/// in the colour space `tex.srgb` says.
-fn sample(args: &[Value], wrap: usize, tex: &mut Uses) -> Result<String, Unsupported> {
-    let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(wrap))
-    else {
-        return Err(Unsupported(String::from(
-            "a texture sample needs an image and a wrap mode",
-        )));
-    };
-    let Some(Value::Str(path)) = node.args.first() else {
-        return Err(Unsupported(String::from("a texture sample needs an image")));
-    };
-    // Texture derivatives from the pixel's footprint, analytically: the uv
-    // expression at the point and displaced by one footprint along two tangent
-    // directions (atlas uv moves isometrically, position along the surface). Unlike
-    // screen-space derivatives they cannot explode at uv seams, and they are valid
-    // in the non-uniform control flow after sphere tracing.
-    let uv = field(&args[1], tex)?;
-    let saved = tex.offset.take();
-    tex.offset = Some((
-        String::from("vec2<f32>(footprint, 0.0)"),
-        String::from("tangent_u * footprint"),
-    ));
-    let ux = field(&args[1], tex)?;
-    tex.offset = Some((
-        String::from("vec2<f32>(0.0, footprint)"),
-        String::from("tangent_v * footprint"),
-    ));
-    let uy = field(&args[1], tex)?;
-    tex.offset = saved;
-    let i = tex.index(path, wrap);
-    Ok(format!(
-        "textureSampleGrad(texture_{i}, sampler_{i}, {uv}, {ux} - {uv}, {uy} - {uv})"
-    ))
 }

@@ -13,6 +13,7 @@
 mod atlas;
 pub mod bindings;
 mod emit;
+mod field;
 mod group;
 pub mod mesh;
 pub mod shake;
@@ -23,7 +24,8 @@ pub use atlas::SEED_WORDS;
 
 pub use atlas::{SeedData, SeedGridChoice, WalkForm, AUTO_BAKED_SEEDS};
 pub use bindings::Binding;
-pub use emit::{lit, TextureUse};
+pub use emit::lit;
+pub use field::TextureUse;
 pub use targets::{compact, translate, validate, NagaError, Target, Validated};
 
 use crate::codes;
@@ -32,7 +34,8 @@ use crate::ir::{self, Scene};
 use crate::sema::{FieldExpr, MaterialAttrs, MaterialDef, Program, SurfaceInput, Ty, Value};
 use crate::span::Span;
 use crate::uv::Atlas;
-use emit::{field, Unsupported, Uses, Writer};
+use emit::Writer;
+use field::{field, Unsupported, Uses};
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -198,6 +201,36 @@ pub struct Options {
     /// Where the atlases' seeds and merge graphs live: baked in as `var<private>` arrays
     /// or in the `tables` buffer (auto: baked up to [`AUTO_BAKED_SEEDS`] seeds).
     pub seed_data: SeedData,
+    /// Which unions' operands are skipped by their boxes where they cannot change the
+    /// union (`ir::guard`).
+    pub bounds: Bounds,
+}
+
+/// Which unions' operands the generated code skips by their bounding boxes
+/// (`ir::guard`: exact, the field is unchanged everywhere). Off by default: on Mesa's
+/// software adapter an `if` never skips work (gallivm runs both sides under lane masks),
+/// so the box tests only add cost there (csg.sdf 1.14×, robot.sdf 1.15× slower plain
+/// traces, `sdfc bench`); a GPU, whose warps branch, may decide otherwise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Bounds {
+    /// None: every operand evaluated everywhere (the default).
+    #[default]
+    Off,
+    /// The operands that cost several primitives ([`ir::guard::MIN_COST`]).
+    Costly,
+    /// Every operand that has a box, however cheap.
+    All,
+}
+
+impl Bounds {
+    /// The cost from which an operand is guarded; None for none.
+    pub fn min_cost(self) -> Option<f64> {
+        match self {
+            Bounds::Costly => Some(ir::guard::MIN_COST),
+            Bounds::Off => None,
+            Bounds::All => Some(0.0),
+        }
+    }
 }
 
 /// A material field, for messages and for the colour space of its textures.
@@ -262,6 +295,7 @@ pub fn generate(
         tables: Vec::new(),
         groups: Vec::new(),
         unions_as_code: options.unions_as_code,
+        guard_cost: options.bounds.min_cost(),
     };
     g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
@@ -308,6 +342,8 @@ struct Generator<'a> {
     groups: Vec<std::sync::Arc<ir::group::Group>>,
     /// `Options::unions_as_code`.
     unions_as_code: bool,
+    /// `Options::bounds`.
+    guard_cost: Option<f64>,
 }
 
 impl Generator<'_> {
@@ -353,7 +389,7 @@ impl Generator<'_> {
                 &mut self.out,
                 &format!("map_{}", named.name),
                 &named.shape,
-                self.unions_as_code,
+                (self.unions_as_code, self.guard_cost),
             );
             self.add_heights(h);
             self.groups.extend(groups);
@@ -370,7 +406,12 @@ impl Generator<'_> {
     /// `scene_map`: the render target.
     fn render_target(&mut self, scene: &Scene, target: &ir::Shape, options: &Options) {
         let start = self.out.len();
-        let (h, groups) = map_fn(&mut self.out, "scene_map", target, self.unions_as_code);
+        let (h, groups) = map_fn(
+            &mut self.out,
+            "scene_map",
+            target,
+            (self.unions_as_code, self.guard_cost),
+        );
         self.add_heights(h);
         self.groups.extend(groups);
         self.surface(target);
@@ -395,6 +436,7 @@ impl Generator<'_> {
         let mut w = emit::Writer::new("scene_blend");
         w.blend = true;
         w.unions_as_code = self.unions_as_code;
+        w.guard_cost = self.guard_cost;
         let d = w.shape(target, target.root(), "p");
         let _ = writeln!(
             self.out,
@@ -708,9 +750,16 @@ type Calls = (
 
 /// Writes `fn NAME(p) -> vec2<f32>` (distance, material); returns the heights and
 /// groups it calls.
-fn map_fn(out: &mut String, name: &str, shape: &ir::Shape, unions_as_code: bool) -> Calls {
+/// `mode`: unions as code, and the cost from which operands are guarded.
+fn map_fn(
+    out: &mut String,
+    name: &str,
+    shape: &ir::Shape,
+    (unions_as_code, guard_cost): (bool, Option<f64>),
+) -> Calls {
     let mut w = Writer::new(name);
     w.unions_as_code = unions_as_code;
+    w.guard_cost = guard_cost;
     let d = w.shape(shape, shape.root(), "p");
     // The evals view counts the render target's evaluations.
     let count = if name == "scene_map" {

@@ -145,7 +145,7 @@ pub fn smin(a: f64, b: f64, k: f64) -> f64 {
 /// Distance and material id (0 = default) of a shape at `p`: the material that
 /// dominates there ([`Blend::dominant`]).
 pub fn eval(shape: &Shape, p: DVec3) -> (f64, u32) {
-    let (d, m) = eval_node(shape, shape.root(), p);
+    let (d, m) = eval_node(shape, shape.root(), p, true);
     (d, m.dominant())
 }
 
@@ -193,7 +193,7 @@ impl Blend {
 
 /// Distance and materials of a shape at `p` (the generated `scene_blend`).
 pub fn eval_blend(shape: &Shape, p: DVec3) -> (f64, Blend) {
-    eval_node(shape, shape.root(), p)
+    eval_node(shape, shape.root(), p, true)
 }
 
 /// Just the distance.
@@ -203,20 +203,26 @@ pub fn distance(shape: &Shape, p: DVec3) -> f64 {
 
 /// The distance of node `id` (a subtree of the shape) at `p`.
 pub fn node_distance(shape: &Shape, id: NodeId, p: DVec3) -> f64 {
-    eval_node(shape, id, p).0
+    eval_node(shape, id, p, true).0
 }
 
-fn eval_node(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
-    stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p))
+/// Distance and materials with every union operand evaluated, none skipped by its
+/// box ([`super::guard`]): the baseline the guards are proven equal to.
+pub fn eval_unguarded(shape: &Shape, p: DVec3) -> (f64, Blend) {
+    eval_node(shape, shape.root(), p, false)
 }
 
-fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
-    if let Some(g) = shape.group(id) {
+fn eval_node(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p, g))
+}
+
+fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
+    if let Some(group) = shape.group(id) {
         // union(leaves…, others…) with a hard union's blends: the nearer, ties first.
-        let (mut d, m) = g.eval(p);
+        let (mut d, m) = group.eval(p);
         let mut blend = Blend::single(m);
-        for &o in &g.others {
-            let (dd, mm) = eval_node(shape, o, p);
+        for &o in &group.others {
+            let (dd, mm) = eval_node(shape, o, p, g);
             if dd < d {
                 (d, blend) = (dd, mm);
             }
@@ -226,8 +232,24 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
     match &shape[id].op {
         Op::Prim(pr) => (prim(p, pr), Blend::single(0)),
         Op::Csg { op, k, a, b } => {
-            let (da, ma) = eval_node(shape, *a, p);
-            let (db, mb) = eval_node(shape, *b, p);
+            let far = (f64::INFINITY, Blend::single(0));
+            let ((da, ma), (db, mb)) = match shape.guard(id).filter(|_| g) {
+                // The first operand, then the other where its box comes near enough.
+                Some(guard) => {
+                    let first = eval_node(shape, guard.first, p, g);
+                    let other = if guard.needed(p, first.0) {
+                        eval_node(shape, guard.guarded, p, g)
+                    } else {
+                        far
+                    };
+                    if guard.first == *a {
+                        (first, other)
+                    } else {
+                        (other, first)
+                    }
+                }
+                None => (eval_node(shape, *a, p, g), eval_node(shape, *b, p, g)),
+            };
             match op {
                 Csg::Union => (smin(da, db, *k), Blend::union(da, ma, db, mb, *k)),
                 Csg::Intersection => (-smin(-da, -db, *k), if da >= db { ma } else { mb }),
@@ -235,7 +257,7 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
             }
         }
         Op::Scale { factor, child } => {
-            let (d, m) = eval_node(shape, *child, p / *factor);
+            let (d, m) = eval_node(shape, *child, p / *factor, g);
             (d * factor.min_element(), m)
         }
         Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > warp_outer(*radius) => {
@@ -249,28 +271,30 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
         | Op::Mirror { child, .. }
         | Op::Elongate { child, .. } => {
             let op = &shape[id].op;
-            eval_node(shape, *child, super::rest::child_point(op, p))
+            eval_node(shape, *child, super::rest::child_point(op, p), g)
         }
         Op::Round { r, child } => {
-            let (d, m) = eval_node(shape, *child, p);
+            let (d, m) = eval_node(shape, *child, p, g);
             (d - r, m)
         }
         Op::Shell { thickness, child } => {
-            let (d, m) = eval_node(shape, *child, p);
+            let (d, m) = eval_node(shape, *child, p, g);
             (d.abs() - thickness * 0.5, m)
         }
-        Op::Paint { material, child } => (eval_node(shape, *child, p).0, Blend::single(*material)),
+        Op::Paint { material, child } => {
+            (eval_node(shape, *child, p, g).0, Blend::single(*material))
+        }
         Op::Displace { height, child } => {
-            let (f, m) = eval_node(shape, *child, p);
-            let d = height.field(f, || project_onto(shape, *child, p, f));
+            let (f, m) = eval_node(shape, *child, p, g);
+            let d = height.field(f, || project_onto(shape, *child, p, f, g));
             (d, m)
         }
         Op::ShellMap { map, base, tile } => {
-            let fb = eval_node(shape, *base, p);
+            let fb = eval_node(shape, *base, p, g);
             map.field(
                 fb,
-                || project_onto(shape, *base, p, fb.0),
-                |s| eval_node(shape, *tile, s),
+                || project_onto(shape, *base, p, fb.0, g),
+                |s| eval_node(shape, *tile, s, g),
             )
         }
     }
@@ -278,10 +302,10 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3) -> (f64, Blend) {
 
 /// Π_f (Eq. 57) onto node `child`'s surface from p, where its distance is `f`, with
 /// the gradient by central differences: the point and the unit normal.
-fn project_onto(shape: &Shape, child: NodeId, p: DVec3, f: f64) -> (DVec3, DVec3) {
+fn project_onto(shape: &Shape, child: NodeId, p: DVec3, f: f64, g: bool) -> (DVec3, DVec3) {
     let h = GRADIENT_STEP;
-    let g = |o: DVec3| eval_node(shape, child, p + o).0 - eval_node(shape, child, p - o).0;
-    let grad = DVec3::new(g(DVec3::X * h), g(DVec3::Y * h), g(DVec3::Z * h)) / (2.0 * h);
+    let diff = |o: DVec3| eval_node(shape, child, p + o, g).0 - eval_node(shape, child, p - o, g).0;
+    let grad = DVec3::new(diff(DVec3::X * h), diff(DVec3::Y * h), diff(DVec3::Z * h)) / (2.0 * h);
     let q = p - grad * (f / grad.length_squared().max(1e-300));
     (q, grad.normalize_or_zero())
 }

@@ -1,6 +1,6 @@
 //! The CPU reference (f64) of the scene's materials: an interpreter of the material
 //! fields ([`FieldExpr`] trees) that mirrors, case by case, the WGSL that
-//! `codegen::emit::field` writes into `scene_material(id, p, n, footprint)`.
+//! `codegen::field::field` writes into `scene_material(id, p, n, footprint)`.
 //!
 //! What it mirrors:
 //! - the material ids of `scene_map` (0 the default material, i + 1 `materials[i]`,
@@ -366,7 +366,7 @@ impl<'a> MaterialEval<'a> {
         }
     }
 
-    /// Rejects what `codegen::emit::field` rejects, and textures without an image.
+    /// Rejects what `codegen::field::field` rejects, and textures without an image.
     fn validate(&self, v: &Value) -> Result<(), String> {
         match v {
             Value::Float(_) | Value::Vec(_) | Value::Bool(_) => Ok(()),

@@ -11,6 +11,7 @@
 pub mod displace;
 pub mod eval;
 pub mod group;
+pub mod guard;
 mod lower;
 pub mod material;
 pub mod rest;
@@ -287,6 +288,14 @@ impl Shape {
             .as_ref()
     }
 
+    /// The guard of union node `id` (its operand skipped by its box), if any.
+    pub fn guard(&self, id: NodeId) -> Option<&guard::Guard> {
+        self.guards
+            .get_or_init(|| guard::guards(self))
+            .get(id.index())?
+            .as_ref()
+    }
+
     /// Whether a node has more than one parent (a `let` used twice).
     pub fn is_shared(&self, id: NodeId) -> bool {
         self.shared
@@ -410,6 +419,8 @@ pub struct Shape {
     shared: std::sync::OnceLock<Vec<bool>>,
     /// The large unions evaluated as data ([`group`]), by node, built on first use.
     groups: std::sync::OnceLock<Vec<Option<std::sync::Arc<group::Group>>>>,
+    /// The unions' guards by their operands' boxes ([`guard`]), built on first use.
+    guards: std::sync::OnceLock<Vec<Option<guard::Guard>>>,
 }
 
 impl PartialEq for Shape {

@@ -58,7 +58,7 @@ impl SeedData {
     }
 }
 
-use super::emit::{lit, point_expr, vec3, Writer};
+use super::emit::{arg, lit, point_expr, vec3, Writer};
 use super::template;
 use crate::uv::grid::SeedGrid;
 use crate::uv::logmap::sharp_angle;
@@ -448,33 +448,25 @@ fn seeds_baked(k: usize, atlas: &Atlas) -> String {
     let seeds = &atlas.seeds;
     let (start, adj, adj_d) = adjacency(atlas);
     let mut text = String::new();
-    text += &arr(
-        "P",
-        "vec3<f32>",
-        seeds.iter().map(|s| vec3(s.seed.p)).collect(),
-    );
-    text += &arr(
-        "N",
-        "vec3<f32>",
-        seeds.iter().map(|s| vec3(s.seed.n)).collect(),
-    );
+    text += &arr("P", "vec3f", seeds.iter().map(|s| vec3(s.seed.p)).collect());
+    text += &arr("N", "vec3f", seeds.iter().map(|s| vec3(s.seed.n)).collect());
     text += &arr(
         "E1",
-        "vec3<f32>",
+        "vec3f",
         seeds.iter().map(|s| vec3(s.seed.e1)).collect(),
     );
     text += &arr(
         "OFFSET",
-        "vec2<f32>",
+        "vec2f",
         seeds
             .iter()
-            .map(|s| format!("vec2<f32>({}, {})", lit(s.offset.x), lit(s.offset.y)))
+            .map(|s| format!("vec2f({}, {})", arg(s.offset.x), arg(s.offset.y)))
             .collect(),
     );
     let u = |v: Vec<u32>| v.into_iter().map(|x| format!("{x}u")).collect();
     text += &arr("ADJ_START", "u32", u(start));
     text += &arr("ADJ", "u32", u(adj));
-    text += &arr("ADJ_D", "f32", adj_d.into_iter().map(lit).collect());
+    text += &arr("ADJ_D", "f32", adj_d.into_iter().map(arg).collect());
     text += &accessors(
         k,
         [

@@ -22,8 +22,19 @@ pub fn lit(x: f64) -> String {
     }
 }
 
+/// A literal as a function argument or array element: no parentheses around a
+/// negative one (naga's parser takes each through its whole precedence chain again).
+pub fn arg(x: f64) -> String {
+    let s = lit(x);
+    match s.strip_prefix('(').and_then(|s| s.strip_suffix(')')) {
+        Some(inner) => inner.to_string(),
+        None => s,
+    }
+}
+
+/// A `vec3f` constant (the alias parses as one token; `vec3<f32>` as four).
 pub fn vec3(v: DVec3) -> String {
-    format!("vec3<f32>({}, {}, {})", lit(v.x), lit(v.y), lit(v.z))
+    format!("vec3f({}, {}, {})", arg(v.x), arg(v.y), arg(v.z))
 }
 
 /// `m * expr`, or just `expr` when `m` is the identity.
@@ -37,7 +48,7 @@ fn apply(m: DMat3, expr: &str) -> String {
 
 fn mat3(m: DMat3) -> String {
     format!(
-        "mat3x3<f32>({}, {}, {})",
+        "mat3x3f({}, {}, {})",
         vec3(m.x_axis),
         vec3(m.y_axis),
         vec3(m.z_axis)
@@ -123,18 +134,18 @@ impl Writer {
     /// A node's value with distance `e` and the material of `dc`.
     fn with_d(&self, dc: &str, e: &str) -> String {
         if self.blend {
-            format!("vec4<f32>({e}, {dc}.yzw)")
+            format!("vec4f({e}, {dc}.yzw)")
         } else {
-            format!("vec2<f32>({e}, {dc}.y)")
+            format!("vec2f({e}, {dc}.y)")
         }
     }
 
     /// A node's value with distance `e` and the single material `m`.
     fn leaf(&self, e: &str, m: &str) -> String {
         if self.blend {
-            format!("vec4<f32>({e}, {m}, {m}, 0.0)")
+            format!("vec4f({e}, {m}, {m}, 0.0)")
         } else {
-            format!("vec2<f32>({e}, {m})")
+            format!("vec2f({e}, {m})")
         }
     }
 

@@ -519,7 +519,7 @@ impl Checker<'_> {
                 )
                 .with_note(
                     "the merge geometry solved at check time grows with the seeds and merges \
-                     (walks between merged seeds, a dense solve of frames and offsets)",
+                     (walks between merged seeds, and a solve for frames and offsets)",
                 )
                 .with_help("split the surface into several atlases"),
             );

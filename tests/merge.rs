@@ -332,11 +332,12 @@ render tube;",
 }
 
 #[test]
-fn frames_and_offsets_solve_for_fifty_seeds() {
-    // A 10 x 5 grid on a plane, all merged with neighbours: the solve recovers one frame.
+fn frames_and_offsets_solve_for_seventy_two_seeds() {
+    // A 12 x 6 grid on a plane, all merged with neighbours: the solve recovers one frame.
+    // Both systems (213 and 71 unknowns) take the sparse factor; PLANE_GRID's the dense.
     let mut src = String::from("let ground = plane(normal: [0, 1, 0], offset: 0);\natlas flat on ground {\n    max_distance = 3;\n");
-    for r in 0..5 {
-        for c in 0..10 {
+    for r in 0..6 {
+        for c in 0..12 {
             let t = [(c as f64).cos(), 0.0, (r as f64 + 0.3).sin()];
             src += &format!(
                 "    seed s{r}_{c} = [{}, 0, {}] tangent [{}, 0, {}];\n",
@@ -347,19 +348,19 @@ fn frames_and_offsets_solve_for_fifty_seeds() {
             );
         }
     }
-    for r in 0..5 {
+    for r in 0..6 {
         src += &format!(
             "    merge {};\n",
-            (0..10)
+            (0..12)
                 .map(|c| format!("s{r}_{c}"))
                 .collect::<Vec<_>>()
                 .join(" ")
         );
     }
-    for c in 0..10 {
+    for c in 0..12 {
         src += &format!(
             "    merge {};\n",
-            (0..5)
+            (0..6)
                 .map(|r| format!("s{r}_{c}"))
                 .collect::<Vec<_>>()
                 .join(" ")
@@ -367,8 +368,8 @@ fn frames_and_offsets_solve_for_fifty_seeds() {
     }
     src += "}\nrender ground;";
     let a = clean_atlas(&src);
-    assert_eq!(a.seeds.len(), 50);
-    assert_eq!(a.graph.edges.len(), 5 * 9 + 10 * 4);
+    assert_eq!(a.seeds.len(), 72);
+    assert_eq!(a.graph.edges.len(), 6 * 11 + 12 * 5);
     let root = a.seeds[0].seed;
     for s in &a.seeds {
         assert!((s.seed.e1 - root.e1).length() < 1e-6);
@@ -376,7 +377,7 @@ fn frames_and_offsets_solve_for_fifty_seeds() {
         assert!((s.offset - DVec2::new(d.dot(root.e1), d.dot(root.e2))).length() < 1e-6);
     }
     eprintln!(
-        "frame and offset solves for 50 seeds: {:.3} ms",
+        "frame and offset solves for 72 seeds: {:.3} ms",
         a.graph.solve_seconds * 1e3
     );
 }

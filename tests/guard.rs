@@ -213,3 +213,32 @@ fn every_example_validates_with_node_bounds() {
     }
     assert!(with_guards >= 8, "{with_guards}");
 }
+
+/// `sdfc compile --bounds` reaches the code generator: `costly` guards csg.sdf's column
+/// and gilded parts, `off` (the default) guards nothing.
+#[test]
+fn compile_command_takes_the_bounds_choice() {
+    let dir = tempfile::tempdir().unwrap();
+    let guard_line = "if (sd_box(p - ";
+    for (bounds, want) in [(None, false), (Some("off"), false), (Some("costly"), true)] {
+        let out = dir.path().join("csg.wgsl");
+        let out_s = out.to_str().unwrap();
+        let mut args = vec![
+            "compile",
+            "examples/csg.sdf",
+            "--target",
+            "wgsl",
+            "-o",
+            out_s,
+        ];
+        if let Some(b) = bounds {
+            args.extend(["--bounds", b]);
+        }
+        let (code, _, stderr) = common::sdfc(&args);
+        assert_eq!(code, 0, "{bounds:?}: {stderr}");
+        let wgsl = std::fs::read_to_string(&out).unwrap();
+        assert_eq!(wgsl.contains(guard_line), want, "{bounds:?}");
+    }
+    let (code, _, stderr) = common::sdfc(&["compile", "examples/csg.sdf", "--bounds", "some"]);
+    assert_eq!(code, 2, "{stderr}");
+}

@@ -157,6 +157,8 @@ fn only_fields_bounded_below_by_their_boxes_are_guarded() {
         "tri_prism(0.5, 0.3)",
         "sphere(0.2).repeat([1, 1, 1])",
         "plane([0, 1, 0], 0)",
+        // A warp of an unbounded shape: its box is a framing guess, not a bound.
+        "plane([0, 1, 0], 0).twist(rate: 0.1)",
     ] {
         let s = render_shape(&format!(
             "render sphere(0.1) | {operand}.translate([3, 0, 0]);"
@@ -168,6 +170,13 @@ fn only_fields_bounded_below_by_their_boxes_are_guarded() {
         let g = s.guard(s.root()).expect("the sphere is guarded");
         assert!(g.guarded != b && g.first == b, "{operand} is guarded");
     }
+    // The twisted plane again, far from the origin, where the guess is farthest off.
+    let s = render_shape(
+        "render sphere(30).translate([0, -100, 0]) | plane([0, 1, 0], 0).twist(rate: 0.1);",
+    );
+    let p = DVec3::new(0.0, -60.0, 0.0);
+    assert_eq!(eval::eval_blend(&s, p), eval::eval_unguarded(&s, p));
+    assert!(eval::distance(&s, p) < -59.0);
     // An intersection is bounded below where an exact operand's box is the result's.
     let s = render_shape(
         "render plane([0, 1, 0], -3) | (sphere(0.2).repeat([1, 1, 1]) & box([3, 0.5, 3])).translate([5, 0, 0]);",
@@ -241,4 +250,43 @@ fn compile_command_takes_the_bounds_choice() {
     }
     let (code, _, stderr) = common::sdfc(&["compile", "examples/csg.sdf", "--bounds", "some"]);
     assert_eq!(code, 2, "{stderr}");
+}
+
+/// A shared node reached from several guards' helper functions is still one function:
+/// a chain of `let`s each used twice stays linear in the WGSL, not exponential.
+#[test]
+fn guards_keep_shared_nodes_one_function_each() {
+    use sdfc::codegen::{self, Bounds};
+    let functions = |depth: usize, bounds: Bounds| {
+        let mut src = String::from("let s0 = sphere(0.2);\n");
+        for i in 1..=depth {
+            src += &format!(
+                "let s{i} = smooth_union(s{0}, s{0}.translate([{1}, 0, 0]), 0.05);\n",
+                i - 1,
+                0.5 * (1u64 << i) as f64
+            );
+        }
+        src += &format!("render s{depth};\n");
+        let a = sdfc::driver::check(&src, None);
+        assert!(!a.has_errors(), "{:?}", a.diagnostics);
+        let options = codegen::Options {
+            bounds,
+            walk: codegen::WalkForm::Loop,
+            ..Default::default()
+        };
+        let m = sdfc::driver::generate(&a, &options).unwrap();
+        codegen::validate(&m.wgsl).unwrap();
+        assert_eq!(m.wgsl.contains("if (sd_box(p - "), bounds == Bounds::All);
+        m.wgsl.matches("\nfn ").count()
+    };
+    // Every level adds one guard helper per function that reaches it (scene_map and each
+    // named shape's map_): the same growth as without guards, not 2^depth.
+    for depth in [6, 12] {
+        let (off, all) = (functions(depth, Bounds::Off), functions(depth, Bounds::All));
+        eprintln!("depth {depth}: {off} functions without guards, {all} with");
+        assert!(
+            all <= 2 * off,
+            "depth {depth}: {off} functions without guards, {all} with"
+        );
+    }
 }

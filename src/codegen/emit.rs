@@ -68,8 +68,12 @@ pub struct Writer {
     /// `let` is at function scope): a node shared by two parents at the same point is
     /// evaluated once.
     done: std::collections::HashMap<(NodeId, String), String>,
-    /// Shared nodes already emitted as helper functions by this writer.
+    /// Shared nodes already emitted as helper functions, by this writer and the helper
+    /// writers of its tree (each has the set so far and hands it back), named after
+    /// `shared_prefix`, the top writer's name: a shared node is one function in the
+    /// module however many helpers (warps, guards) reach it.
     emitted: std::collections::HashSet<NodeId>,
+    shared_prefix: String,
     /// The node whose helper function this writer is writing (not a helper again).
     own: Option<NodeId>,
     /// The displacements' heights the code calls (`height_ID`), once each.
@@ -103,6 +107,7 @@ impl Writer {
             helpers: String::new(),
             done: std::collections::HashMap::new(),
             emitted: std::collections::HashSet::new(),
+            shared_prefix: name.to_string(),
             own: None,
             heights: Vec::new(),
             groups: Vec::new(),
@@ -119,7 +124,17 @@ impl Writer {
         w.blend = self.blend;
         w.unions_as_code = self.unions_as_code;
         w.guard_cost = self.guard_cost;
+        w.emitted = self.emitted.clone();
+        w.shared_prefix = self.shared_prefix.clone();
         w
+    }
+
+    /// Takes back what a helper writer made for the module: its helper functions, the
+    /// shared nodes it emitted, its heights and groups.
+    fn absorb(&mut self, w: &mut Writer) {
+        self.helpers.push_str(&w.helpers);
+        self.emitted.extend(w.emitted.drain());
+        self.take_heights(w);
     }
 
     /// The WGSL type of a node's value.
@@ -173,13 +188,12 @@ impl Writer {
         let d = if self.own != Some(id) && shape.is_shared(id) {
             // A node with several parents (a `let` used twice) is one helper function,
             // called from each: the WGSL stays linear in the scene.
-            let name = format!("{}_n{}", self.prefix, id.index());
+            let name = format!("{}_n{}", self.shared_prefix, id.index());
             if self.emitted.insert(id) {
                 let mut w = self.sub(&name);
                 w.own = Some(id);
                 let dc = w.shape(shape, id, "p");
-                self.helpers.push_str(&w.helpers);
-                self.take_heights(&mut w);
+                self.absorb(&mut w);
                 let _ = writeln!(
                     self.helpers,
                     "fn {name}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",
@@ -476,8 +490,7 @@ impl Writer {
         let helper = self.fresh(&format!("{}_{tag}", self.prefix));
         let mut inner_w = self.sub(&helper);
         let dc = inner_w.shape(shape, child, "p");
-        self.helpers.push_str(&inner_w.helpers);
-        self.take_heights(&mut inner_w);
+        self.absorb(&mut inner_w);
         let _ = writeln!(
             self.helpers,
             "fn {helper}(p: vec3<f32>) -> {} {{\n{}    return {dc};\n}}\n",

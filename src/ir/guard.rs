@@ -43,9 +43,13 @@ impl Guard {
     /// Whether the guarded operand can change the union at `p`, where the first
     /// operand's distance is `first`.
     pub fn needed(&self, p: DVec3, first: f64) -> bool {
+        // A NaN first operand: the union is the other (Rust's min ignores NaN).
+        if first.is_nan() {
+            return true;
+        }
         let q = (p - self.center).abs() - self.half;
         let outside = q.max(DVec3::ZERO).length() + q.max_element().min(0.0);
-        // NaN evaluates the operand.
+        // A NaN box distance evaluates the operand.
         outside.partial_cmp(&(first.max(0.0) + self.slack)) != Some(std::cmp::Ordering::Greater)
     }
 }
@@ -126,11 +130,13 @@ pub fn exact_outside(shape: &Shape) -> Vec<bool> {
             }
             Op::Scale { factor, child } => e(child) && factor.min_element() == factor.max_element(),
             // Warps rotate points about the origin within the child's ball (radius R):
-            // the field is at least |p| − R, and the box holds the ball.
+            // the field is at least |p| − R, and the box holds the ball. An unbounded
+            // child has no ball (its warp's box is only a framing guess).
+            Op::Twist { child, radius, .. } | Op::Bend { child, radius, .. } => {
+                e(child) && radius.is_finite()
+            }
             // The child's box grows by what the operation can subtract.
-            Op::Twist { child, .. }
-            | Op::Bend { child, .. }
-            | Op::Mirror { child, .. }
+            Op::Mirror { child, .. }
             | Op::Elongate { child, .. }
             | Op::Round { child, .. }
             | Op::Shell { child, .. }

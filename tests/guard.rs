@@ -97,22 +97,42 @@ fn guarded_fields_equal_the_full_field_on_every_example() {
 
 #[test]
 fn guarded_fields_equal_the_full_field_on_random_scenes() {
-    let dir = tempfile::tempdir().unwrap();
+    // Where the generator's texture paths resolve (as in tests/random_scenes.rs).
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join("ui");
     let mut rng = Rng(0xB0_1D5);
-    let (mut points, mut skipped) = (0, 0);
+    let (mut points, mut skipped, mut validated) = (0, 0, 0);
     for seed in 0..400u64 {
         let scene = gen::scene(seed);
         if scene.mutation.is_some() {
             continue;
         }
-        for (name, shape) in shapes(&scene.text, dir.path()) {
+        for (name, shape) in shapes(&scene.text, &dir) {
             let (p, s) = check_shape(&format!("seed {seed}: {name}"), &shape, &mut rng, 40);
             points += p;
             skipped += s;
         }
+        // Every operand bounded: the generated code validates (the same scene as
+        // written, a naga rejection is a compiler bug).
+        let a = sdfc::driver::check(&scene.text, Some(&dir));
+        if a.has_errors() {
+            continue;
+        }
+        let options = sdfc::codegen::Options {
+            bounds: sdfc::codegen::Bounds::All,
+            walk: sdfc::codegen::WalkForm::Loop,
+            ..Default::default()
+        };
+        if let Ok(m) = sdfc::driver::generate(&a, &options) {
+            sdfc::codegen::validate(&m.wgsl)
+                .unwrap_or_else(|e| panic!("seed {seed}: --bounds all: {e}\n{}", scene.text));
+            validated += 1;
+        }
     }
-    eprintln!("random scenes: {points} points, a guard skipped at {skipped}");
+    eprintln!("random scenes: {points} points, a guard skipped at {skipped}; {validated} modules validated with every operand bounded");
     assert!(skipped > 100, "{skipped} of {points}");
+    assert!(validated >= 80, "{validated}");
 }
 
 fn render_shape(src: &str) -> Shape {

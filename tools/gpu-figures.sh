@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The performance figures that need a real GPU (README, Performance), in one run:
+# robot.sdf and sphere.sdf at 1080p with every variant `sdfc bench` compares (unrolled
+# and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
+# and the seed sweep with its chart, both walk forms. Each bench writes its --json next to its log.
+#
+#   tools/gpu-figures.sh OUT_DIR            # on the GPU machine
+#   SIZE=160x90 FRAMES=3 tools/gpu-figures.sh OUT_DIR   # a quick check of the script
+#
+# Build first (cargo build --release); the script runs target/release/sdfc, or $SDFC.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+out=${1:?usage: tools/gpu-figures.sh OUT_DIR}
+size=${SIZE:-1920x1080}
+frames=${FRAMES:-30}
+sdfc=${SDFC:-${CARGO_TARGET_DIR:-target}/release/sdfc}
+mkdir -p "$out"
+
+if [ ! -x "$sdfc" ]; then
+  echo "error: $sdfc is not built (cargo build --release)" >&2
+  exit 2
+fi
+
+{
+  echo "date:    $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+  echo "commit:  $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+  if command -v nvidia-smi >/dev/null; then
+    nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
+  fi
+} | tee "$out/machine.txt"
+
+for scene in robot sphere csg plate; do
+  echo "== bench $scene ($size, $frames frames)"
+  "$sdfc" bench "examples/$scene.sdf" --size "$size" --frames "$frames" \
+    --json "$out/$scene.json" 2>&1 | tee "$out/$scene.txt"
+done
+
+for walk in unrolled loop; do
+  echo "== seed sweep, $walk walk"
+  "$sdfc" bench --seed-sweep --walk "$walk" --size "$size" --frames "$frames" \
+    --json "$out/sweep-$walk.json" --plot "$out/sweep-$walk.png" 2>&1 | tee "$out/sweep-$walk.txt"
+done
+
+echo "wrote $out"

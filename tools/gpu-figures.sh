@@ -4,14 +4,24 @@
 # and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
 # and the seed sweep with its chart, both walk forms. Each bench writes its --json next to its log.
 #
-#   tools/gpu-figures.sh OUT_DIR            # on the GPU machine
+#   tools/gpu-figures.sh OUT_DIR            # on the GPU machine: everything
+#   tools/gpu-figures.sh OUT_DIR robot sweep   # only these parts (robot sphere csg plate sweep)
 #   SIZE=160x90 FRAMES=3 tools/gpu-figures.sh OUT_DIR   # a quick check of the script
 #
 # Build first (cargo build --release); the script runs target/release/sdfc, or $SDFC.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-out=${1:?usage: tools/gpu-figures.sh OUT_DIR}
+out=${1:?usage: tools/gpu-figures.sh OUT_DIR [robot sphere csg plate sweep]}
+shift
+parts=${*:-robot sphere csg plate sweep}
+want() { [[ " $parts " == *" $1 "* ]]; }
+for part in $parts; do
+  case $part in
+    robot | sphere | csg | plate | sweep) ;;
+    *) echo "error: unknown part '$part' (robot sphere csg plate sweep)" >&2; exit 2 ;;
+  esac
+done
 size=${SIZE:-1920x1080}
 frames=${FRAMES:-30}
 sdfc=${SDFC:-${CARGO_TARGET_DIR:-target}/release/sdfc}
@@ -31,12 +41,14 @@ fi
 } | tee "$out/machine.txt"
 
 for scene in robot sphere csg plate; do
+  want "$scene" || continue
   echo "== bench $scene ($size, $frames frames)"
   "$sdfc" bench "examples/$scene.sdf" --size "$size" --frames "$frames" \
     --json "$out/$scene.json" 2>&1 | tee "$out/$scene.txt"
 done
 
 for walk in unrolled loop; do
+  want sweep || continue
   echo "== seed sweep, $walk walk"
   "$sdfc" bench --seed-sweep --walk "$walk" --size "$size" --frames "$frames" \
     --json "$out/sweep-$walk.json" --plot "$out/sweep-$walk.png" 2>&1 | tee "$out/sweep-$walk.txt"

@@ -8,7 +8,8 @@ use super::*;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-fn box_dist(p: DVec3, half: DVec3) -> f64 {
+/// The signed distance to a centred box of half size `half` (`sd_box` in the shaders).
+pub fn box_dist(p: DVec3, half: DVec3) -> f64 {
     let q = p.abs() - half;
     q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
 }

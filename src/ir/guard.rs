@@ -47,8 +47,8 @@ impl Guard {
         if first.is_nan() {
             return true;
         }
-        let q = (p - self.center).abs() - self.half;
-        let outside = q.max(DVec3::ZERO).length() + q.max_element().min(0.0);
+        // As the shaders' guard: sd_box(p - centre, half).
+        let outside = super::eval::box_dist(p - self.center, self.half);
         // A NaN box distance evaluates the operand.
         outside.partial_cmp(&(first.max(0.0) + self.slack)) != Some(std::cmp::Ordering::Greater)
     }

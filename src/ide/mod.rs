@@ -23,6 +23,7 @@ use std::path::Path;
 use walk::Visitor;
 
 /// One analysed document.
+#[derive(Clone)]
 pub struct Document {
     pub text: String,
     pub analysis: Analysis,

@@ -43,7 +43,7 @@ fn atlas<'a>(doc: &'a Document, name: &str) -> Result<&'a AtlasDef, String> {
 }
 
 /// The statements of an atlas's block in the syntax tree.
-fn body<'a>(doc: &'a Document, def: &AtlasDef) -> Result<&'a [AtlasStmt], String> {
+pub(super) fn body<'a>(doc: &'a Document, def: &AtlasDef) -> Result<&'a [AtlasStmt], String> {
     doc.analysis
         .parsed
         .file
@@ -64,19 +64,19 @@ fn doc_def_span(doc: &Document, def: &AtlasDef) -> Span {
 }
 
 /// The start of the line holding `offset`.
-fn line_start(text: &str, offset: usize) -> usize {
+pub(super) fn line_start(text: &str, offset: usize) -> usize {
     text[..offset].rfind('\n').map_or(0, |i| i + 1)
 }
 
 /// The end of the line holding `offset`, past its newline.
-fn line_end(text: &str, offset: usize) -> usize {
+pub(super) fn line_end(text: &str, offset: usize) -> usize {
     text[offset..]
         .find('\n')
         .map_or(text.len(), |i| offset + i + 1)
 }
 
 /// The whitespace that starts the line holding `offset`.
-fn indent(text: &str, offset: usize) -> &str {
+pub(super) fn indent(text: &str, offset: usize) -> &str {
     let start = line_start(text, offset);
     let rest = &text[start..];
     &rest[..rest.len() - rest.trim_start_matches([' ', '\t']).len()]

@@ -3,10 +3,12 @@
 //! --write` alike. Placing takes about a second on the robot, so the server offers
 //! the action cheaply and computes the edit only when it is chosen (`codeAction/resolve`).
 
-use super::Document;
+use super::{seed_edit, Document};
 use crate::bake::mesh::surface_samples;
 use crate::diagnostic::Edit;
+use crate::sema::AtlasDef;
 use crate::span::Span;
+use crate::syntax::ast::AtlasStmt;
 use crate::uv::seeds::{place, PlaceOptions, Placement};
 use glam::DVec3;
 
@@ -53,29 +55,148 @@ fn added(placement: &Placement, names: &[String], from_seed: usize, from_merge: 
     out
 }
 
-/// An atlas item's text with `statements` instead of its seeds and merges (other
-/// settings and comments on their own lines stay); `None` without a body.
-pub fn rewrite(item: &str, statements: &str) -> Option<String> {
-    let open = item.find('{')?;
-    let close = item.rfind('}')?;
-    let inner = &item[open + 1..close];
-    let mut kept = String::new();
-    for line in inner.split_inclusive('\n') {
-        let t = line.trim_start();
-        if t.starts_with("seed ") || t.starts_with("merge ") {
-            continue;
-        }
-        kept.push_str(line);
+/// The edit that writes `statements` into atlas `def`'s block instead of its seeds
+/// and merges, over the atlas item's span. Built from the syntax tree: each `seed` and
+/// `merge` statement goes, with the whitespace that only served it (its line when
+/// nothing else is on it; else the spaces between it and the code before it, or after
+/// it when it starts its line), and the blank lines that its going would double;
+/// every other byte stays (settings, comments, a comment after a seed on its line).
+/// The new statements go on their own lines before the closing brace, which goes on
+/// its own line at the item's indentation.
+pub fn replace_seeds(doc: &Document, def: &AtlasDef, statements: &str) -> Result<Edit, String> {
+    let text = doc.text.as_str();
+    let span = def.span;
+    let no_body = || format!("cannot find the body of atlas `{}`", def.name);
+    let item = text.get(span.start..span.end).ok_or_else(no_body)?;
+    let close = span.start + item.rfind('}').ok_or_else(no_body)?;
+    let from = def.shape_span.end.clamp(span.start, close);
+    let open = from + text[from..close].find('{').ok_or_else(no_body)?;
+    let spans: Vec<Span> = seed_edit::body(doc, def)?
+        .iter()
+        .filter_map(|s| match s {
+            AtlasStmt::Seed { span, .. } | AtlasStmt::Merge { span, .. } => Some(*span),
+            _ => None,
+        })
+        .filter(|s| open < s.start && s.end <= close)
+        .collect();
+    let mut removed = merged(statement_removals(text, &spans));
+    removed.extend(doubled_blank_lines(text, open, close, &removed));
+    let removed = merged(removed);
+    let mut out = String::new();
+    let mut at = span.start;
+    for r in &removed {
+        out.push_str(&text[at..r.start]);
+        at = r.end;
     }
-    let mut body = String::from(kept.trim_end());
-    body.push('\n');
-    body.push_str(statements);
-    Some(format!(
-        "{}{{{}}}{}",
-        &item[..open],
-        body,
-        &item[close + 1..]
-    ))
+    out.push_str(&text[at..close]);
+    out.truncate(out.trim_end_matches([' ', '\t']).len());
+    if !out.ends_with('\n') {
+        out.push('\n');
+    }
+    out.push_str(statements);
+    out.push_str(seed_edit::indent(text, span.start));
+    out.push_str(&text[close..span.end]);
+    Ok(Edit { span, text: out })
+}
+
+/// The pieces of `from..to` outside `spans` (sorted; clipped to the range).
+fn gaps(from: usize, to: usize, spans: &[Span]) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    let mut at = from;
+    for s in spans {
+        let (a, b) = (s.start.clamp(from, to), s.end.clamp(from, to));
+        if a > at {
+            out.push(at..a);
+        }
+        at = at.max(b);
+    }
+    if at < to {
+        out.push(at..to);
+    }
+    out
+}
+
+/// The end of the line holding `offset`, before its newline.
+fn line_stop(text: &str, offset: usize) -> usize {
+    text[offset..].find('\n').map_or(text.len(), |i| offset + i)
+}
+
+/// The ranges that removing the statements at `spans` (sorted) deletes: the lines they
+/// are on when nothing else is (apart from whitespace); else each statement with the
+/// spaces and tabs before it, or after it when no code comes before it on its line.
+fn statement_removals(text: &str, spans: &[Span]) -> Vec<Span> {
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < spans.len() {
+        // The statements on the lines from the first one's to the last one's.
+        let start = seed_edit::line_start(text, spans[k].start);
+        let mut j = k;
+        let mut stop = line_stop(text, spans[k].end);
+        while j + 1 < spans.len() && spans[j + 1].start <= stop {
+            j += 1;
+            stop = line_stop(text, spans[j].end);
+        }
+        let group = &spans[k..=j];
+        let blank = |r: std::ops::Range<usize>| text[r].trim().is_empty();
+        if gaps(start, stop, group).into_iter().all(blank) {
+            out.push(Span::new(start, seed_edit::line_end(text, stop)));
+        } else {
+            for (n, s) in group.iter().enumerate() {
+                let line = seed_edit::line_start(text, s.start);
+                if gaps(line, s.start, &group[..n]).into_iter().all(blank) {
+                    let rest = &text[s.end..];
+                    let after = rest.len() - rest.trim_start_matches([' ', '\t']).len();
+                    out.push(Span::new(s.start, s.end + after));
+                } else {
+                    let before = text[..s.start].trim_end_matches([' ', '\t']).len();
+                    out.push(Span::new(before.max(line), s.end));
+                }
+            }
+        }
+        k = j + 1;
+    }
+    out
+}
+
+/// The ranges sorted, with those that overlap or touch joined.
+fn merged(mut ranges: Vec<Span>) -> Vec<Span> {
+    ranges.sort_by_key(|r| (r.start, r.end));
+    let mut out: Vec<Span> = Vec::new();
+    for r in ranges {
+        match out.last_mut() {
+            Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
+            _ => out.push(r),
+        }
+    }
+    out
+}
+
+/// The blank lines of the block between `open` and `close` that the lines `removed`
+/// (sorted, joined) would leave doubled, first in the block or last in it: a blank
+/// line right after removed lines when the line kept before them is blank or the
+/// block's first, or when the closing brace's line follows.
+fn doubled_blank_lines(text: &str, open: usize, close: usize, removed: &[Span]) -> Vec<Span> {
+    let first = seed_edit::line_end(text, open);
+    let last = seed_edit::line_start(text, close);
+    let mut out = Vec::new();
+    let (mut blank_before, mut removed_since) = (true, false);
+    let mut a = first;
+    while a < last {
+        let b = seed_edit::line_end(text, a).min(last);
+        if removed.iter().any(|r| r.start <= a && b <= r.end) {
+            removed_since = true;
+        } else {
+            let blank = text[a..b].trim().is_empty();
+            if blank && removed_since && (blank_before || b == last) {
+                out.push(Span::new(a, b));
+            } else {
+                blank_before = blank;
+                removed_since = false;
+            }
+        }
+        a = b;
+    }
+    out
 }
 
 /// The atlases whose item touches `range`, by name, with whether they have seeds (to
@@ -151,7 +272,6 @@ pub fn place_edit(
         };
         return Ok((placement, edit));
     }
-    let text = rewrite(item, &statements(&placement))
-        .ok_or_else(|| format!("cannot find the body of atlas `{name}`"))?;
-    Ok((placement, Edit { span, text }))
+    let edit = replace_seeds(doc, def, &statements(&placement))?;
+    Ok((placement, edit))
 }

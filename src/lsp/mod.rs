@@ -32,6 +32,7 @@ type Error = Box<dyn std::error::Error + Send + Sync>;
 /// The open documents, by URI.
 type Docs = HashMap<String, Open>;
 
+#[derive(Clone)]
 pub(super) struct Open {
     version: i32,
     doc: Document,
@@ -235,7 +236,7 @@ fn open(
 
 /// Answers a request against the latest texts: every request the server handles, by
 /// its `lsp_types` type.
-fn answer(docs: &Docs, req: Request) -> Response {
+pub(super) fn answer(docs: &Docs, req: Request) -> Response {
     use lsp::request::*;
     RequestDispatcher::new(req, docs)
         .on::<HoverRequest>(hover)

@@ -56,7 +56,16 @@ pub(super) struct Server {
     cancelled: HashSet<RequestId>,
     /// The workspace folders (from `initialize`), where documents may read files.
     roots: Vec<std::path::PathBuf>,
+    /// Answers computed on threads of their own (see [`Server::in_background`]).
+    background: (Sender<Response>, Receiver<Response>),
+    /// The requests being answered in the background, not yet answered.
+    in_flight: HashSet<RequestId>,
 }
+
+/// Requests whose answers can take seconds (placing seeds walks the whole surface):
+/// they are computed on a thread of their own, so the loop keeps answering hover,
+/// cancellations, `shutdown` and `exit` meanwhile.
+const BACKGROUND: &[&str] = &["codeAction/resolve"];
 
 /// Moves every message of the connection into an unbounded queue, from a thread
 /// that ends when the connection closes or the server stops listening.
@@ -109,6 +118,8 @@ pub fn serve(conn: Connection) -> Result<Ended, Error> {
         analysing: HashMap::new(),
         cancelled: HashSet::new(),
         roots: Vec::new(),
+        background: crossbeam_channel::unbounded(),
+        in_flight: HashSet::new(),
     };
     let mut carried: Vec<Message> = Vec::new();
     loop {
@@ -123,6 +134,11 @@ pub fn serve(conn: Connection) -> Result<Ended, Error> {
                 recv(server.done) -> d => {
                     if let Ok(d) = d {
                         server.finished(d)?;
+                    }
+                }
+                recv(server.background.1) -> r => {
+                    if let Ok(r) = r {
+                        server.background_done(r)?;
                     }
                 }
             }
@@ -148,6 +164,16 @@ pub fn serve(conn: Connection) -> Result<Ended, Error> {
             carried = server.wait(&inbox)?;
         }
         for p in pending {
+            let p = match p {
+                Pending::Deferred(req)
+                    if BACKGROUND.contains(&req.method.as_str())
+                        && !server.cancelled.contains(&req.id) =>
+                {
+                    server.in_background(req);
+                    continue;
+                }
+                p => p,
+            };
             let resp = server.answer(p);
             server.conn.sender.send(Message::Response(resp))?;
         }
@@ -284,12 +310,85 @@ impl Server {
                 publish(&s.conn, &uri, None, false)
             })?
             .on::<Cancel, Error>(|s, p| {
-                s.cancelled.insert(match p.id {
+                let id = match p.id {
                     lsp::NumberOrString::Number(i) => RequestId::from(i),
                     lsp::NumberOrString::String(s) => RequestId::from(s),
-                });
+                };
+                // A request answered in the background is answered now; its late
+                // result is dropped.
+                if s.in_flight.remove(&id) {
+                    let resp = respond::<()>(
+                        id,
+                        Err(Failure::new(
+                            ErrorCode::RequestCanceled,
+                            "cancelled by the client",
+                        )),
+                    );
+                    s.conn.sender.send(Message::Response(resp))?;
+                    return Ok(());
+                }
+                s.cancelled.insert(id);
                 Ok(())
             })?;
+        Ok(())
+    }
+
+    /// Answers `req` on a thread of its own, against a copy of its document as it is
+    /// now; the answer comes back through `background` (a panic is an internal error).
+    fn in_background(&mut self, req: Request) {
+        let uri = req.params["data"]["uri"]
+            .as_str()
+            .or_else(|| req.params["textDocument"]["uri"].as_str())
+            .unwrap_or_default()
+            .to_string();
+        let mut docs = Docs::new();
+        if let Some(o) = self.docs.get(&uri) {
+            docs.insert(uri, o.clone());
+        }
+        let request = req.id.clone();
+        self.in_flight.insert(request.clone());
+        let tx = self.background.0.clone();
+        let (id, method) = (req.id.clone(), req.method.clone());
+        let spawned = std::thread::Builder::new()
+            .name(String::from("sdfc-lsp-request"))
+            .stack_size(64 << 20)
+            .spawn(move || {
+                let resp =
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| answer(&docs, req)))
+                        .unwrap_or_else(|panic| {
+                            let why = panic_message(&panic);
+                            eprintln!("sdfc lsp: internal error in {method}: {why}");
+                            respond::<()>(
+                                id,
+                                Err(Failure::new(
+                                    ErrorCode::InternalError,
+                                    format!("internal error in {method}: {why}"),
+                                )),
+                            )
+                        });
+                // The loop is gone when the server has stopped: nothing to answer.
+                let _ = tx.send(resp);
+                discard(docs);
+            });
+        if let Err(e) = spawned {
+            eprintln!("sdfc lsp: no thread for a request: {e}");
+            self.in_flight.remove(&request);
+            let resp = respond::<()>(
+                request,
+                Err(Failure::new(
+                    ErrorCode::InternalError,
+                    format!("no thread to answer the request: {e}"),
+                )),
+            );
+            let _ = self.conn.sender.send(Message::Response(resp));
+        }
+    }
+
+    /// A background answer: sent, unless the request was cancelled and answered since.
+    fn background_done(&mut self, resp: Response) -> Result<(), Error> {
+        if self.in_flight.remove(&resp.id) {
+            self.conn.sender.send(Message::Response(resp))?;
+        }
         Ok(())
     }
 

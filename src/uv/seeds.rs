@@ -179,6 +179,11 @@ pub fn place(
     // Seeds to place until coverage is reached, with the final Alg. 2 check between
     // rounds (it can differ from the walks' union where a nearer seed's walk fails).
     let mut covered_by_alg2: Option<Vec<bool>> = None;
+    // Samples where a seed could not be prepared: never picked again, so every round
+    // either adds a seed or retires a sample (placement always ends).
+    let mut rejected = vec![false; samples.len()];
+    // The seeds at the end of the last round: a round that adds none ends placement.
+    let mut last_round: Option<usize> = None;
     loop {
         fn covered(
             k: usize,
@@ -198,7 +203,7 @@ pub fn place(
         while seeds.len() < options.max_seeds && share(&best, &covered_by_alg2) < options.target {
             // The uncovered eligible sample farthest from every seed.
             let next = (0..samples.len())
-                .filter(|&k| !covered(k, &best, &covered_by_alg2, spacing))
+                .filter(|&k| !rejected[k] && !covered(k, &best, &covered_by_alg2, spacing))
                 .map(|k| {
                     let d = seeds
                         .iter()
@@ -222,10 +227,11 @@ pub fn place(
             seeds.push((s.p, Some(tangent(s.n))));
             let i = seeds.len() - 1;
             let Ok(atlas) = Atlas::prepare(&with_seeds(def, &seeds, &[]), shape) else {
-                // Projection failed (cannot happen for a surface sample): drop it.
+                // The seed cannot be prepared there (its projection does not converge,
+                // as at a pyramid's apex): drop it and never pick that sample again.
                 seeds.pop();
-                covered_by_alg2 = None;
-                break;
+                rejected[k] = true;
+                continue;
             };
             cover(&atlas, i, samples, reach, &mut best, &mut covered_by_alg2);
             // The new seed's own sample is covered by construction (a walk of length 0).
@@ -250,10 +256,13 @@ pub fn place(
             .map(|k| samples[k].area)
             .sum::<f64>()
             / total;
+        let progressed = last_round != Some(seeds.len());
+        last_round = Some(seeds.len());
         let more = coverage < options.target
+            && progressed
             && seeds.len() < options.max_seeds
             && covered_by_alg2.as_ref() != Some(&ok)
-            && (0..samples.len()).any(|k| eligible[k] && !ok[k]);
+            && (0..samples.len()).any(|k| eligible[k] && !ok[k] && !rejected[k]);
         if !more {
             return Placement {
                 kept,

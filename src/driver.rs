@@ -285,10 +285,11 @@ fn derived_overflows(program: &Program, scene: &Scene) -> Vec<Diagnostic> {
                 "derived constants beyond single precision",
             )
             .with_note(
-                "each twist or bend multiplies the bound of the distance's stretch; long \
-                 chains of warps overflow the shaders' 32-bit floats",
+                "each twist or bend multiplies the bound of the distance's stretch, and a \
+                 displacement's scale widens its band; long chains of warps or huge scales \
+                 overflow the shaders' 32-bit floats",
             )
-            .with_help("use fewer chained warps, or smaller rates")
+            .with_help("use fewer chained warps, smaller rates or smaller scales")
         })
         .collect()
 }
@@ -343,16 +344,77 @@ pub fn compile(analysis: &Analysis, options: &codegen::Options) -> Result<Compil
     #[cfg(feature = "test-hooks")]
     let module = test_hooks::corrupt(module);
     match codegen::validate(&module.wgsl) {
-        Ok(validated) => Ok(Compiled {
-            module,
-            validated: Arc::new(validated),
-        }),
+        Ok(validated) => {
+            if let Some(d) = inlined_too_large(analysis, options, &validated.module) {
+                return Err(CompileError::Scene(vec![d]));
+            }
+            Ok(Compiled {
+                module,
+                validated: Arc::new(validated),
+            })
+        }
         Err(naga) => Err(CompileError::Internal {
             diagnostic: Box::new(module.internal_error(&naga)),
             naga,
             module: Box::new(module),
         }),
     }
+}
+
+/// E0118 when an entry point of `module`, with every call inlined, is over
+/// [`codegen::inline_cost::MAX_INLINED`]: on the compiled shape, with a label on each
+/// atlas on a displaced shape (walks nested in walks are what multiplies).
+fn inlined_too_large(
+    analysis: &Analysis,
+    options: &codegen::Options,
+    module: &naga::Module,
+) -> Option<Diagnostic> {
+    use codegen::inline_cost::{inlined_sizes, MAX_INLINED};
+    let (entry, size) = inlined_sizes(module).into_iter().next()?;
+    if size <= MAX_INLINED {
+        return None;
+    }
+    let program = &analysis.program;
+    let span = match options.shape.as_deref() {
+        Some(name) => program.defs.iter().find(|d| d.name == name).map(|d| d.span),
+        None => program.render.as_ref().map(|r| r.target_span),
+    }
+    .unwrap_or_default();
+    let mut d = Diagnostic::error(
+        crate::codes::E_INLINED_SIZE,
+        format!(
+            "this shape's code is too large for a driver to build: `{entry}` has a \
+             loop-weighted inlined size of {size}, over the limit of {MAX_INLINED}"
+        ),
+        span,
+        "compiled here",
+    );
+    for a in program.atlases.iter() {
+        if let Some(call) = sema::displaced(&a.shape) {
+            d = d.with_label(
+                a.shape_span,
+                format!(
+                    "the walks of atlas `{}` evaluate this displaced shape",
+                    a.name
+                ),
+            );
+            d = d.with_label(call, "each evaluation walks the height's atlas");
+        }
+    }
+    d = d.with_note(
+        "drivers inline every function: a walk nested inside another walk (an atlas on a \
+         displaced shape) is copied once per evaluation of the outer walk, so the code \
+         grows as the product of the walks; the size counts each expression once per \
+         inlined copy, 4 times more for each loop around it",
+    );
+    let help = if options.walk == codegen::WalkForm::Unrolled {
+        "compile with `--walk loop` (one copy of each walk's step), or read the base \
+         shape's atlas instead of an atlas on the displaced shape"
+    } else {
+        "read the base shape's atlas instead of an atlas on the displaced shape, or \
+         displace less deeply"
+    };
+    Some(d.with_help(help))
 }
 
 /// The generated (not yet validated) module of a checked scene.

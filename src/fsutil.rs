@@ -284,3 +284,48 @@ mod linux {
         (nanos << 16) ^ COUNTER.fetch_add(1, Ordering::Relaxed)
     }
 }
+
+/// What a path finally names, for telling whether two paths are one file: the links
+/// followed, and the folder made absolute (the file itself need not exist yet).
+fn identity(path: &Path) -> Option<PathBuf> {
+    let end = follow_links(path).ok()?;
+    let dir = std::fs::canonicalize(folder_of(&end)).ok()?;
+    Some(dir.join(end.file_name()?))
+}
+
+/// Refuses outputs that name one file (the last write would silently replace the
+/// others) or that name an input: `outputs` and `inputs` are (what names it, path),
+/// as `("--charts", path)`. Streams (`/dev/stdout`, anything under `/dev` or `/proc`)
+/// are written through, so several outputs may share them. The error names both.
+pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<(), String> {
+    let mut seen: Vec<(&str, PathBuf)> = Vec::new();
+    for (what, path) in inputs {
+        if let Some(id) = identity(path) {
+            seen.push((what, id));
+        }
+    }
+    let first_output = seen.len();
+    for (what, path) in outputs {
+        if is_system(path) {
+            continue;
+        }
+        let Some(id) = identity(path) else { continue };
+        let stream = std::fs::metadata(&id).is_ok_and(|m| is_stream(&m.file_type()));
+        if is_system(&id) || stream {
+            continue;
+        }
+        if let Some((k, (other, _))) = seen.iter().enumerate().find(|(_, (_, p))| *p == id) {
+            let role = if k < first_output {
+                "the input"
+            } else {
+                "the output"
+            };
+            return Err(format!(
+                "{what} {} names the same file as {role} {other}: give each output its own file",
+                path.display()
+            ));
+        }
+        seen.push((what, id));
+    }
+    Ok(())
+}

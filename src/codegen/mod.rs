@@ -15,6 +15,7 @@ pub mod bindings;
 mod emit;
 mod field;
 mod group;
+pub mod inline_cost;
 pub mod mesh;
 pub mod shake;
 pub mod targets;

@@ -49,7 +49,9 @@ pub struct Height {
     /// The atlas the height reads (at most one; the checker requires it to be on the
     /// displaced shape).
     pub atlas: Option<AtlasId>,
-    /// Names the height's WGSL function `height_ID`: the call's source offset.
+    /// Names the height's WGSL function `height_ID`: the offset where the call ends,
+    /// which no other call has (in a method chain such as
+    /// `sphere(1).displace(…).shell_map(…)` every call starts at the same offset).
     pub id: usize,
     /// The difference step of ∇f for Π_f: 1e-3 of the base's scale (f32-safe, notes).
     pub grad_step: f64,

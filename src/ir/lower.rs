@@ -429,8 +429,7 @@ impl Lowerer<'_> {
                 } else {
                     4.0
                 };
-                let height =
-                    Height::new(a[1].clone(), scale, band, bound, n.span.start, 1e-3 * size);
+                let height = Height::new(a[1].clone(), scale, band, bound, n.span.end, 1e-3 * size);
                 let bounds = b.expand(height.epsilon());
                 let lipschitz = height.lipschitz(l);
                 self.push(
@@ -461,7 +460,7 @@ impl Lowerer<'_> {
                 } else {
                     4.0
                 };
-                let uv = Height::uv_field(a[2].clone(), slope, n.span.start, 1e-3 * size);
+                let uv = Height::uv_field(a[2].clone(), slope, n.span.end, 1e-3 * size);
                 let map = super::shell::ShellMap::new(uv, thickness, keep, (tb.min.y, tb.max.y));
                 let lipschitz = map.lipschitz(l, lt);
                 self.push(

@@ -486,6 +486,37 @@ impl Shape {
                     ));
                 }
             }
+            // The band tests and offsets the displacement and shell-map code writes
+            // (an unbounded base has infinite bounds, so the box test above misses them).
+            let over = |x: f64| !x.is_finite() || x.abs() > MAX_DERIVED;
+            match &n.op {
+                Op::Displace { height, .. }
+                    if [height.lo, height.hi, height.band_width(), height.slope]
+                        .into_iter()
+                        .any(over) =>
+                {
+                    return Some(format!(
+                        "its displacement reaches {:e} (scale times the height's range, and the band around it), beyond {MAX_DERIVED:e}",
+                        height.band_width()
+                    ));
+                }
+                Op::ShellMap { map, .. } => {
+                    let band = shell::BAND * map.thickness;
+                    let consts = [
+                        map.thickness * map.lo - band,
+                        map.thickness * map.hi + band,
+                        map.scale,
+                        map.uv.slope,
+                    ];
+                    if consts.into_iter().any(over) {
+                        return Some(format!(
+                            "its shell map's constants (thickness {:e}, uv slope {:e}) reach beyond {MAX_DERIVED:e}",
+                            map.thickness, map.uv.slope
+                        ));
+                    }
+                }
+                _ => {}
+            }
         }
         None
     }

@@ -76,6 +76,9 @@ fn prepare_cached(def: &AtlasDef, shape: &ir::Shape) -> Result<Atlas, PrepareErr
 pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
+    // How deep each atlas's walks nest: 1 on a plain shape, one more than the deepest
+    // atlas a displacement or shell map of its shape reads.
+    let mut depth: Vec<usize> = Vec::new();
     // Atlases on displaced shapes evaluate their heights: those read textures (their
     // texels bound the heights) and the atlases prepared before them. A displaced
     // render target needs the textures to be lowered for its rest-pose query.
@@ -97,8 +100,21 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     for def in &program.atlases {
         let Some(shape) = ir::lower_shape_textured(&def.shape, &textures) else {
             out.push(None);
+            depth.push(1);
             continue;
         };
+        let nested = shape
+            .heights()
+            .iter()
+            .filter_map(|h| depth.get(h.atlas?.index()).copied())
+            .max()
+            .unwrap_or(0);
+        depth.push(nested + 1);
+        if nested + 1 > MAX_WALK_NESTING {
+            diags.push(nesting_error(program, def, &shape, &depth));
+            out.push(None);
+            continue;
+        }
         shape.bind_heights(&out, &textures);
         match prepare_cached(def, &shape) {
             Ok(mut a) => {
@@ -127,6 +143,50 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
         }
     }
     (out, diags)
+}
+
+/// How deep an atlas's walks may nest inside other atlases' walks: an atlas on a
+/// displaced shape walks the height's atlas at every evaluation, so each level
+/// multiplies the cost per point by about N × 8 × the seeds walked (three levels of
+/// the 20-step, 2-seed atlases of the issue never finished checking; two take 0.1 s).
+pub const MAX_WALK_NESTING: usize = 2;
+
+/// E0119 on an atlas whose walks nest deeper than [`MAX_WALK_NESTING`], with the chain
+/// of atlases its shape's heights read.
+fn nesting_error(
+    program: &Program,
+    def: &AtlasDef,
+    shape: &ir::Shape,
+    depth: &[usize],
+) -> Diagnostic {
+    let k = depth.len() - 1;
+    let mut d = Diagnostic::error(
+        codes::E_WALK_NESTING,
+        format!(
+            "the walks of atlas `{}` nest {} deep in other atlases' walks, over the limit of {MAX_WALK_NESTING}",
+            def.name, depth[k]
+        ),
+        def.shape_span,
+        "this shape is displaced by a height that reads an atlas on a displaced shape",
+    );
+    for h in shape.heights() {
+        if let Some(j) = h
+            .atlas
+            .filter(|j| depth.get(j.index()).is_some_and(|&n| n + 1 == depth[k]))
+        {
+            let inner = program.atlas(j);
+            d = d.with_label(
+                inner.shape_span,
+                format!("atlas `{}` walks {} deep", inner.name, depth[j.index()]),
+            );
+        }
+    }
+    d.with_note(
+        "each evaluation of a displaced shape walks the atlas its height reads, and a walk \
+         evaluates its shape at every step: every level multiplies the cost per point by \
+         about N × 8 × the seeds walked",
+    )
+    .with_help("read the base shape's atlas in the height instead of an atlas on a displaced shape")
 }
 
 pub fn fmt_point(p: DVec3) -> String {

@@ -510,3 +510,6 @@ fn place_seeds_automatically_is_a_resolved_code_action() {
     );
     assert!(p.stop().success());
 }
+
+#[path = "resolve.rs"]
+mod resolve;

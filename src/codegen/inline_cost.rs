@@ -14,13 +14,14 @@ use naga::{Block, Function, Handle, Module, Statement};
 use std::collections::HashMap;
 
 /// The largest loop-weighted inlined size ([`weighted`]) an entry point may have.
-/// Measured on lavapipe (LLVM 15, 2 cores), pipeline build time grows about linearly
-/// with it: the unrolled robot (the largest example, 6.0 M) builds in 2.6 s, the
-/// displaced atlas of `tests/ui/atlas_on_displaced.sdf` (6.9 M with the loop walk) in
-/// about 8 s, and the shell map of a displaced shape read through a second atlas on it
-/// (435 M with the loop walk) took 117-151 s and 4.9-5.0 GB. The limit leaves the
-/// examples a margin of 5 and refuses what would take lavapipe over about 15 s.
-pub const MAX_INLINED: u64 = 32_000_000;
+/// Measured on lavapipe (LLVM 15, 2 cores, whole `sdfc render --size 64x48`), build
+/// time and memory grow with it: the unrolled robot (the largest example, 6.0 M)
+/// takes 2.6 s; an atlas on a displaced sphere read by a material (tests/displace.rs,
+/// 39 M with the loop walk) 6 s and 0.7 GB; the shell map of a displaced sphere read
+/// through a second atlas on it (435 M with the loop walk) 117-151 s and 5 GB. The
+/// limit leaves the examples a margin of 10 and refuses what would take lavapipe
+/// over about 20 s.
+pub const MAX_INLINED: u64 = 64_000_000;
 
 /// How much more an expression inside one more loop counts: the fit of lavapipe's
 /// build times above (a driver's loop passes, unrolling and lane masks work on every

@@ -176,6 +176,35 @@ fn walks_nested_in_walks_are_refused_before_the_driver() {
         eprintln!("nested shell {walk:?}: {entry} {size}");
         assert!(size > MAX_INLINED, "{walk:?}: {size}");
     }
+    // The 13-line variant that the kernel killed at 24 GB: a mirror, a normal map, a
+    // twist and a smooth union more.
+    let variant = "let base = sphere(1);
+atlas skin on base { mirror = [1, 0, 0]; seed f = [0.2, 0, 1]; }
+let d = base.displace(sin(skin.uv.x), scale: 0.05);
+atlas skin2 on d { refine = 2; seed f = [0, 0, 1]; }
+let bricks = image(\"textures/bricks_normal.png\");
+material m {
+    color = [skin2.uv, 0.5];
+    normal = sample_normal(bricks, skin2.uv);
+}
+let shelled = d.shell_map(sphere(0.2), skin2.uv * 3, thickness: 0.15);
+let twisted = shelled.twist(rate: 0.3);
+let blended = smooth_union(twisted, box([0.5, 0.5, 0.5]).translate([1.5, 0, 0]), k: 0.2);
+render blended.paint(m);
+";
+    let examples = root.join("examples");
+    let (entry, size) = largest_inlined(variant, Some(&examples), WalkForm::Loop);
+    eprintln!("13-line variant Loop: {entry} {size}");
+    assert!(size > 10 * MAX_INLINED, "{size}");
+    let options = codegen::Options {
+        walk: WalkForm::Loop,
+        ..Default::default()
+    };
+    let a = check(variant, Some(&examples));
+    match sdfc::driver::compile(&a, &options) {
+        Err(sdfc::driver::CompileError::Scene(d)) => assert_eq!(d[0].code, "E0118"),
+        other => panic!("not refused: {:?}", other.map(|_| ())),
+    }
     // The compiler refuses it with E0118 on the rendered shape, labelling the atlas
     // on the displaced shape.
     let a = check_all(NESTED_SHELL, None);

@@ -298,3 +298,173 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
         ["folder.glb", "plain.sdf", "plane.sdf", "sphere.sdf"]
     );
 }
+
+/// The bake's memory model (`pipeline::estimated_peak_bytes`) is the formula its
+/// documentation states, with each phase the largest for some bake.
+#[test]
+fn the_bake_memory_model_is_its_formula() {
+    use sdfc::bake::pipeline::{estimated_peak_bytes, Footprint, CHANNELS, LEVEL_SAMPLE_BYTES};
+    // The formula's numbers come from the code: 11 f32 channels a sample.
+    assert_eq!((CHANNELS, LEVEL_SAMPLE_BYTES), (11, 44));
+    let formula = |f: &Footprint| -> (u64, &str) {
+        let s = f.samples;
+        let phases = [
+            (80 * s + 272 * s.min(1 << 20), "shade"),
+            (120 * s, "handover"),
+            (81 * s + 48 * f.texels, "encode"),
+        ];
+        let (most, phase) = phases.into_iter().max_by_key(|p| p.0).unwrap();
+        let after = 800 * f.cells + 168 * f.vertices + most;
+        let mesh = 16 * f.grid_corners;
+        let phase = if mesh > after { "mesh" } else { phase };
+        ((128 << 20) + mesh.max(after), phase)
+    };
+    let sphere = |samples: u64, texels: u64| Footprint {
+        grid_corners: 51 * 51 * 51,
+        cells: 10746,
+        vertices: 4 * 10746,
+        samples,
+        texels,
+    };
+    let cases = [
+        // The one-sphere scene at --size 1024, 4096 and 16384 (flat, grid 48).
+        (sphere(526_556, 1024 * 1008), "shade"),
+        (sphere(10_326_908, 4096 * 4032), "encode"),
+        (sphere(173_322_236, 16384 * 16128), "encode"),
+        // Many samples in a small image (no such layout exists; the phase does).
+        (sphere(50_000_000, 1000), "handover"),
+        (
+            Footprint {
+                grid_corners: 515 * 515 * 515,
+                ..Footprint::default()
+            },
+            "mesh",
+        ),
+    ];
+    for (f, phase) in cases {
+        assert_eq!(estimated_peak_bytes(&f), formula(&f).0, "{f:?}");
+        assert_eq!(formula(&f).1, phase, "{f:?}");
+    }
+    // The figures in the report: 4096 is accepted (about 1.7 GiB), 8192 is not.
+    let mib = |f: &Footprint| estimated_peak_bytes(f) >> 20;
+    assert_eq!(mib(&sphere(10_326_908, 4096 * 4032)), 1696);
+    assert_eq!(mib(&sphere(173_322_236, 16384 * 16128)), 25_627);
+}
+
+/// The memory check refuses what the model puts over 2 GiB, and only that.
+#[test]
+fn the_bake_memory_check_accepts_just_under_its_limit() {
+    use sdfc::bake::pipeline::{
+        check_memory, estimated_peak_bytes, BakeError, Footprint, MAX_BAKE_BYTES,
+    };
+    assert_eq!(MAX_BAKE_BYTES, 2 << 30);
+    // The mesh grid alone, exactly at the limit and one corner past it.
+    let grid = |grid_corners| Footprint {
+        grid_corners,
+        ..Footprint::default()
+    };
+    let at = (MAX_BAKE_BYTES - (128 << 20)) / 16;
+    assert_eq!(estimated_peak_bytes(&grid(at)), MAX_BAKE_BYTES);
+    assert_eq!(check_memory(&grid(at)).unwrap(), MAX_BAKE_BYTES);
+    match check_memory(&grid(at + 1)) {
+        Err(BakeError::Resource(m)) => assert!(
+            m.contains("about 2049 MiB of memory")
+                && m.contains("mesh grid of 125829121 corners")
+                && m.contains("over the limit of 2048 MiB for a bake"),
+            "{m}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    // An atlas: the most samples the limit takes with a 3:2 image of as many texels.
+    let atlas = |samples: u64| Footprint {
+        cells: 10746,
+        vertices: 4 * 10746,
+        samples,
+        texels: samples * 3 / 2,
+        ..Footprint::default()
+    };
+    let (mut lo, mut hi) = (0u64, 1 << 30);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if estimated_peak_bytes(&atlas(mid)) <= MAX_BAKE_BYTES {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    assert!(check_memory(&atlas(lo)).unwrap() > MAX_BAKE_BYTES - 200);
+    match check_memory(&atlas(lo + 1)) {
+        Err(BakeError::Resource(m)) => assert!(
+            m.contains(&format!("estimated from {} level-0 samples", lo + 1))
+                && m.contains("use a smaller --size"),
+            "{m}"
+        ),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `Footprint::of` counts the level-0 samples the bake shades (each shared one once)
+/// and the atlas's texels, on a real mesh and layout.
+#[test]
+fn the_footprint_counts_the_samples_the_bake_shades() {
+    use sdfc::bake::charts::ChartTable;
+    use sdfc::bake::mesh::{dual_contour, Grid};
+    use sdfc::bake::pipeline::{sample_points, Footprint};
+    use sdfc::bake::{Atlas, FlatLayout, PackedLayout, Patches};
+    let dir = tempfile::tempdir().unwrap();
+    let source = "material m { color = [1, 0, 0]; }\nrender box([1, 0.5, 0.7]).paint(m);";
+    let analysis = sdfc::driver::check(source, Some(dir.path()));
+    let scene = analysis.scene.as_ref().expect("scene");
+    let shape = sdfc::driver::pick_shape(scene, None).expect("shape");
+    let grid = Grid::over(shape.root_node().bounds, 9);
+    let quads = dual_contour(shape, &grid, 1e-6);
+    let table = ChartTable::new(&quads);
+    let singles = Patches::singles(table.len());
+    for (size, m) in [(256, 1), (1024, 2)] {
+        for atlas in [
+            Atlas::Flat(FlatLayout::fit(table.len(), size).unwrap()),
+            Atlas::Packed(PackedLayout::fit(&singles.dims, size).unwrap()),
+        ] {
+            let f = Footprint::of(&grid, &table, quads.vertices.len(), &atlas, m);
+            let points = sample_points(&quads, &table, atlas.cell_size() as usize);
+            let shaded = points.corners.len() + points.edges.len() + points.interiors.len();
+            assert_eq!(f.samples, shaded as u64, "{size}");
+            assert_eq!(f.texels, (atlas.width() * atlas.height()) as u64);
+            assert_eq!(f.cells, table.len() as u64);
+            assert_eq!(f.vertices, (table.len() * (m + 1) * (m + 1)) as u64);
+            let [x, y, z] = grid.dims.map(|d| d as u64 + 1);
+            assert_eq!(f.grid_corners, x * y * z);
+        }
+    }
+}
+
+/// A bake over the memory limit is refused at once, before any GPU work, with exit 5
+/// and a message naming the limit and the estimate: `--size 16384` took 14 GB and
+/// 147 s on a one-sphere scene before the limit.
+#[test]
+fn bakes_over_the_memory_limit_are_refused_before_any_work() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.glb");
+    for (extra, message) in [
+        (&["--size", "16384"][..], "about 25628 MiB of memory"),
+        (&["--size", "8192"][..], "about 6462 MiB of memory"),
+        (&["--grid", "512"][..], "estimated from its mesh grid"),
+    ] {
+        let mut args = vec!["bake", "examples/sphere.sdf", "-o", out.to_str().unwrap()];
+        args.extend(extra);
+        let (code, _, err) = sdfc(&args);
+        assert_eq!(code, 5, "{args:?}: {err}");
+        // (An adapter with smaller textures refuses the size first, as a limit too.)
+        let side = err.contains("over this GPU's limit");
+        assert!(
+            side || err.contains(message) && err.contains("over the limit of 2048 MiB for a bake"),
+            "{args:?}: {err}"
+        );
+        // Refused before the shading stage: no progress past the layout.
+        assert!(!err.contains("shade (GPU)"), "{err}");
+        assert!(!out.exists());
+    }
+}

@@ -8,6 +8,7 @@ use super::mips::{self, Texel};
 use super::patches::{self, Patches};
 use super::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
+use crate::gpu::compute::MAX_POINTS_PER_DISPATCH;
 use crate::gpu::{Gpu, GpuError};
 use crate::ir::{Aabb, Op, Shape};
 use glam::DVec3;
@@ -219,21 +220,138 @@ pub fn bilinear(q: [DVec3; 4], u: f64, v: f64) -> DVec3 {
         + q[3] * ((1.0 - u) * v)
 }
 
-/// Runs the whole bake of `shape` with the compiled scene `module`.
-pub fn bake(
-    gpu: &Gpu,
-    module: &Module,
-    base_dir: &Path,
-    shape: &Shape,
-    options: &Options,
-    progress: &dyn Progress,
-) -> Result<Baked, BakeError> {
-    let mut report = Report::default();
-    let mut clock = Instant::now();
-    let mut lap = |report: &mut Report, name: &'static str| {
-        report.stages.push((name, clock.elapsed()));
-        clock = Instant::now();
+/// What a bake's memory depends on: see [`estimated_peak_bytes`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Footprint {
+    /// The mesh stage's grid corners (its distance samples).
+    pub grid_corners: u64,
+    /// Cells: the chart grid's quads (the chart table's length).
+    pub cells: u64,
+    /// The exported mesh's vertices, `(m + 1)²` a cell for `--chart-quads m`.
+    pub vertices: u64,
+    /// Level-0 samples, each shared one once (corners, edges' inner samples, interiors).
+    pub samples: u64,
+    /// The atlas image's texels, width × height.
+    pub texels: u64,
+}
+
+impl Footprint {
+    /// The mesh stage's part alone, known before meshing.
+    pub fn grid(grid: &Grid) -> Footprint {
+        Footprint {
+            grid_corners: grid.dims.iter().map(|&d| d as u64 + 1).product(),
+            ..Footprint::default()
+        }
+    }
+
+    /// The whole bake's, once the atlas is laid out: `n` samples a cell side at level 0
+    /// over `table`'s charts, on a mesh of `vertices` vertices, `m` quads a chart side.
+    pub fn of(grid: &Grid, table: &ChartTable, vertices: usize, atlas: &Atlas, m: usize) -> Self {
+        let n = atlas.cell_size() as u64;
+        let inner = n.saturating_sub(2);
+        let cells = table.len() as u64;
+        Footprint {
+            samples: vertices as u64 + table.edges.len() as u64 * inner + cells * inner * inner,
+            texels: atlas.width() as u64 * atlas.height() as u64,
+            cells,
+            vertices: cells * (m as u64 + 1).pow(2),
+            ..Footprint::grid(grid)
+        }
+    }
+}
+
+/// The largest estimated peak memory of a bake ([`estimated_peak_bytes`]): 2 GiB.
+pub const MAX_BAKE_BYTES: u64 = 2 << 30;
+/// The process and the GPU driver besides the bake's own data (measured on lavapipe:
+/// 98 MiB with the device open, 119 MiB with the bake's pipeline compiled).
+pub const BASE_BYTES: u64 = 128 << 20;
+/// A mesh-stage grid corner: its f64 distance, the u32 index of its cell, and rayon's
+/// slack while it joins the slabs (measured: 13.4 at grid 400).
+pub const GRID_CORNER_BYTES: u64 = 16;
+/// One sample of one level: [`CHANNELS`] f32s.
+pub const LEVEL_SAMPLE_BYTES: u64 = 4 * CHANNELS as u64;
+/// A level-0 sample while it is shaded: its point (16) and its [`Shaded`] result (64).
+pub const SHADE_SAMPLE_BYTES: u64 = 16 + 64;
+/// A point of the dispatch in flight: its input (16), the GPU's output and readback
+/// buffers (64 each) and the two copies of the readback (64 each).
+pub const DISPATCH_POINT_BYTES: u64 = 16 + 4 * 64;
+/// A level-0 sample when the shaded results become level 0: the [`Shaded`] result
+/// (64), level 0 ([`LEVEL_SAMPLE_BYTES`]) and the projected point (12). Filtering
+/// level 0 holds less: the point, level 0, its smoothed copy and level 1 (111).
+pub const HANDOVER_SAMPLE_BYTES: u64 = 64 + LEVEL_SAMPLE_BYTES + 12;
+/// A level-0 sample while the outputs are encoded: every level (44 × 4/3 ≤ 59), the
+/// projected point (12) and `--ktx2`'s stacked levels (4 × 4/3, twice: 11).
+pub const ENCODE_SAMPLE_BYTES: u64 = LEVEL_SAMPLE_BYTES * 4 / 3 + 12 + 11;
+/// An atlas texel while the outputs are encoded: four RGBA8 images (16), the .glb's
+/// PNGs in its buffer and in the file (at worst 12 each: RGB, incompressible), and
+/// `--object-normals` (an RGBA8 image and its PNG: 8).
+pub const ENCODE_TEXEL_BYTES: u64 = 16 + 2 * 12 + 8;
+/// A cell, whatever the atlas: the quad mesh (vertex, normal, quad: 64), the chart
+/// table (corners, sides, two edges, a vertex's charts: about 230), the charts
+/// (`Patches`, about 60), its entry in a packed layout and that entry's JSON copies
+/// (about 200) and the per-cell work of the images and statistics (about 250).
+pub const CELL_BYTES: u64 = 800;
+/// An exported vertex: position, normal, tangent and texture coordinate (48), twice
+/// more in the .glb's buffer and file, and its share of the indices.
+pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
+
+/// The estimated peak memory of a bake and of writing its outputs, in bytes: the
+/// largest of its phases, over [`BASE_BYTES`]. With S the level-0 samples (about the
+/// level-0 texels of the charts) and T the atlas image's texels:
+///
+/// ```text
+/// mesh:   16 B × grid corners                       (then freed)
+/// after:  800 B × cells + 168 B × exported vertices
+///         + max(80 B × S + 272 B × min(S, 2^20),    shading, one dispatch in flight
+///               120 B × S,                          shaded results → level 0
+///               81 B × S + 48 B × T)                encoding the outputs
+/// ```
+///
+/// Derived from the buffers each stage holds at once (the constants above), and
+/// checked against peak resident sizes measured with `/usr/bin/time -v`: it is
+/// 16–30 % over them, the margin being mostly the PNGs taken as incompressible.
+pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
+    let s = f.samples;
+    let dispatch = s.min(MAX_POINTS_PER_DISPATCH as u64);
+    let mesh = GRID_CORNER_BYTES * f.grid_corners;
+    let shade = SHADE_SAMPLE_BYTES * s + DISPATCH_POINT_BYTES * dispatch;
+    let handover = HANDOVER_SAMPLE_BYTES * s;
+    let encode = ENCODE_SAMPLE_BYTES * s + ENCODE_TEXEL_BYTES * f.texels;
+    let after = CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode);
+    BASE_BYTES + mesh.max(after)
+}
+
+/// The estimate of [`estimated_peak_bytes`], or a [`BakeError::Resource`] naming it and
+/// [`MAX_BAKE_BYTES`] when it is over.
+pub fn check_memory(f: &Footprint) -> Result<u64, BakeError> {
+    let estimate = estimated_peak_bytes(f);
+    if estimate <= MAX_BAKE_BYTES {
+        return Ok(estimate);
+    }
+    let mib = |b: u64| b.div_ceil(1 << 20);
+    let (what, fix) = if f.samples == 0 {
+        (
+            format!("its mesh grid of {} corners", f.grid_corners),
+            "a coarser --grid or --edge",
+        )
+    } else {
+        (
+            format!(
+                "{} level-0 samples, {} atlas texels and {} cells",
+                f.samples, f.texels, f.cells
+            ),
+            "a smaller --size, a coarser --grid or --edge, or a smaller --chart-quads",
+        )
     };
+    Err(BakeError::Resource(format!(
+        "the bake would need about {} MiB of memory at its peak (estimated from {what}), over the limit of {} MiB for a bake: use {fix}",
+        mib(estimate),
+        mib(MAX_BAKE_BYTES)
+    )))
+}
+
+/// Checks the options and `shape` before any work: the mesh grid and the chart quads.
+fn plan(gpu: &Gpu, shape: &Shape, options: &Options) -> Result<(Grid, usize), BakeError> {
     if !has_material(shape) {
         return Err(BakeError::NoMaterial);
     }
@@ -282,9 +400,31 @@ pub fn bake(
             "--chart-quads {m} is not between 1 and {MAX_CHART_QUADS}"
         )));
     }
-    let scale = crate::uv::atlas::scale(shape);
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
-    let grid = Grid::over(bounds, cells.div_ceil(m).max(1));
+    Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m))
+}
+
+/// Runs the whole bake of `shape` with the compiled scene `module`. A bake whose
+/// [`estimated_peak_bytes`] is over [`MAX_BAKE_BYTES`] is refused before any GPU work
+/// ([`BakeError::Resource`]): its mesh grid before meshing, the rest once the atlas
+/// is laid out.
+pub fn bake(
+    gpu: &Gpu,
+    module: &Module,
+    base_dir: &Path,
+    shape: &Shape,
+    options: &Options,
+    progress: &dyn Progress,
+) -> Result<Baked, BakeError> {
+    let mut report = Report::default();
+    let mut clock = Instant::now();
+    let mut lap = |report: &mut Report, name: &'static str| {
+        report.stages.push((name, clock.elapsed()));
+        clock = Instant::now();
+    };
+    let (grid, m) = plan(gpu, shape, options)?;
+    check_memory(&Footprint::grid(&grid))?;
+    let scale = crate::uv::atlas::scale(shape);
     report.grid = grid.dims;
     report.chart_quads = m;
 
@@ -315,62 +455,33 @@ pub fn bake(
             "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
         ))
     })?;
+    check_memory(&Footprint::of(
+        &grid,
+        &table,
+        quads.vertices.len(),
+        &atlas,
+        m,
+    ))?;
     report.cells = table.len();
     report.charts = charts;
     report.chart_size = atlas.cell_size();
     report.levels = atlas.levels();
     lap(&mut report, "charts");
 
-    // 3. Texel points, each shared one once.
+    // 3 and 4. Texel points, shaded on the GPU.
     let n = atlas.cell_size() as usize;
-    let points = sample_points(&quads, &table, n);
-    let flat: Vec<[f32; 4]> = points
-        .corners
-        .iter()
-        .chain(&points.edges)
-        .chain(&points.interiors)
-        .copied()
-        .collect();
-    report.samples = flat.len();
-    lap(&mut report, "texel points");
-
-    // 4. Attributes on the GPU.
-    let pass = BakePass::new(gpu, module, base_dir)?;
-    lap(&mut report, "pipeline (GPU)");
-    progress.stage("shade", flat.len());
-    let shaded = pass.run(gpu, &flat, &|k| progress.advance(k))?;
-    progress.finish();
-    let texel = |s: &Shaded| -> Texel<CHANNELS> {
-        [
-            s.color[0],
-            s.color[1],
-            s.color[2],
-            s.roughness,
-            s.metallic,
-            s.emission[0],
-            s.emission[1],
-            s.emission[2],
-            s.normal[0],
-            s.normal[1],
-            s.normal[2],
-        ]
-    };
-    let (nc, ne) = (points.corners.len(), points.edges.len());
-    let level0 = Samples {
+    let (level0, points) = shade(
+        gpu,
+        module,
+        base_dir,
+        &quads,
+        &table,
         n,
-        corners: shaded[..nc].iter().map(texel).collect(),
-        edges: shaded[nc..nc + ne].iter().map(texel).collect(),
-        interiors: shaded[nc + ne..].iter().map(texel).collect(),
-    };
-    let position = |s: &Shaded| s.position;
-    let projected = Samples {
-        n,
-        corners: shaded[..nc].iter().map(position).collect(),
-        edges: shaded[nc..nc + ne].iter().map(position).collect(),
-        interiors: shaded[nc + ne..].iter().map(position).collect(),
-    };
-    report.max_residual = shaded.iter().map(|s| s.residual as f64).fold(0.0, f64::max) / scale;
-    lap(&mut report, "shade (GPU)");
+        progress,
+        &mut report,
+        &mut lap,
+    )?;
+    report.max_residual /= scale;
 
     // 5. Mips.
     progress.stage("mips", 1);
@@ -395,11 +506,75 @@ pub fn bake(
         patches,
         atlas,
         levels,
-        points: projected,
+        points,
         mesh,
         textures,
         report,
     })
+}
+
+/// Stages 3 and 4: level 0's texel points (each shared one once), shaded on the GPU:
+/// the filtered channels and the projected points. Sets the report's sample count and
+/// largest residual (in scene units). Each buffer is dropped as soon as it is used,
+/// for the memory model of [`estimated_peak_bytes`].
+#[allow(clippy::too_many_arguments)]
+fn shade(
+    gpu: &Gpu,
+    module: &Module,
+    base_dir: &Path,
+    quads: &QuadMesh,
+    table: &ChartTable,
+    n: usize,
+    progress: &dyn Progress,
+    report: &mut Report,
+    lap: &mut dyn FnMut(&mut Report, &'static str),
+) -> Result<(Samples<Texel<CHANNELS>>, Samples<[f32; 3]>), BakeError> {
+    let points = sample_points(quads, table, n);
+    let (nc, ne) = (points.corners.len(), points.edges.len());
+    let mut flat = points.corners;
+    flat.extend(points.edges);
+    flat.extend(points.interiors);
+    report.samples = flat.len();
+    lap(report, "texel points");
+
+    let pass = BakePass::new(gpu, module, base_dir)?;
+    lap(report, "pipeline (GPU)");
+    progress.stage("shade", flat.len());
+    let shaded = pass.run(gpu, &flat, &|k| progress.advance(k))?;
+    drop(flat);
+    progress.finish();
+    let texel = |s: &Shaded| -> Texel<CHANNELS> {
+        [
+            s.color[0],
+            s.color[1],
+            s.color[2],
+            s.roughness,
+            s.metallic,
+            s.emission[0],
+            s.emission[1],
+            s.emission[2],
+            s.normal[0],
+            s.normal[1],
+            s.normal[2],
+        ]
+    };
+    let level0 = Samples {
+        n,
+        corners: shaded[..nc].iter().map(texel).collect(),
+        edges: shaded[nc..nc + ne].iter().map(texel).collect(),
+        interiors: shaded[nc + ne..].iter().map(texel).collect(),
+    };
+    let position = |s: &Shaded| s.position;
+    let projected = Samples {
+        n,
+        corners: shaded[..nc].iter().map(position).collect(),
+        edges: shaded[nc..nc + ne].iter().map(position).collect(),
+        interiors: shaded[nc + ne..].iter().map(position).collect(),
+    };
+    report.max_residual = shaded.iter().map(|s| s.residual as f64).fold(0.0, f64::max);
+    drop(shaded);
+    lap(report, "shade (GPU)");
+    Ok((level0, projected))
 }
 
 /// The charts' texel density, (n − 1) texels over the square root of the chart's area:

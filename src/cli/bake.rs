@@ -208,6 +208,19 @@ pub fn run(args: BakeArgs) -> ExitCode {
         .chain(&args.charts)
         .chain(&args.object_normals)
         .collect();
+    let flagged: Vec<(&str, &std::path::Path)> = [("-o", Some(&args.output))]
+        .into_iter()
+        .chain([
+            ("--ktx2", args.ktx2.as_ref()),
+            ("--charts", args.charts.as_ref()),
+            ("--object-normals", args.object_normals.as_ref()),
+        ])
+        .filter_map(|(flag, p)| Some((flag, p?.as_path())))
+        .collect();
+    if let Err(e) = sdfc::fsutil::distinct_outputs(&flagged, &[("scene", args.scene.as_path())]) {
+        eprintln!("error: {e}");
+        return ExitCode::from(exit::USAGE);
+    }
     for path in &outputs {
         if let Err(e) = writable(path) {
             eprintln!("error: cannot write {}: {e}", path.display());

@@ -5,12 +5,14 @@
 
 use super::render::write_frame;
 use super::RenderArgs;
+use sdfc::bake::export::ReadError;
 use sdfc::gpu::{MeshError, MeshRenderer};
 use sdfc::view::View;
 use std::process::ExitCode;
 use std::time::Instant;
 
-/// The largest `.glb` read.
+/// The largest `.glb` read (its JSON and textures have limits of their own, see
+/// [`sdfc::bake::export::gltf`]); over it is a resource error (exit 5).
 pub const MAX_GLB_BYTES: usize = 1 << 30;
 
 pub fn run(args: RenderArgs) -> ExitCode {
@@ -30,16 +32,21 @@ pub fn run(args: RenderArgs) -> ExitCode {
     let load_start = Instant::now();
     let bytes = match super::read_bytes(&args.scene, MAX_GLB_BYTES) {
         Ok(b) if b.len() > MAX_GLB_BYTES => {
-            return usage(format!(
-                "{name} is larger than the limit of {MAX_GLB_BYTES} bytes"
-            ))
+            eprintln!("error: {name} is larger than the limit of {MAX_GLB_BYTES} bytes (1 GiB) for a .glb");
+            return ExitCode::from(super::exit::RESOURCE);
         }
         Ok(b) => b,
         Err(e) => return usage(format!("cannot read {name}: {e}")),
     };
     let (mesh, textures, layout) = match sdfc::bake::export::read_glb(&bytes) {
         Ok(x) => x,
-        Err(e) => return usage(format!("{name} is not a mesh baked by sdfc: {e}")),
+        Err(ReadError::Invalid(e)) => {
+            return usage(format!("{name} is not a mesh baked by sdfc: {e}"))
+        }
+        Err(ReadError::Limit(e)) => {
+            eprintln!("error: {name} is over a limit of what sdfc reads: {e}");
+            return ExitCode::from(super::exit::RESOURCE);
+        }
     };
     let load_time = load_start.elapsed();
     let gpu = match super::open_gpu(args.backend) {

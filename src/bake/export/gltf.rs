@@ -30,11 +30,20 @@
 //! every image as RGBA with alpha 255 there, so a round trip gives back equal data.
 //!
 //! [`read_glb`] reads such files (and any glTF shaped like them) with explicit bounds
-//! checks throughout: for any input bytes it returns an error message or data that
-//! passes [`check_mesh`], [`check_textures`] and [`check_atlas`], never panics, and
-//! never allocates much more than the input's size before a check except to decode
-//! PNGs, whose decoder refuses images larger than the layout says (and than
-//! [`MAX_IMAGE_SIZE`] a side) before allocating.
+//! checks throughout: for any input bytes it returns an error ([`ReadError`]) or data
+//! that passes [`check_mesh`], [`check_textures`] and [`check_atlas`], never panics,
+//! and never allocates much more than the input's size before a check. Its limits,
+//! each checked before the work it bounds ([`ReadError::Limit`]):
+//!
+//! - the JSON chunk is at most [`MAX_JSON_BYTES`] and holds at most
+//!   [`MAX_JSON_VALUES`] JSON values outside `extras` (which gltf-json keeps as raw
+//!   text), counted without building them, so its typed parse (a few hundred bytes a
+//!   value at most) stays small;
+//! - the textures' decoded size: the atlas at most [`MAX_IMAGE_SIZE`] a side, and the
+//!   memory its textures take in `sdfc render` ([`texture_bytes`]) at most
+//!   [`MAX_TEXTURE_BYTES`], both from the layout before any PNG is decoded; each PNG's
+//!   header must then give the layout's size, and the decoder's own limits hold it
+//!   to that.
 
 use std::io::Cursor;
 
@@ -55,8 +64,77 @@ use crate::bake::{Atlas, MeshData, Textures};
 /// The key of the atlas layout in the root's `extras`.
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
 
-/// The largest image side [`read_glb`] decodes.
-pub const MAX_IMAGE_SIZE: u32 = 16384;
+/// The largest image side [`read_glb`] decodes: 8192, as for a scene's textures (an
+/// 8192 × 8192 atlas is over [`MAX_TEXTURE_BYTES`] anyway; the bake writes at most
+/// what its own memory limit allows, 4096 × 4096 for a typical scene).
+pub const MAX_IMAGE_SIZE: u32 = 8192;
+/// The most memory the textures of a `.glb` may take in `sdfc render`
+/// ([`texture_bytes`]): 2 GiB, the bake's limit too.
+pub const MAX_TEXTURE_BYTES: u64 = 2 << 30;
+/// The largest JSON chunk [`read_glb`] parses: 64 MiB. sdfc's own is about 2 KB, plus
+/// 37 bytes a chart for a packed layout (354 KB for the 9,642 charts of a sphere at
+/// the default grid of 48, 11 MB for 308,574 one-cell charts at grid 256); [`glb`]
+/// refuses to write a larger one.
+pub const MAX_JSON_BYTES: usize = 64 << 20;
+/// The most JSON values [`read_glb`] parses outside `extras` (every number, string,
+/// array and object counts; an `extras` counts as one): 65,536. sdfc writes about 200.
+pub const MAX_JSON_VALUES: u64 = 1 << 16;
+
+/// The memory, in bytes, `images` textures of `width` × `height` take in `sdfc render`:
+/// per texel of each, the decoded RGBA8 image (4), the GPU texture with a full mip
+/// chain (4 × 4/3) and the upload's staging copy (4), 40/3 bytes in all. (Decoding
+/// holds less: an RGB PNG's pixels (3) beside their RGBA8 copy.)
+pub fn texture_bytes(width: u32, height: u32, images: usize) -> u64 {
+    (images as u64 * width as u64 * height as u64).saturating_mul(40) / 3
+}
+
+/// Why [`read_glb`] refused a file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReadError {
+    /// Not a glTF that sdfc reads: malformed, or not shaped like the ones it writes.
+    Invalid(String),
+    /// Over one of the reader's limits (named in the message): [`MAX_JSON_BYTES`],
+    /// [`MAX_JSON_VALUES`], [`MAX_IMAGE_SIZE`], [`MAX_TEXTURE_BYTES`].
+    Limit(String),
+}
+
+impl ReadError {
+    /// The same error with its message prefixed by `context`.
+    fn context(self, context: &str) -> ReadError {
+        match self {
+            ReadError::Invalid(m) => ReadError::Invalid(format!("{context}: {m}")),
+            ReadError::Limit(m) => ReadError::Limit(format!("{context}: {m}")),
+        }
+    }
+}
+
+impl std::fmt::Display for ReadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReadError::Invalid(m) | ReadError::Limit(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for ReadError {}
+
+impl From<String> for ReadError {
+    fn from(message: String) -> ReadError {
+        ReadError::Invalid(message)
+    }
+}
+
+impl From<&str> for ReadError {
+    fn from(message: &str) -> ReadError {
+        ReadError::Invalid(message.to_owned())
+    }
+}
+
+impl From<ReadError> for String {
+    fn from(e: ReadError) -> String {
+        e.to_string()
+    }
+}
 
 const MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -168,7 +246,10 @@ pub fn glb(
         generator: Some(format!("sdfc {}", env!("CARGO_PKG_VERSION"))),
         ..Default::default()
     };
-    let extras = serde_json::json!({ LAYOUT_KEY: layout }).to_string();
+    // Straight to text: a packed layout's table as JSON values would take ten times
+    // its text.
+    let layout = serde_json::to_string(layout).map_err(|e| e.to_string())?;
+    let extras = format!("{{\"{LAYOUT_KEY}\":{layout}}}");
     doc.root.extras = Some(RawValue::from_string(extras).map_err(|e| e.to_string())?);
     doc.finish()
 }
@@ -301,6 +382,13 @@ impl Builder {
         });
         let mut json = self.root.to_vec().map_err(|e| e.to_string())?;
         json.resize(json.len().next_multiple_of(4), b' ');
+        if json.len() > MAX_JSON_BYTES {
+            return Err(format!(
+                "the glTF's JSON would be {} bytes, over the limit of {} MiB that sdfc reads back (a packed layout of fewer charts: a larger --max-chart or a coarser --grid)",
+                json.len(),
+                MAX_JSON_BYTES >> 20
+            ));
+        }
         let length = 12 + 8 + json.len() + 8 + self.bin.len();
         let too_big = || format!("the glTF would be {length} bytes, past GLB's 4 GiB");
         let word = |n: usize| {
@@ -339,9 +427,12 @@ fn encode_png(image: &RgbaImage) -> image::ImageResult<Vec<u8>> {
 /// Reads a binary glTF written by [`glb`] (or shaped like one: the first mesh's first
 /// primitive, TRIANGLES, with POSITION, NORMAL, TANGENT and TEXCOORD_0 as f32 and
 /// unsigned indices, its material's PNG textures in the GLB's buffer, and the atlas
-/// layout in `extras.sdfc_atlas`). Any other input is an error, never a panic.
-pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), String> {
+/// layout in `extras.sdfc_atlas`). Any other input is an error, never a panic; what
+/// is over a limit (see the module's documentation) is a [`ReadError::Limit`],
+/// found before the work it bounds.
+pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), ReadError> {
     let (json, bin) = split_glb(bytes)?;
+    check_json(json)?;
     let root = Root::from_slice(json).map_err(|e| format!("the glTF's JSON: {e}"))?;
     let layout = read_layout(&root)?;
     check_atlas(&layout)?;
@@ -362,6 +453,11 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), String> {
     if !matches!(primitive.mode, Checked::Valid(Mode::Triangles)) {
         return Err("the glTF's primitive is not made of triangles".into());
     }
+    let material = primitive
+        .material
+        .and_then(|m| root.get(m))
+        .ok_or("the glTF's primitive has no material")?;
+    check_texture_size(&layout, 3 + material.emissive_texture.is_some() as usize)?;
     let attribute = |semantic: Semantic| {
         let name = semantic.to_string();
         primitive
@@ -383,16 +479,12 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), String> {
     };
     check_mesh(&mesh)?;
 
-    let material = primitive
-        .material
-        .and_then(|m| root.get(m))
-        .ok_or("the glTF's primitive has no material")?;
     let pbr = &material.pbr_metallic_roughness;
     let texture = |index: Option<Index<Texture>>, what: &str| {
         index
-            .ok_or_else(|| format!("the glTF's material has no {what} texture"))
+            .ok_or_else(|| ReadError::from(format!("the glTF's material has no {what} texture")))
             .and_then(|index| doc.image(index, &layout))
-            .map_err(|e| format!("the {what} texture: {e}"))
+            .map_err(|e| e.context(&format!("the {what} texture")))
     };
     let textures = Textures {
         base_color: texture(
@@ -411,6 +503,149 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), String> {
     };
     check_textures(&textures, &layout)?;
     Ok((mesh, textures, layout))
+}
+
+/// Checks the JSON chunk against [`MAX_JSON_BYTES`] and [`MAX_JSON_VALUES`] before it is
+/// parsed: the values are counted as they are read, none is built.
+fn check_json(json: &[u8]) -> Result<(), ReadError> {
+    if json.len() > MAX_JSON_BYTES {
+        return Err(ReadError::Limit(format!(
+            "its JSON chunk is {} bytes, over the limit of {} MiB ({MAX_JSON_BYTES} bytes) for a .glb's JSON",
+            json.len(),
+            MAX_JSON_BYTES >> 20
+        )));
+    }
+    use serde::de::DeserializeSeed;
+    let count = std::cell::Cell::new(0);
+    let mut reader = serde_json::Deserializer::from_slice(json);
+    let counted = Counter { count: &count }
+        .deserialize(&mut reader)
+        .and_then(|()| reader.end());
+    match counted {
+        _ if count.get() > MAX_JSON_VALUES => Err(ReadError::Limit(format!(
+            "its JSON has more than {MAX_JSON_VALUES} values outside `extras`, the limit for a .glb's JSON"
+        ))),
+        Err(e) => Err(ReadError::Invalid(format!("the glTF's JSON: {e}"))),
+        Ok(()) => Ok(()),
+    }
+}
+
+/// Counts a JSON document's values into `count`, stopping past [`MAX_JSON_VALUES`];
+/// the value of an `extras` key counts as one (gltf-json keeps it as raw text).
+struct Counter<'a> {
+    count: &'a std::cell::Cell<u64>,
+}
+
+impl Counter<'_> {
+    fn bump<E: serde::de::Error>(&self) -> Result<(), E> {
+        self.count.set(self.count.get() + 1);
+        if self.count.get() > MAX_JSON_VALUES {
+            return Err(E::custom("too many values"));
+        }
+        Ok(())
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for Counter<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for Counter<'_> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E: serde::de::Error>(self, _: bool) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_i64<E: serde::de::Error>(self, _: i64) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_u64<E: serde::de::Error>(self, _: u64) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_f64<E: serde::de::Error>(self, _: f64) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_str<E: serde::de::Error>(self, _: &str) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_unit<E: serde::de::Error>(self) -> Result<(), E> {
+        self.bump()
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        self.bump()?;
+        while seq
+            .next_element_seed(Counter { count: self.count })?
+            .is_some()
+        {}
+        Ok(())
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        self.bump()?;
+        while let Some(key) = map.next_key_seed(IsExtras)? {
+            if key {
+                map.next_value::<serde::de::IgnoredAny>()?;
+                self.bump()?;
+            } else {
+                map.next_value_seed(Counter { count: self.count })?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Reads a key: whether it is `extras`.
+struct IsExtras;
+
+impl<'de> serde::de::DeserializeSeed<'de> for IsExtras {
+    type Value = bool;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<bool, D::Error> {
+        d.deserialize_str(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for IsExtras {
+    type Value = bool;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a key")
+    }
+    fn visit_str<E: serde::de::Error>(self, key: &str) -> Result<bool, E> {
+        Ok(key == "extras")
+    }
+}
+
+/// Checks the decoded size of `images` textures of `layout`'s size before any is
+/// decoded: [`MAX_IMAGE_SIZE`] a side and [`MAX_TEXTURE_BYTES`] in all.
+fn check_texture_size(layout: &Atlas, images: usize) -> Result<(), ReadError> {
+    let (w, h) = (layout.width(), layout.height());
+    if w > MAX_IMAGE_SIZE || h > MAX_IMAGE_SIZE {
+        return Err(ReadError::Limit(format!(
+            "its atlas is {w}×{h} texels, over the limit of {MAX_IMAGE_SIZE} × {MAX_IMAGE_SIZE} for a .glb's textures"
+        )));
+    }
+    let bytes = texture_bytes(w, h, images);
+    if bytes > MAX_TEXTURE_BYTES {
+        return Err(ReadError::Limit(format!(
+            "its {images} textures of {w}×{h} texels would take about {} MiB decoded and on the GPU, over the limit of {} MiB for a .glb's textures",
+            bytes >> 20,
+            MAX_TEXTURE_BYTES >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// A PNG's width and height from its header (the IHDR chunk, which comes first).
+fn png_size(png: &[u8]) -> Option<(u32, u32)> {
+    let word = |at: usize| Some(u32::from_be_bytes(png.get(at..at + 4)?.try_into().ok()?));
+    if png.get(..8)? != b"\x89PNG\r\n\x1a\n" || png.get(12..16)? != b"IHDR" {
+        return None;
+    }
+    Some((word(16)?, word(20)?))
 }
 
 /// The JSON and BIN chunks of a GLB file (the BIN chunk is empty when absent).
@@ -452,14 +687,26 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], &[u8]), String> {
     }
 }
 
-/// The atlas layout from the root's `extras.sdfc_atlas`.
+/// The atlas layout from the root's `extras.sdfc_atlas`, parsed from the text into the
+/// layout's own types (no JSON values are built: a packed layout's table can be
+/// large).
 fn read_layout(root: &Root) -> Result<Atlas, String> {
+    #[derive(serde::Deserialize)]
+    struct Extras<'a> {
+        #[serde(borrow, rename = "sdfc_atlas")]
+        atlas: Option<&'a RawValue>,
+    }
     let missing =
         || format!("the glTF has no atlas layout (extras.{LAYOUT_KEY}): not from sdfc bake");
     let extras = root.extras.as_ref().ok_or_else(missing)?;
-    let mut extras: Value = serde_json::from_str(extras.get()).map_err(|e| e.to_string())?;
-    let layout = extras.get_mut(LAYOUT_KEY).ok_or_else(missing)?.take();
-    serde_json::from_value(layout).map_err(|e| format!("the glTF's atlas layout: {e}"))
+    let extras: Extras =
+        serde_json::from_str(extras.get()).map_err(|e| format!("the glTF's extras: {e}"))?;
+    let layout = extras.atlas.ok_or_else(missing)?.get();
+    // As `Atlas`'s untagged form reads it: packed, else flat.
+    serde_json::from_str(layout)
+        .map(Atlas::Packed)
+        .or_else(|_| serde_json::from_str(layout).map(Atlas::Flat))
+        .map_err(|e| format!("the glTF's atlas layout (neither packed nor flat): {e}"))
 }
 
 /// A parsed document and its buffer 0, for bounds-checked reads.
@@ -561,9 +808,10 @@ impl Reader<'_> {
             .collect())
     }
 
-    /// The image of texture `index`, a PNG in a buffer view, as RGBA.
-    /// Images larger than `layout` says are refused before they are decoded.
-    fn image(&self, index: Index<Texture>, layout: &Atlas) -> Result<RgbaImage, String> {
+    /// The image of texture `index`, a PNG in a buffer view, as RGBA. Images of
+    /// another size than `layout`'s are refused before they are decoded (a
+    /// [`ReadError::Limit`] when over [`MAX_IMAGE_SIZE`]).
+    fn image(&self, index: Index<Texture>, layout: &Atlas) -> Result<RgbaImage, ReadError> {
         let texture = self
             .root
             .get(index)
@@ -576,6 +824,20 @@ impl Reader<'_> {
             return Err("the image is not a PNG in the GLB".into());
         }
         let (png, _) = self.view(image.buffer_view.ok_or("the image is not in the GLB")?)?;
+        let (pw, ph) = png_size(png).ok_or("the image is not a PNG")?;
+        if pw > MAX_IMAGE_SIZE || ph > MAX_IMAGE_SIZE {
+            return Err(ReadError::Limit(format!(
+                "its PNG is {pw}×{ph} texels, over the limit of {MAX_IMAGE_SIZE} × {MAX_IMAGE_SIZE} for a .glb's textures"
+            )));
+        }
+        if (pw, ph) != (layout.width(), layout.height()) {
+            return Err(format!(
+                "its PNG is {pw}×{ph} texels, the atlas {}×{}",
+                layout.width(),
+                layout.height()
+            )
+            .into());
+        }
         let mut reader = image::ImageReader::with_format(Cursor::new(png), ImageFormat::Png);
         let mut limits = image::Limits::default();
         let (w, h) = (

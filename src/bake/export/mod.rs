@@ -14,7 +14,7 @@
 pub mod gltf;
 pub mod ktx2;
 
-pub use self::gltf::{glb, read_glb};
+pub use self::gltf::{glb, read_glb, ReadError};
 pub use self::ktx2::ktx2;
 
 use super::{Atlas, FlatLayout, MeshData, Textures};

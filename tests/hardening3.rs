@@ -10,34 +10,10 @@ use sdfc::codegen::{self, WalkForm};
 use sdfc::driver::{check, check_all};
 use std::time::{Duration, Instant};
 
-/// The error codes of a scene after the whole check; no internal compiler error, and
-/// every span inside the text.
-fn codes(src: &str) -> Vec<&'static str> {
-    let a = check_all(src, None);
-    for d in &a.diagnostics {
-        assert_ne!(
-            d.code, "E0900",
-            "internal compiler error: {}\n{src}",
-            d.message
-        );
-        for l in d.primary.iter().chain(&d.secondary) {
-            assert!(l.span.end <= src.len());
-        }
-    }
-    let mut c: Vec<&'static str> = a
-        .diagnostics
-        .iter()
-        .filter(|d| d.is_error())
-        .map(|d| d.code)
-        .collect();
-    c.dedup();
-    c
-}
-
 /// The WGSL of a scene that compiles (naga validated it).
 fn wgsl(src: &str) -> String {
     let a = check_all(src, None);
-    assert_eq!(codes(src), Vec::<&str>::new(), "{src}");
+    assert_eq!(common::error_codes(src), Vec::<&str>::new(), "{src}");
     a.compiled.expect("a module").module.wgsl.clone()
 }
 
@@ -71,7 +47,7 @@ fn displacements_of_unbounded_shapes_overflow_cleanly() {
         "render sphere(1).repeat([3, 3, 3]).displace(1, scale: 1e31);",
         "render sphere(1).displace(1, scale: 1e31);",
     ] {
-        assert_eq!(codes(src), ["E0403"], "{src}");
+        assert_eq!(common::error_codes(src), ["E0403"], "{src}");
     }
     // Large but representable: compiles.
     wgsl("render plane().displace(1, scale: 1e20);");

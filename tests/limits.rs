@@ -2,28 +2,11 @@
 //! errors, crashed or hung. Each now either compiles (naga accepts it) or gets its
 //! spanned error, and the depth limits hold at the limit and just beyond it.
 
+mod common;
+
 use sdfc::driver::check_all;
 use sdfc::syntax::parser::MAX_NESTING;
 use std::time::Instant;
-
-/// The error codes of a scene after the whole check (codegen and naga included).
-fn codes(src: &str) -> Vec<&'static str> {
-    let a = check_all(src, None);
-    for d in &a.diagnostics {
-        assert_ne!(d.code, "E0900", "internal compiler error: {}", d.message);
-        for l in d.primary.iter().chain(&d.secondary) {
-            assert!(l.span.end <= src.len());
-        }
-    }
-    let mut c: Vec<&'static str> = a
-        .diagnostics
-        .iter()
-        .filter(|d| d.is_error())
-        .map(|d| d.code)
-        .collect();
-    c.dedup();
-    c
-}
 
 fn compiles(src: &str) {
     let a = check_all(src, None);
@@ -46,15 +29,15 @@ fn constants_beyond_single_precision_are_rejected_at_the_literal() {
         "let s = sphere(1);\natlas a on s { max_distance = 1e39; seed p = [1, 0, 0]; }\nrender s;",
         "render sphere(1e20 * 1e20);",
     ] {
-        assert_eq!(codes(src), ["E0302"], "{src}");
+        assert_eq!(common::error_codes(src), ["E0302"], "{src}");
     }
     // The largest f32 is a valid constant; as a shape's offset its bounds overflow.
     assert_eq!(
-        codes("let x = 3e38;\nrender sphere(1);"),
+        common::error_codes("let x = 3e38;\nrender sphere(1);"),
         Vec::<&str>::new()
     );
     assert_eq!(
-        codes("render sphere(1).translate([0, 3e38, 0]);"),
+        common::error_codes("render sphere(1).translate([0, 3e38, 0]);"),
         ["E0403"]
     );
 }
@@ -71,7 +54,10 @@ fn chains_of_warps_compile_or_overflow_cleanly() {
     compiles(&chain(".twist(rate: 0.1)", 21));
     compiles(&chain(".bend(rate: 0.1)", 127));
     compiles(&chain(".twist(rate: 0.00001)", 200));
-    assert_eq!(codes(&chain(".twist(rate: 1e6)", 8)), ["E0403"]);
+    assert_eq!(
+        common::error_codes(&chain(".twist(rate: 1e6)", 8)),
+        ["E0403"]
+    );
 }
 
 fn lets(n: usize) -> String {
@@ -91,7 +77,7 @@ fn lets(n: usize) -> String {
 fn chains_of_field_lets_compile_or_hit_the_depth_limit() {
     compiles(&lets(98));
     compiles(&lets(200));
-    assert_eq!(codes(&lets(10_000)), ["E0011"]);
+    assert_eq!(common::error_codes(&lets(10_000)), ["E0011"]);
 }
 
 /// A `let` used twice by the next doubles the inlined size: past the limit it is
@@ -106,7 +92,7 @@ fn doubling_lets_hit_the_size_limit_quickly() {
         }
         s.push_str("render sphere(1);\n");
         let t = Instant::now();
-        assert_eq!(codes(&s), ["E0012"], "{leaf}");
+        assert_eq!(common::error_codes(&s), ["E0012"], "{leaf}");
         assert!(t.elapsed().as_secs() < 20, "took {:?}", t.elapsed());
     }
 }
@@ -114,25 +100,31 @@ fn doubling_lets_hit_the_size_limit_quickly() {
 #[test]
 fn very_long_chains_are_a_depth_error_not_a_crash() {
     assert_eq!(
-        codes(&chain(".translate([0, 0, 0.001])", 12_000)),
+        common::error_codes(&chain(".translate([0, 0, 0.001])", 12_000)),
         ["E0011"]
     );
     let ors = vec!["sphere(1)"; 20_000].join(" | ");
-    assert_eq!(codes(&format!("render {ors};")), ["E0011"]);
+    assert_eq!(common::error_codes(&format!("render {ors};")), ["E0011"]);
     let sum = vec!["1"; 100_000].join(" + ");
-    assert_eq!(codes(&format!("render sphere({sum});")), ["E0011"]);
+    assert_eq!(
+        common::error_codes(&format!("render sphere({sum});")),
+        ["E0011"]
+    );
 }
 
 /// The one nesting limit, at the limit and one past it, for each kind of nesting.
 #[test]
 fn the_nesting_limit_holds_exactly() {
     let links = |n: usize| format!("let x = 1{};\nrender sphere(x);\n", " + 0".repeat(n));
-    assert_eq!(codes(&links(MAX_NESTING)), Vec::<&str>::new());
-    assert_eq!(codes(&links(MAX_NESTING + 1)), ["E0011"]);
+    assert_eq!(common::error_codes(&links(MAX_NESTING)), Vec::<&str>::new());
+    assert_eq!(common::error_codes(&links(MAX_NESTING + 1)), ["E0011"]);
     // The arguments of the last call are one level below the chain.
     let methods = |n: usize| format!("render sphere(1){};", ".round(0.001)".repeat(n));
-    assert_eq!(codes(&methods(MAX_NESTING - 1)), Vec::<&str>::new());
-    assert_eq!(codes(&methods(MAX_NESTING)), ["E0011"]);
+    assert_eq!(
+        common::error_codes(&methods(MAX_NESTING - 1)),
+        Vec::<&str>::new()
+    );
+    assert_eq!(common::error_codes(&methods(MAX_NESTING)), ["E0011"]);
     let brackets = |n: usize| {
         format!(
             "let x = {}1{};\nrender sphere(x);\n",
@@ -140,8 +132,11 @@ fn the_nesting_limit_holds_exactly() {
             ")".repeat(n)
         )
     };
-    assert_eq!(codes(&brackets(MAX_NESTING)), Vec::<&str>::new());
-    assert_eq!(codes(&brackets(MAX_NESTING + 1)), ["E0011"]);
+    assert_eq!(
+        common::error_codes(&brackets(MAX_NESTING)),
+        Vec::<&str>::new()
+    );
+    assert_eq!(common::error_codes(&brackets(MAX_NESTING + 1)), ["E0011"]);
 }
 
 /// Generated names are mangled by index: an atlas `a` and one `a_merged` do not collide.
@@ -222,11 +217,15 @@ fn scenes_found_by_the_random_generator() {
     compiles("let f4 = dot(0.5, normal.z);\nmaterial m6 { metallic = f4; }\nrender sphere(1).paint(m6);\n");
     // Constants beyond f32, even where unused.
     assert_eq!(
-        codes("material m4 { emission = [1.0, 1.5, 1e39]; }\nlet s5 = pyramid();\nrender s5;"),
+        common::error_codes(
+            "material m4 { emission = [1.0, 1.5, 1e39]; }\nlet s5 = pyramid();\nrender s5;"
+        ),
         ["E0302"]
     );
     assert_eq!(
-        codes("let s5 = scale(sphere(1), 99999999999999999999999999999999999999999);\nrender s5;"),
+        common::error_codes(
+            "let s5 = scale(sphere(1), 99999999999999999999999999999999999999999);\nrender s5;"
+        ),
         ["E0302"]
     );
 }

@@ -248,20 +248,7 @@ impl Server {
             Pending::Deferred(req) => {
                 // A panic inside a request is answered as an internal error, and the
                 // server keeps serving (as rust-analyzer does).
-                let id = req.id.clone();
-                let method = req.method.clone();
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| answer(&self.docs, req)))
-                    .unwrap_or_else(|panic| {
-                        let why = panic_message(&panic);
-                        eprintln!("sdfc lsp: internal error in {method}: {why}");
-                        respond::<()>(
-                            id,
-                            Err(Failure::new(
-                                ErrorCode::InternalError,
-                                format!("internal error in {method}: {why}"),
-                            )),
-                        )
-                    })
+                answer_caught(&self.docs, req)
             }
         }
     }
@@ -348,24 +335,11 @@ impl Server {
         let request = req.id.clone();
         self.in_flight.insert(request.clone());
         let tx = self.background.0.clone();
-        let (id, method) = (req.id.clone(), req.method.clone());
         let spawned = std::thread::Builder::new()
             .name(String::from("sdfc-lsp-request"))
             .stack_size(64 << 20)
             .spawn(move || {
-                let resp =
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| answer(&docs, req)))
-                        .unwrap_or_else(|panic| {
-                            let why = panic_message(&panic);
-                            eprintln!("sdfc lsp: internal error in {method}: {why}");
-                            respond::<()>(
-                                id,
-                                Err(Failure::new(
-                                    ErrorCode::InternalError,
-                                    format!("internal error in {method}: {why}"),
-                                )),
-                            )
-                        });
+                let resp = answer_caught(&docs, req);
                 // The loop is gone when the server has stopped: nothing to answer.
                 let _ = tx.send(resp);
                 discard(docs);
@@ -540,6 +514,24 @@ pub(super) fn discard<T: Send + 'static>(value: T) {
         }
         None => drop(value),
     }
+}
+
+/// The answer to `req`; a panic inside it is answered as an internal error and logged.
+fn answer_caught(docs: &Docs, req: Request) -> Response {
+    let (id, method) = (req.id.clone(), req.method.clone());
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| answer(docs, req))).unwrap_or_else(
+        |panic| {
+            let why = panic_message(&panic);
+            eprintln!("sdfc lsp: internal error in {method}: {why}");
+            respond::<()>(
+                id,
+                Err(Failure::new(
+                    ErrorCode::InternalError,
+                    format!("internal error in {method}: {why}"),
+                )),
+            )
+        },
+    )
 }
 
 pub(super) fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {

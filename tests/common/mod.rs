@@ -234,3 +234,27 @@ pub fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
     let n = (a.len() / 4) as f64;
     (sum as f64 / (n * 3.0), bad as f64 / n)
 }
+
+/// The error codes of a scene after the whole check (codegen and naga included), each
+/// run once; asserts no internal compiler error (E0900) and every span inside the text.
+pub fn error_codes(src: &str) -> Vec<&'static str> {
+    let a = sdfc::driver::check_all(src, None);
+    for d in &a.diagnostics {
+        assert_ne!(
+            d.code, "E0900",
+            "internal compiler error: {}\n{src}",
+            d.message
+        );
+        for l in d.primary.iter().chain(&d.secondary) {
+            assert!(l.span.end <= src.len());
+        }
+    }
+    let mut c: Vec<&'static str> = a
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .map(|d| d.code)
+        .collect();
+    c.dedup();
+    c
+}

@@ -426,11 +426,13 @@ pub fn generate(analysis: &Analysis, options: &codegen::Options) -> Result<Modul
             return Err(CompileError::Scene(errors.cloned().collect()));
         }
     };
-    pick_shape(scene, options.shape.as_deref()).map_err(CompileError::Usage)?;
+    let name = options.shape.as_deref();
+    let shape = pick_shape(scene, name).map_err(CompileError::Usage)?;
     if let Some(name) = options.atlas.as_deref() {
         pick_atlas(&analysis.program, Some(name)).map_err(CompileError::Usage)?;
     }
-    codegen::generate(&analysis.program, scene, &analysis.atlases, options)
+    let target = codegen::Rendered { shape, name };
+    codegen::generate(&analysis.program, scene, &analysis.atlases, target, options)
         .map_err(CompileError::Scene)
 }
 

@@ -163,26 +163,36 @@ pub fn run(args: BenchArgs) -> ExitCode {
     // A displaced render target: the same scene with every displacement replaced by its
     // base (the plain textured render), to measure what displacement costs.
     let target = analysis.program.render.as_ref().map(|r| &r.target);
-    let undisplaced = match target
-        .filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some())
-    {
-        Some(t) => {
-            let mut scene = analysis.scene.clone().unwrap_or_default();
-            scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));
-            let options = Options {
-                walk: WalkForm::Loop,
-                ..base.clone()
-            };
-            match sdfc::codegen::generate(&analysis.program, &scene, &analysis.atlases, &options) {
-                Ok(m) => Some(m),
-                Err(d) => {
-                    eprintln!("error: cannot compile the undisplaced scene: {d:?}");
+    let undisplaced =
+        match target.filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some()) {
+            Some(t) => {
+                let mut scene = analysis.scene.clone().unwrap_or_default();
+                scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));
+                let options = Options {
+                    walk: WalkForm::Loop,
+                    ..base.clone()
+                };
+                let Some(shape) = scene.render.as_ref() else {
+                    eprintln!("error: the undisplaced scene has no render target");
                     return ExitCode::from(super::exit::ICE);
+                };
+                let target = sdfc::codegen::Rendered { shape, name: None };
+                match sdfc::codegen::generate(
+                    &analysis.program,
+                    &scene,
+                    &analysis.atlases,
+                    target,
+                    &options,
+                ) {
+                    Ok(m) => Some(m),
+                    Err(d) => {
+                        eprintln!("error: cannot compile the undisplaced scene: {d:?}");
+                        return ExitCode::from(super::exit::ICE);
+                    }
                 }
             }
-        }
-        None => None,
-    };
+            None => None,
+        };
     let unrolled = unrolled.module;
     // The same scene with every material's `normal` back to the surface normal: the
     // plain textured render that normal maps are measured against.

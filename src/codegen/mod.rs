@@ -269,14 +269,24 @@ fn internal(message: String) -> Vec<Diagnostic> {
     ]
 }
 
-/// Generates the module for a checked, error-free program. `atlases` are the prepared
+/// The shape a module renders, as the caller resolved it: the lowered shape, and the
+/// name of the `let` it is when it is not the render item's target.
+#[derive(Debug, Clone, Copy)]
+pub struct Rendered<'a> {
+    pub shape: &'a ir::Shape,
+    pub name: Option<&'a str>,
+}
+
+/// Generates the module for a checked, error-free program, rendering `target` (the
+/// driver resolves it once: [`crate::driver::pick_shape`]). `atlases` are the prepared
 /// atlases of [`crate::driver::check`], one per atlas of the program; they are never
-/// recomputed here. Choices that name things outside the scene (`options.shape`,
-/// `options.atlas`) are checked by the driver before; here they are internal errors.
+/// recomputed here. `options.atlas`, which names an atlas, is checked by the driver
+/// before; here it is an internal error.
 pub fn generate(
     program: &Program,
     scene: &Scene,
     atlases: &[Option<Atlas>],
+    target: Rendered<'_>,
     options: &Options,
 ) -> Result<Module, Vec<Diagnostic>> {
     if atlases.len() != program.atlases.len() {
@@ -286,8 +296,7 @@ pub fn generate(
             program.atlases.len()
         )));
     }
-    let target = crate::driver::pick_shape(scene, options.shape.as_deref())
-        .map_err(|e| internal(format!("code generation: {e}")))?;
+    let (name, target) = (target.name, target.shape);
     let mut g = Generator {
         program,
         out: String::new(),
@@ -304,7 +313,7 @@ pub fn generate(
         g.add_heights(a.shape.heights());
     }
     g.shapes(scene, target);
-    g.render_target(scene, target, options);
+    g.render_target(scene, target, name);
     let plain = options.plain;
     let mut uses = Uses::default();
     g.heights(&mut uses)?;
@@ -405,7 +414,7 @@ impl Generator<'_> {
     }
 
     /// `scene_map`: the render target.
-    fn render_target(&mut self, scene: &Scene, target: &ir::Shape, options: &Options) {
+    fn render_target(&mut self, scene: &Scene, target: &ir::Shape, name: Option<&str>) {
         let start = self.out.len();
         let (h, groups) = map_fn(
             &mut self.out,
@@ -416,7 +425,7 @@ impl Generator<'_> {
         self.add_heights(h);
         self.groups.extend(groups);
         self.surface(target);
-        let span = match (options.shape.as_deref(), &self.program.render) {
+        let span = match (name, &self.program.render) {
             (Some(n), _) => self.let_span(n),
             (None, Some(r)) => Some(r.target_span),
             (None, None) => scene.shapes.first().and_then(|s| self.let_span(&s.name)),

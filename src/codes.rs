@@ -37,8 +37,8 @@ codes! {
     E_NO_SEEDS = "E0115": "an atlas with no seed";
     E_DUPLICATE_RENDER = "E0116": "more than one render item";
     E_TOO_MANY = "E0117": "an atlas with more seeds or merges than the limit";
-    E_INLINED_SIZE = "E0118": "a module too large for a driver to build once its calls are inlined (walks nested inside walks)";
-    E_WALK_NESTING = "E0119": "an atlas whose walks nest inside other atlases' walks deeper than the limit";
+    E_INLINED_SIZE = "E0118": "a module too large for a driver to build once its calls are inlined (stacked displacements, walks nested inside walks)";
+    E_WALK_NESTING = "E0119": "an atlas whose shape costs too much to evaluate (walks nested in walks, stacked displacements and shell maps)";
     E_TYPE_MISMATCH = "E0200": "a value of the wrong type";
     E_BAD_OPERANDS = "E0201": "an operator applied to types it does not accept";
     E_VECTOR_SIZE = "E0202": "a vector of the wrong size, or vectors of different sizes";

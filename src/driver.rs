@@ -402,17 +402,19 @@ fn inlined_too_large(
         }
     }
     d = d.with_note(
-        "drivers inline every function: a walk nested inside another walk (an atlas on a \
-         displaced shape) is copied once per evaluation of the outer walk, so the code \
-         grows as the product of the walks; the size counts each expression once per \
-         inlined copy, 4 times more for each loop around it",
+        "drivers inline every function: each displacement or shell map evaluates its \
+         base 7 times, a height that reads an atlas holds a copy of its walk, and a walk \
+         holds a copy of its shape per evaluation, so stacked displacements and walks \
+         nested in walks multiply; the size counts each expression once per inlined \
+         copy, 4 times more for each loop around it",
     );
     let help = if options.walk == codegen::WalkForm::Unrolled {
-        "compile with `--walk loop` (one copy of each walk's step), or read the base \
-         shape's atlas instead of an atlas on the displaced shape"
+        "compile with `--walk loop` (one copy of each walk's step), stack fewer \
+         displacements and shell maps, or read the base shape's atlas instead of an \
+         atlas on a displaced shape"
     } else {
-        "read the base shape's atlas instead of an atlas on the displaced shape, or \
-         displace less deeply"
+        "stack fewer displacements and shell maps, or read the base shape's atlas \
+         instead of an atlas on a displaced shape"
     };
     Some(d.with_help(help))
 }

@@ -86,6 +86,34 @@ fn atlases_nested_too_deep_are_refused_before_the_work() {
     assert!(start.elapsed() < Duration::from_secs(60));
 }
 
+#[test]
+fn atlases_on_stacked_shell_maps_are_refused_before_the_work() {
+    // Found by the §5 generator: each shell map evaluates its base 7 times, so an
+    // atlas on 4 stacked over a displaced sphere took 25 s to check, on 6 over 120 s.
+    let stack = |n: usize| {
+        format!(
+            "let b = sphere(1);\natlas a on b {{ seed p = [0, 0, 1]; }}\nlet d = b.displace(sin(a.uv.x), scale: 0.1){};\natlas x on d {{ seed p = [0.0676, -0.8757, 0.4781]; }}\nrender b;\n",
+            ".shell_map(sphere(0.3), [0.5, 0.5])".repeat(n)
+        )
+    };
+    for n in [4, 6] {
+        let src = stack(n);
+        let a = check(&src, None);
+        let e: Vec<_> = a.diagnostics.iter().filter(|d| d.is_error()).collect();
+        assert_eq!(e.len(), 1, "{:?}", a.diagnostics);
+        assert_eq!(e[0].code, "E0119");
+        let at = e[0].primary.as_ref().unwrap().span;
+        assert_eq!(&src[at.start..at.end], "d");
+    }
+    // Two stacked shell maps cost under the limit and check.
+    let a = check(&stack(2), None);
+    assert!(
+        a.diagnostics.iter().all(|d| d.code != "E0119"),
+        "{:?}",
+        a.diagnostics
+    );
+}
+
 /// The §5 scene that lavapipe took 117 s and 4.9 GB to build with the loop walk.
 const NESTED_SHELL: &str = "let base = sphere(1);
 atlas skin on base { seed f = [0, 0, 1]; }

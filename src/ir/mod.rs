@@ -397,6 +397,10 @@ impl Aabb {
     }
 }
 
+/// How often a displacement or a shell map evaluates its base at a point near the
+/// surface: once for the distance and six times for Π_f's gradient (Eq. 57).
+pub const PROJECTION_EVALS: f64 = 7.0;
+
 /// The largest derived constant a shape may have (bounds, Lipschitz bound, warp
 /// radii): well inside single precision, so sums and products in the shader stay finite.
 pub const MAX_DERIVED: f64 = 1e30;
@@ -454,6 +458,27 @@ impl Shape {
 
     pub fn lipschitz(&self) -> f64 {
         self.root_node().lipschitz
+    }
+
+    /// About how many primitive evaluations one evaluation of the shape's field costs
+    /// near its surface, each use of a shared node counted: a displacement or a shell
+    /// map evaluates its base [`PROJECTION_EVALS`] times (Π_f of Eq. 57), and a height
+    /// or uv that reads atlas `k` walks it, at `walk(k)` evaluations.
+    pub fn eval_cost(&self, walk: impl Fn(crate::sema::AtlasId) -> f64) -> f64 {
+        let mut cost: Vec<f64> = Vec::with_capacity(self.nodes.len());
+        for n in &self.nodes {
+            let c = |id: NodeId| cost[id.index()];
+            let read = |h: &Height| h.atlas.map_or(1.0, &walk);
+            let total = match &n.op {
+                Op::Displace { height, child } => PROJECTION_EVALS * c(*child) + read(height),
+                Op::ShellMap { map, base, tile } => {
+                    PROJECTION_EVALS * c(*base) + c(*tile) + read(&map.uv)
+                }
+                op => 1.0 + op.children().iter().map(|&k| c(k)).sum::<f64>(),
+            };
+            cost.push(total);
+        }
+        cost.last().copied().unwrap_or(0.0)
     }
 
     /// Why the shape's derived constants (bounds, Lipschitz bound, warp radii) do not fit

@@ -76,9 +76,9 @@ fn prepare_cached(def: &AtlasDef, shape: &ir::Shape) -> Result<Atlas, PrepareErr
 pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
-    // How deep each atlas's walks nest: 1 on a plain shape, one more than the deepest
-    // atlas a displacement or shell map of its shape reads.
-    let mut depth: Vec<usize> = Vec::new();
+    // What one evaluation of each atlas's shape costs, and one walk of the atlas: an
+    // atlas on a displaced shape walks the height's atlas at every evaluation.
+    let mut walks: Vec<f64> = Vec::new();
     // Atlases on displaced shapes evaluate their heights: those read textures (their
     // texels bound the heights) and the atlases prepared before them. A displaced
     // render target needs the textures to be lowered for its rest-pose query.
@@ -100,18 +100,15 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     for def in &program.atlases {
         let Some(shape) = ir::lower_shape_textured(&def.shape, &textures) else {
             out.push(None);
-            depth.push(1);
+            walks.push(f64::INFINITY);
             continue;
         };
-        let nested = shape
-            .heights()
-            .iter()
-            .filter_map(|h| depth.get(h.atlas?.index()).copied())
-            .max()
-            .unwrap_or(0);
-        depth.push(nested + 1);
-        if nested + 1 > MAX_WALK_NESTING {
-            diags.push(nesting_error(program, def, &shape, &depth));
+        // A height that reads an atlas declared later is not bound yet: the CPU evaluates
+        // its band's bound, not a walk.
+        let cost = shape.eval_cost(|k| walks.get(k.index()).copied().unwrap_or(1.0));
+        walks.push(walk_evals(def) * cost);
+        if !(cost <= MAX_EVAL_COST) {
+            diags.push(cost_error(program, def, &shape, cost));
             out.push(None);
             continue;
         }
@@ -145,48 +142,71 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     (out, diags)
 }
 
-/// How deep an atlas's walks may nest inside other atlases' walks: an atlas on a
-/// displaced shape walks the height's atlas at every evaluation, so each level
-/// multiplies the cost per point by about N × 8 × the seeds walked (three levels of
-/// the 20-step, 2-seed atlases of the issue never finished checking; two take 0.1 s).
-pub const MAX_WALK_NESTING: usize = 2;
+/// The most primitive evaluations one evaluation of an atlas's shape may cost
+/// ([`ir::Shape::eval_cost`]): preparing an atlas evaluates its shape tens of
+/// thousands of times. Two atlases of 20 steps with two seeds, the second on a shape
+/// displaced by the first, cost about 1,000 and check in 0.1 s; a third on top costs
+/// about 940,000 and never finished (over 120 s); an atlas on four shell maps stacked
+/// on a displaced sphere costs about 170,000 and took 25 s (three: 24,000, 3.4 s).
+pub const MAX_EVAL_COST: f64 = 50_000.0;
 
-/// E0119 on an atlas whose walks nest deeper than [`MAX_WALK_NESTING`], with the chain
-/// of atlases its shape's heights read.
-fn nesting_error(
-    program: &Program,
-    def: &AtlasDef,
-    shape: &ir::Shape,
-    depth: &[usize],
-) -> Diagnostic {
-    let k = depth.len() - 1;
+/// Field evaluations of one walk of an atlas, as the cost model counts them: N steps
+/// (times 1 + refine), each a gradient and a step (8 evaluations), from up to 4 seeds.
+fn walk_evals(def: &AtlasDef) -> f64 {
+    let p = &def.params;
+    p.steps as f64 * (1.0 + p.refine as f64) * 8.0 * def.seeds.len().clamp(1, 4) as f64
+}
+
+/// E0119 on an atlas whose shape costs more than [`MAX_EVAL_COST`] to evaluate, with
+/// the atlases its heights walk and the displacements and shell maps that multiply.
+fn cost_error(program: &Program, def: &AtlasDef, shape: &ir::Shape, cost: f64) -> Diagnostic {
     let mut d = Diagnostic::error(
         codes::E_WALK_NESTING,
         format!(
-            "the walks of atlas `{}` nest {} deep in other atlases' walks, over the limit of {MAX_WALK_NESTING}",
-            def.name, depth[k]
+            "evaluating the shape of atlas `{}` costs about {} primitive evaluations, over the limit of {}",
+            def.name,
+            fmt_count(cost),
+            fmt_count(MAX_EVAL_COST)
         ),
         def.shape_span,
-        "this shape is displaced by a height that reads an atlas on a displaced shape",
+        "each of this shape's evaluations is too costly to walk",
     );
+    let mut walked = Vec::new();
     for h in shape.heights() {
-        if let Some(j) = h
-            .atlas
-            .filter(|j| depth.get(j.index()).is_some_and(|&n| n + 1 == depth[k]))
-        {
+        if let Some(j) = h.atlas.filter(|j| !walked.contains(j)) {
+            walked.push(j);
             let inner = program.atlas(j);
             d = d.with_label(
                 inner.shape_span,
-                format!("atlas `{}` walks {} deep", inner.name, depth[j.index()]),
+                format!("every evaluation walks atlas `{}`", inner.name),
             );
         }
     }
     d.with_note(
-        "each evaluation of a displaced shape walks the atlas its height reads, and a walk \
-         evaluates its shape at every step: every level multiplies the cost per point by \
-         about N × 8 × the seeds walked",
+        "a walk evaluates its shape at every step; each displacement or shell map \
+         evaluates its base 7 times, and each height that reads an atlas walks it, so \
+         stacked displacements and atlases on displaced shapes multiply",
     )
-    .with_help("read the base shape's atlas in the height instead of an atlas on a displaced shape")
+    .with_help(
+        "stack fewer displacements and shell maps under the atlas, or read the base \
+         shape's atlas in the height instead of an atlas on a displaced shape",
+    )
+}
+
+/// A count for a message: 940000 → "940,000"; infinite → "unbounded".
+fn fmt_count(x: f64) -> String {
+    if !x.is_finite() || x >= 1e18 {
+        return String::from("more than 10^18");
+    }
+    let digits = format!("{}", x.round() as u64);
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }
 
 pub fn fmt_point(p: DVec3) -> String {

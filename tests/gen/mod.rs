@@ -11,6 +11,8 @@
 
 #![allow(dead_code)]
 
+pub mod section5;
+
 use sdfc::sema::builtins::{
     Builtin, Check, Kind, PTy, Ret, SettingSpec, ATLAS_SETTINGS, BUILTINS, MATERIAL_SETTINGS,
     RENDER_SETTINGS,

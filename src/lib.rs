@@ -18,6 +18,7 @@
 //! so one run shows every independent problem. No input makes any stage panic.
 
 pub mod access;
+pub mod asset;
 pub mod bake;
 pub mod bench;
 pub mod codegen;

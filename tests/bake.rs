@@ -450,7 +450,7 @@ fn the_normal_map_decodes_to_the_object_space_normal() {
     let n = level.n;
     let mut worst = 0.0f64;
     for c in 0..baked.table.len() {
-        let [x0, y0] = baked.atlas.cell_origin(&baked.patches, c, 0);
+        let [x0, y0] = baked.patches.cell_origin(&baked.atlas, c, 0);
         let grid = level.grid(&baked.table, c);
         for j in 0..n {
             for i in 0..n {

@@ -106,7 +106,7 @@ fn grown_charts_conform_and_keep_borders_identical_at_every_level() {
     for (l, level) in baked.levels.iter().enumerate() {
         let n = level.n;
         for c in 0..cells {
-            let [x0, y0] = baked.atlas.cell_origin(&baked.patches, c, l);
+            let [x0, y0] = baked.patches.cell_origin(&baked.atlas, c, l);
             let grid = level.grid(&baked.table, c);
             for j in 0..n {
                 for i in 0..n {

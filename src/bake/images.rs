@@ -166,7 +166,7 @@ pub fn atlas_images(
     for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;
         for c in 0..table.len() {
-            let [x0, y0] = atlas.cell_origin(patches, c, l);
+            let [x0, y0] = patches.cell_origin(atlas, c, l);
             let grid = level.grid(table, c);
             for j in 0..n {
                 for i in 0..n {
@@ -324,7 +324,7 @@ pub fn mesh_data(
                 out.normals.push(nrm.as_vec3().to_array());
                 out.tangents
                     .push([t.x as f32, t.y as f32, t.z as f32, sign as f32]);
-                out.texcoords.push(atlas.texcoord(patches, c, u, w));
+                out.texcoords.push(patches.texcoord(atlas, c, u, w));
             }
         }
         for j in 0..m {
@@ -361,7 +361,7 @@ pub fn object_normals(
     for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;
         for c in 0..table.len() {
-            let [x0, y0] = atlas.cell_origin(patches, c, l);
+            let [x0, y0] = patches.cell_origin(atlas, c, l);
             for (k, t) in level.grid(table, c).iter().enumerate() {
                 let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or_zero();
                 let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);

@@ -7,7 +7,7 @@
 use super::emit::lit;
 use super::targets::{validate, NagaError, Validated};
 use super::{template, RENDER_LIBRARY};
-use crate::bake::{Atlas, FlatLayout};
+use crate::asset::{Atlas, FlatLayout};
 
 /// The WGSL of the mesh module for `layout` (not yet validated).
 pub fn mesh_wgsl(atlas: &Atlas) -> Result<String, template::Mismatch> {

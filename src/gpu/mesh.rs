@@ -16,7 +16,7 @@
 
 use super::render::{self, Frame, Timings, ViewMode};
 use super::{Gpu, GpuError};
-use crate::bake::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
+use crate::asset::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::mesh::{mesh_module, MeshIce};
 use crate::ir::Aabb;
 use crate::view::View;

@@ -221,3 +221,338 @@ fn document_messages(text: &str) -> Vec<Message> {
     )));
     out
 }
+
+/// Surface samples for placing seeds in the `seeds_write` target: a coarse grid keeps
+/// each input fast (`sdfc seeds --grid 12`).
+pub const SEEDS_GRID: usize = 12;
+
+/// At most this many atlases of one input are placed (each placement walks the surface).
+pub const SEEDS_ATLASES: usize = 2;
+
+/// `sdfc seeds --write` and "Place seeds automatically": on a scene that checks (an
+/// atlas without seeds aside, as `sdfc seeds` allows), the first [`SEEDS_ATLASES`]
+/// atlases get their seeds placed ([`sdfc::ide::seeds::place_edit`]), anew and kept.
+/// Never a panic; applied, each edit gives a text that parses, that formats, and that
+/// keeps every byte of the input outside the replaced `seed` and `merge` statements
+/// (see [`assert_seeds_edit`]). Inputs may start with `#`, as the `lsp` target's
+/// documents do (the `#` is dropped). Returns how many edits were checked.
+pub fn seeds_write(data: &[u8], base: &Path) -> usize {
+    let data = data.strip_prefix(b"#").unwrap_or(data);
+    let text = text(data);
+    let analysis = sdfc::driver::check(&text, Some(base));
+    assert_spans(&text, &analysis.diagnostics);
+    let blocking = analysis
+        .diagnostics
+        .iter()
+        .any(|d| d.is_error() && d.code != sdfc::codes::E_NO_SEEDS);
+    if blocking {
+        return 0;
+    }
+    let doc = sdfc::ide::Document { text, analysis };
+    let names: Vec<String> = doc
+        .analysis
+        .program
+        .atlases
+        .iter()
+        .take(SEEDS_ATLASES)
+        .map(|a| a.name.clone())
+        .collect();
+    let mut checked = 0;
+    for name in &names {
+        for keep in [false, true] {
+            if place_seeds(&doc, name, keep, SEEDS_GRID).is_some() {
+                checked += 1;
+            }
+        }
+    }
+    checked
+}
+
+/// Places the seeds of atlas `name` of `doc` (anew, or with `keep` added to its own),
+/// applies the edit and checks it ([`assert_seeds_edit`]); returns the edited text, or
+/// `None` when placing refused (an `Err`, which is not a failure).
+pub fn place_seeds(
+    doc: &sdfc::ide::Document,
+    name: &str,
+    keep: bool,
+    grid: usize,
+) -> Option<String> {
+    let options = sdfc::uv::seeds::PlaceOptions {
+        keep,
+        ..Default::default()
+    };
+    let (placement, edit) = sdfc::ide::seeds::place_edit(doc, name, options, grid).ok()?;
+    let output = assert_seeds_edit(doc, name, keep, &placement, &edit);
+    Some(output)
+}
+
+/// The spans of atlas `name`'s `seed` and `merge` statements in the syntax tree of
+/// `doc`, sorted, and the offset of its block's closing brace.
+pub fn seed_statement_spans(doc: &sdfc::ide::Document, name: &str) -> (Vec<sdfc::Span>, usize) {
+    use sdfc::syntax::ast::{AtlasStmt, ItemKind};
+    let def = doc
+        .analysis
+        .program
+        .atlases
+        .iter()
+        .find(|a| a.name == name)
+        .unwrap_or_else(|| panic!("no atlas `{name}`"));
+    let item = &doc.text[def.span.start..def.span.end];
+    let close = def.span.start + item.rfind('}').expect("the atlas block's `}`");
+    let mut spans: Vec<sdfc::Span> = doc
+        .analysis
+        .parsed
+        .file
+        .items
+        .iter()
+        .filter_map(|item| match &item.kind {
+            ItemKind::Atlas { name: n, body, .. } if n.name == name => Some(body),
+            _ => None,
+        })
+        .flatten()
+        .filter_map(|s| match s {
+            AtlasStmt::Seed { span, .. } | AtlasStmt::Merge { span, .. } => Some(*span),
+            _ => None,
+        })
+        .filter(|s| def.span.start <= s.start && s.end <= close)
+        .collect();
+    spans.sort_by_key(|s| s.start);
+    (spans, close)
+}
+
+/// The properties of a placement's edit of atlas `name` (`keep`: the seeds kept and
+/// added to): applied to `doc`'s text, the output parses without errors and formats
+/// (idempotently, tokens kept); with `keep` it is the input with the new statements
+/// inserted before the block's closing brace; else it is the input with the atlas's
+/// `seed` and `merge` statements replaced by the placed ones, every other byte kept
+/// (whitespace aside only where it served a removed statement or ended the block).
+/// Returns the output.
+pub fn assert_seeds_edit(
+    doc: &sdfc::ide::Document,
+    name: &str,
+    keep: bool,
+    placement: &sdfc::uv::seeds::Placement,
+    edit: &sdfc::diagnostic::Edit,
+) -> String {
+    let input = doc.text.as_str();
+    let (spans, close) = seed_statement_spans(doc, name);
+    let e = edit.span;
+    assert!(
+        e.start <= e.end && e.end <= input.len(),
+        "the edit {}..{} is outside the text of {} bytes",
+        e.start,
+        e.end,
+        input.len()
+    );
+    let output = sdfc::ide::actions::apply(input, std::slice::from_ref(edit));
+    let context = || format!("--- input\n{input}\n--- output\n{output}");
+    if keep {
+        assert_eq!(
+            (e.start, e.end),
+            (close, close),
+            "adding seeds is not an insertion before the block's `}}`\n{}",
+            context()
+        );
+    } else {
+        // The placed statements close the edit's text: the block's indentation and its
+        // closing brace (and what followed it in the item) come after them.
+        let inserted = sdfc::ide::seeds::statements(placement);
+        let at = edit
+            .text
+            .rfind(&inserted)
+            .unwrap_or_else(|| panic!("the edit lacks the placed statements\n{}", context()));
+        let tail = &edit.text[at + inserted.len()..];
+        assert!(
+            tail.trim_start_matches([' ', '\t']) == &input[close..e.end],
+            "after the placed statements: {tail:?}\n{}",
+            context()
+        );
+        assert_only_statements_replaced(input, &output, &spans, e.start + at, &inserted, close);
+    }
+    let mut diags = Vec::new();
+    let _ = sdfc::syntax::parse(&output, &mut diags);
+    let errors: Vec<_> = diags.iter().filter(|d| d.is_error()).collect();
+    assert!(
+        errors.is_empty(),
+        "the edited text does not parse: {errors:?}\n{}",
+        context()
+    );
+    format(output.as_bytes());
+    output
+}
+
+/// The property of a seed rewrite (tests/seeds_write.rs): `output` with `inserted`
+/// (at byte `p`) taken out is `input` with the statements at `spans` taken out, up to
+/// whitespace taken out next to those statements (or just before the closing brace
+/// `close`) and whitespace put in right around the insertion. Checked by aligning the
+/// two texts: every byte other than whitespace must stay, in order.
+pub fn assert_only_statements_replaced(
+    input: &str,
+    output: &str,
+    spans: &[sdfc::Span],
+    p: usize,
+    inserted: &str,
+    close: usize,
+) {
+    let context = || format!("--- input\n{input}\n--- output\n{output}");
+    assert_eq!(
+        output.get(p..p + inserted.len()),
+        Some(inserted),
+        "the placed statements are not at {p}\n{}",
+        context()
+    );
+    let o = format!("{}{}", &output[..p], &output[p + inserted.len()..]);
+    let (a, b) = (input.as_bytes(), o.as_bytes());
+    let mut deleted = vec![false; a.len()];
+    let mut statement = vec![false; a.len()];
+    let mut put_in = std::collections::BTreeSet::new();
+    let (mut i, mut j, mut k) = (0, 0, 0);
+    while i < a.len() || j < b.len() {
+        if k < spans.len() && spans[k].start == i {
+            for x in spans[k].start..spans[k].end {
+                deleted[x] = true;
+                statement[x] = true;
+            }
+            i = spans[k].end;
+            k += 1;
+        } else if i < a.len() && j < b.len() && a[i] == b[j] {
+            i += 1;
+            j += 1;
+        } else if i < a.len() && a[i].is_ascii_whitespace() {
+            deleted[i] = true;
+            i += 1;
+        } else if j < b.len() && b[j].is_ascii_whitespace() {
+            put_in.insert(j);
+            j += 1;
+        } else {
+            panic!(
+                "a byte other than whitespace changed at input {i} / output {j}\n{}",
+                context()
+            );
+        }
+    }
+    assert_eq!(
+        k,
+        spans.len(),
+        "statements left: {:?}\n{}",
+        &spans[k..],
+        context()
+    );
+    // Each run of removed bytes holds a statement or ends at the closing brace.
+    let mut x = 0;
+    while x < a.len() {
+        if !deleted[x] {
+            x += 1;
+            continue;
+        }
+        let start = x;
+        while x < a.len() && deleted[x] {
+            x += 1;
+        }
+        assert!(
+            statement[start..x].contains(&true) || x == close,
+            "whitespace {start}..{x} ({:?}) removed away from any statement\n{}",
+            &input[start..x],
+            context()
+        );
+    }
+    // Whitespace put in only next to the inserted statements.
+    let (mut lo, mut hi) = (p, p);
+    while lo > 0 && put_in.contains(&(lo - 1)) {
+        lo -= 1;
+    }
+    while put_in.contains(&hi) {
+        hi += 1;
+    }
+    assert_eq!(
+        put_in.len(),
+        hi - lo,
+        "whitespace put in away from the new statements: {put_in:?} (insertion at {p})\n{}",
+        context()
+    );
+}
+
+/// `sdfc render MESH.glb`'s reader, [`sdfc::bake::export::read_glb`], on any bytes:
+/// never a panic, and what it accepts is what its documentation promises, checked
+/// here independently of the crate's own checks too (in u64, so that no overflow can
+/// hide a chart outside the images): the mesh passes `check_mesh`, the layout
+/// `check_atlas` and every chart of every level lies inside the atlas, the textures
+/// are the atlas's size, at most `MAX_IMAGE_SIZE` a side and `MAX_TEXTURE_BYTES` in
+/// all. Returns the reader's refusal, if any (tests/glb_fuzz.rs counts them).
+pub fn glb(data: &[u8]) -> Result<(), sdfc::bake::export::ReadError> {
+    use sdfc::bake::export::gltf::{texture_bytes, MAX_IMAGE_SIZE, MAX_TEXTURE_BYTES};
+    use sdfc::bake::export::{check_atlas, check_mesh, check_textures};
+    let (mesh, textures, atlas) = sdfc::bake::export::read_glb(data)?;
+    check_mesh(&mesh).expect("read_glb returned a mesh that check_mesh refuses");
+    check_atlas(&atlas).expect("read_glb returned a layout that check_atlas refuses");
+    check_textures(&textures, &atlas).expect("read_glb returned textures of another size");
+    let (w, h) = (atlas.width(), atlas.height());
+    let images = 3 + textures.emissive.is_some() as usize;
+    assert!(
+        w <= MAX_IMAGE_SIZE && h <= MAX_IMAGE_SIZE,
+        "read_glb returned a {w}×{h} atlas"
+    );
+    assert!(
+        texture_bytes(w, h, images) <= MAX_TEXTURE_BYTES,
+        "read_glb returned {images} textures of {w}×{h}, over the memory limit"
+    );
+    if let Err(e) = layout_inside(&atlas) {
+        panic!("read_glb returned a layout that check_atlas accepts but that is unsafe: {e}: {atlas:?}");
+    }
+    Ok(())
+}
+
+/// Every chart of every level of `atlas` inside its image, computed in u64 (no
+/// overflow): the flat layout's grid at each level, each packed chart's whole block.
+pub fn layout_inside(atlas: &sdfc::bake::Atlas) -> Result<(), String> {
+    use sdfc::bake::Atlas;
+    let (w, h) = (atlas.width() as u64, atlas.height() as u64);
+    match atlas {
+        Atlas::Flat(l) => {
+            let n = l.chart_size as u64;
+            if n < 2 || !n.is_power_of_two() || l.gutter as u64 > n {
+                return Err(format!("chart size {n}, gutter {}", l.gutter));
+            }
+            if l.level_origins.is_empty() || l.columns == 0 || l.rows == 0 {
+                return Err("an empty layout".into());
+            }
+            for (level, &[x, y]) in l.level_origins.iter().enumerate() {
+                let size = n.checked_shr(level as u32).unwrap_or(0);
+                if size < 2 {
+                    return Err(format!("level {level} has charts of {size} texels"));
+                }
+                let stride = size + if level == 0 { 2 * l.gutter as u64 } else { 0 };
+                let right = x as u64 + l.columns as u64 * stride;
+                let bottom = y as u64 + l.rows as u64 * stride;
+                if right > w || bottom > h {
+                    return Err(format!(
+                        "level {level} reaches ({right}, {bottom}), past the {w}×{h} image"
+                    ));
+                }
+            }
+        }
+        Atlas::Packed(l) => {
+            let n = l.cell_size as u64;
+            if n < 2 || !n.is_power_of_two() || l.levels as u64 != n.ilog2() as u64 {
+                return Err(format!("cell size {n} with {} levels", l.levels));
+            }
+            let size = |c: u32, level: u32| c as u64 * ((n >> level) - 1) + 1;
+            for (p, chart) in l.charts.iter().enumerate() {
+                let [cu, cv] = chart.cells;
+                if cu == 0 || cv == 0 {
+                    return Err(format!("packed chart {p} has no cells"));
+                }
+                let below: u64 = (1..l.levels).map(|level| size(cu, level)).sum();
+                let bw = size(cu, 0).max(below);
+                let bh = size(cv, 0) + if l.levels > 1 { size(cv, 1) } else { 0 };
+                let [x, y] = chart.origin.map(u64::from);
+                if x + bw > w || y + bh > h {
+                    return Err(format!(
+                        "packed chart {p}'s block {bw}×{bh} at ({x}, {y}) leaves the {w}×{h} image"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -42,6 +42,11 @@ pub struct PackedLayout {
     pub charts: Vec<PackedChart>,
 }
 
+/// The longest side, in texels, of a cell or a chart that a layout read from a file
+/// may have (far beyond any image a reader decodes; it keeps every texel sum of a
+/// chart's pyramid inside u32).
+pub const MAX_SIDE: u32 = 1 << 24;
+
 /// A chart's size in texels at level `l`, for `cells` cells and cell size `n`.
 fn size(cells: [u32; 2], n: u32, l: usize) -> [u32; 2] {
     let nl = n >> l;
@@ -182,7 +187,7 @@ impl PackedLayout {
     /// overlapping.
     pub fn check(&self) -> Result<(), String> {
         let n = self.cell_size;
-        if n < 2 || !n.is_power_of_two() || self.levels != n.ilog2() {
+        if n < 2 || n > MAX_SIDE || !n.is_power_of_two() || self.levels != n.ilog2() {
             return Err(format!(
                 "the packed layout's cell size {n} with {} levels is not a power of two of at least 2 with log2(N) levels",
                 self.levels
@@ -190,7 +195,9 @@ impl PackedLayout {
         }
         let mut rects = Vec::with_capacity(self.charts.len());
         for (p, chart) in self.charts.iter().enumerate() {
-            if chart.cells.contains(&0) || chart.cells.iter().any(|&c| c > 1 << 16) {
+            // Each side in u64 first: [`block`]'s u32 sums then cannot overflow.
+            let side = |c: u32| c as u64 * n as u64;
+            if chart.cells.contains(&0) || chart.cells.iter().any(|&c| side(c) > MAX_SIDE as u64) {
                 return Err(format!("packed chart {p} has {:?} cells", chart.cells));
             }
             let ([w, h], _) = block(chart.cells, n, self.levels());

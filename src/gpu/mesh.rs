@@ -114,8 +114,11 @@ pub fn mesh_bounds(mesh: &MeshData) -> Aabb {
 /// [`FlatLayout::size_at`] says.)
 pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
     let n = layout.chart_size;
-    if n < 2 {
-        return Err(format!("the chart size {n} is under 2 texels"));
+    if !(2..=crate::asset::packed::MAX_SIDE).contains(&n) {
+        return Err(format!(
+            "the chart size {n} is not from 2 to {} texels",
+            crate::asset::packed::MAX_SIDE
+        ));
     }
     let levels = layout.levels();
     let max_levels = (0..32).take_while(|l| n >> l >= 2).count();
@@ -159,8 +162,11 @@ fn packed_charts(mesh: &MeshData, layout: &PackedLayout) -> Result<Vec<[f32; 4]>
     let (w, h) = (layout.width, layout.height);
     let (tw, th) = (w.div_ceil(TILE) as usize, h.div_ceil(TILE) as usize);
     let mut tiles: Vec<Vec<u32>> = vec![Vec::new(); tw * th];
-    for p in 0..layout.charts.len() {
-        let [x, y, cw, ch] = layout.rect(p, 0);
+    // Each chart's level-0 rectangle, computed once (a rect builds the chart's pyramid).
+    let rects: Vec<[u32; 4]> = (0..layout.charts.len())
+        .map(|p| layout.rect(p, 0))
+        .collect();
+    for (p, &[x, y, cw, ch]) in rects.iter().enumerate() {
         for ty in y / TILE..=(y + ch - 1) / TILE {
             for tx in x / TILE..=(x + cw - 1) / TILE {
                 tiles[ty as usize * tw + tx as usize].push(p as u32);
@@ -179,13 +185,19 @@ fn packed_charts(mesh: &MeshData, layout: &PackedLayout) -> Result<Vec<[f32; 4]>
         } else {
             None
         };
-        let found = tile.into_iter().flatten().copied().find(|&p| {
-            let [x, y, cw, ch] = layout.rect(p as usize, 0).map(f64::from);
+        let on = |p: u32| {
+            let [x, y, cw, ch] = rects[p as usize].map(f64::from);
             tx >= x + 0.5 - slack
                 && tx <= x + cw - 0.5 + slack
                 && ty >= y + 0.5 - slack
                 && ty <= y + ch - 0.5 + slack
-        });
+        };
+        // A chart's vertices come together: the last vertex's chart first.
+        let found = which
+            .last()
+            .copied()
+            .filter(|&p| on(p))
+            .or_else(|| tile.into_iter().flatten().copied().find(|&p| on(p)));
         let Some(p) = found else {
             return Err(format!(
                 "vertex {i}'s texture coordinate ({}, {}) is on no chart of the packed atlas",

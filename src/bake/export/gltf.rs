@@ -65,12 +65,14 @@ use crate::bake::{Atlas, MeshData, Textures};
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
 
 /// The largest image side [`read_glb`] decodes: 8192, as for a scene's textures (an
-/// 8192 × 8192 atlas is over [`MAX_TEXTURE_BYTES`] anyway; the bake writes at most
-/// what its own memory limit allows, 4096 × 4096 for a typical scene).
+/// 8192 × 8192 atlas is over [`MAX_TEXTURE_BYTES`] anyway).
 pub const MAX_IMAGE_SIZE: u32 = 8192;
 /// The most memory the textures of a `.glb` may take in `sdfc render`
-/// ([`texture_bytes`]): 2 GiB, the bake's limit too.
-pub const MAX_TEXTURE_BYTES: u64 = 2 << 30;
+/// ([`texture_bytes`]): 768 MiB, so that the whole render stays under 1 GB (a 4096²
+/// bake with three textures, 630 MiB by this count, rendered in 822 MiB on lavapipe;
+/// an 8192 × 4096 atlas with three, 1,336 MB). A 4096² atlas with an emissive texture
+/// (853 MiB) is refused: bake it at 2048 to render it here.
+pub const MAX_TEXTURE_BYTES: u64 = 768 << 20;
 /// The largest JSON chunk [`read_glb`] parses: 64 MiB. sdfc's own is about 2 KB, plus
 /// 37 bytes a chart for a packed layout (354 KB for the 9,642 charts of a sphere at
 /// the default grid of 48, 11 MB for 308,574 one-cell charts at grid 256); [`glb`]

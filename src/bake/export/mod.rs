@@ -73,9 +73,11 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
     if width == 0 || height == 0 || columns == 0 || rows == 0 {
         return Err("the atlas layout is empty".into());
     }
-    if !chart_size.is_power_of_two() || chart_size < 2 {
+    if !chart_size.is_power_of_two() || !(2..=crate::asset::packed::MAX_SIDE).contains(&chart_size)
+    {
         return Err(format!(
-            "the atlas's chart size {chart_size} is not a power of two from 2"
+            "the atlas's chart size {chart_size} is not a power of two from 2 to {}",
+            crate::asset::packed::MAX_SIDE
         ));
     }
     // The half-texel inset needs charts of at least 2 texels at every level.

@@ -65,3 +65,27 @@ fn lsp_target_holds_on_the_examples() {
     );
     targets::lsp(framed.as_bytes());
 }
+
+/// The `seeds_write` target on every scene of the corpus (textures from its own
+/// folder) and the cut and flipped copies of the examples: placing seeds takes tens of
+/// milliseconds per atlas on the target's coarse grid, so the examples' copies are
+/// enough mutations here (the UI scenes mostly have errors, and are skipped).
+#[test]
+fn seeds_write_target_holds_on_the_corpus() {
+    let files = common::scene_files();
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut checked = 0;
+    for f in &files {
+        let bytes = std::fs::read(f).unwrap();
+        checked += targets::seeds_write(&bytes, f.parent().unwrap());
+    }
+    assert!(checked >= 20, "only {checked} edits checked");
+    for (i, input) in corpus().iter().enumerate() {
+        // Every third entry is a seed (checked above).
+        if i % 3 != 2 {
+            let mut doc = b"#".to_vec();
+            doc.extend(input);
+            targets::seeds_write(&doc, &examples);
+        }
+    }
+}

@@ -77,6 +77,9 @@ pub struct MeshRenderer {
     index_count: u32,
     formats: [wgpu::TextureFormat; 4],
     bounds: Aabb,
+    /// The triangles on the CPU, for the fragment estimate of each frame
+    /// ([`super::overdraw::MAX_OVERDRAW`]).
+    triangles: Vec<[[f32; 3]; 3]>,
     /// The sun's shadow map: its depth-only pipeline, its group layout (the light), the
     /// map and its comparison sampler.
     shadow_pipeline: wgpu::RenderPipeline,
@@ -397,6 +400,11 @@ impl MeshRenderer {
             index_count: mesh.indices.len() as u32,
             formats,
             bounds: mesh_bounds(mesh),
+            triangles: mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]))
+                .collect(),
             shadow_pipeline,
             shadow_layout,
             shadow_view,
@@ -420,6 +428,7 @@ impl MeshRenderer {
         let d = &gpu.device;
         let (w, h) = (view.width.max(1), view.height.max(1));
         gpu.check_size(w, h, render::bytes_per_texel(&self.formats) + 4)?;
+        super::overdraw::check(&self.triangles, view, &self.bounds, SHADOW_SIZE)?;
         let uniforms = render::globals(view, mode);
         let background = tonemap(view.background);
         let light = light_uniform(&self.bounds, view.sun.direction);

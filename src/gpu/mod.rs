@@ -5,6 +5,7 @@
 pub mod cache;
 pub mod compute;
 mod mesh;
+pub mod overdraw;
 mod render;
 pub mod scene_group;
 pub mod texture;

@@ -154,6 +154,13 @@ pub fn place(
 ) -> Placement {
     let total: f64 = samples.iter().map(|s| s.area).sum::<f64>().max(1e-300);
     let eligible: Vec<bool> = samples.iter().map(|s| s.smooth >= SMOOTH_COS).collect();
+    // With a `mirror` plane, the mirrored side takes the uv of its reflection: a seed
+    // there is never used (W0008), so none is placed there.
+    let mirror = def
+        .params
+        .mirror
+        .map(|n| DVec3::from_array(n).normalize_or_zero());
+    let mirrored = |k: usize| mirror.is_some_and(|n| samples[k].p.dot(n) < 0.0);
     let reach = def.params.max_distance;
     let spacing = options.spacing.unwrap_or(0.5 * reach).min(reach);
     let mut seeds: Vec<(DVec3, Option<DVec3>)> = Vec::new();
@@ -181,7 +188,10 @@ pub fn place(
     let mut covered_by_alg2: Option<Vec<bool>> = None;
     // Samples where a seed could not be prepared: never picked again, so every round
     // either adds a seed or retires a sample (placement always ends).
-    let mut rejected = vec![false; samples.len()];
+    // A sample that already has a seed is never given another one: where its own seed
+    // does not make Alg. 2 succeed (a mirrored side whose reflection is off the
+    // surface), another seed at the same point would not either.
+    let mut rejected: Vec<bool> = (0..samples.len()).map(mirrored).collect();
     // The seeds at the end of the last round: a round that adds none ends placement.
     let mut last_round: Option<usize> = None;
     loop {
@@ -224,6 +234,7 @@ pub fn place(
                 .map(|(_, d, k)| (d, k));
             let Some((_, k)) = next else { break };
             let s = &samples[k];
+            rejected[k] = true;
             seeds.push((s.p, Some(tangent(s.n))));
             let i = seeds.len() - 1;
             let Ok(atlas) = Atlas::prepare(&with_seeds(def, &seeds, &[]), shape) else {

@@ -10,6 +10,10 @@
 
 mod common;
 
+#[path = "../fuzz/fuzz_targets/targets.rs"]
+#[allow(dead_code)]
+mod targets;
+
 use sdfc::ide::seeds::{place_edit, statements};
 use sdfc::ide::Document;
 use sdfc::span::Span;
@@ -59,10 +63,8 @@ fn statement_spans(doc: &Document, name: &str) -> (Vec<Span>, usize) {
     (spans, close)
 }
 
-/// The property (see the module docs), checked by aligning `input` with `output`
-/// (less `inserted`): the statements at `spans` must go, any other non-whitespace
-/// byte must stay in order; whitespace may go only in runs that hold a statement or
-/// end at the closing brace `close`, and come only right around the insertion.
+/// The property (see the module docs): the fuzz target's checker
+/// (`targets::assert_only_statements_replaced`), at the one place `inserted` stands.
 fn assert_only_statements_replaced(
     input: &str,
     output: &str,
@@ -70,78 +72,9 @@ fn assert_only_statements_replaced(
     inserted: &str,
     close: usize,
 ) {
-    let context = || format!("--- input\n{input}\n--- output\n{output}");
-    assert_eq!(output.matches(inserted).count(), 1, "{}", context());
+    assert_eq!(output.matches(inserted).count(), 1, "--- output\n{output}");
     let p = output.find(inserted).unwrap();
-    let o = format!("{}{}", &output[..p], &output[p + inserted.len()..]);
-    let (a, b) = (input.as_bytes(), o.as_bytes());
-    let mut deleted = vec![false; a.len()];
-    let mut statement = vec![false; a.len()];
-    let mut put_in = std::collections::BTreeSet::new();
-    let (mut i, mut j, mut k) = (0, 0, 0);
-    while i < a.len() || j < b.len() {
-        if k < spans.len() && spans[k].start == i {
-            for x in spans[k].start..spans[k].end {
-                deleted[x] = true;
-                statement[x] = true;
-            }
-            i = spans[k].end;
-            k += 1;
-        } else if i < a.len() && j < b.len() && a[i] == b[j] {
-            i += 1;
-            j += 1;
-        } else if i < a.len() && a[i].is_ascii_whitespace() {
-            deleted[i] = true;
-            i += 1;
-        } else if j < b.len() && b[j].is_ascii_whitespace() {
-            put_in.insert(j);
-            j += 1;
-        } else {
-            panic!(
-                "a byte other than whitespace changed at input {i} / output {j}\n{}",
-                context()
-            );
-        }
-    }
-    assert_eq!(
-        k,
-        spans.len(),
-        "statements left: {:?}\n{}",
-        &spans[k..],
-        context()
-    );
-    // Each run of removed bytes holds a statement or ends at the closing brace.
-    let mut x = 0;
-    while x < a.len() {
-        if !deleted[x] {
-            x += 1;
-            continue;
-        }
-        let start = x;
-        while x < a.len() && deleted[x] {
-            x += 1;
-        }
-        assert!(
-            statement[start..x].contains(&true) || x == close,
-            "whitespace {start}..{x} ({:?}) removed away from any statement\n{}",
-            &input[start..x],
-            context()
-        );
-    }
-    // Whitespace put in only next to the inserted statements.
-    let (mut lo, mut hi) = (p, p);
-    while lo > 0 && put_in.contains(&(lo - 1)) {
-        lo -= 1;
-    }
-    while put_in.contains(&hi) {
-        hi += 1;
-    }
-    assert_eq!(
-        put_in.len(),
-        hi - lo,
-        "whitespace put in away from the new statements: {put_in:?} (insertion at {p})\n{}",
-        context()
-    );
+    targets::assert_only_statements_replaced(input, output, spans, p, inserted, close);
 }
 
 /// Places seeds for atlas `name` of `input` (replacing its seeds and merges), applies

@@ -20,6 +20,10 @@
 //! ignored test runs at least 1,000 in-process and 100 through the binary:
 //! `cargo test --release --test glb_fuzz -- --ignored --nocapture`.
 
+mod common;
+
+use common::glb::{crc32, join_text, split, zlib_zeros};
+
 #[path = "../fuzz/fuzz_targets/targets.rs"]
 mod targets;
 
@@ -78,92 +82,7 @@ impl Rng {
 // ---------------------------------------------------------------------------------
 // GLB files and PNGs.
 
-/// The JSON and BIN chunks of a GLB written by `glb`.
-fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
-    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let doc = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
-    (doc, bytes[20 + len + 8..].to_vec())
-}
-
-/// A GLB of the JSON text `json` (padded with spaces) and `bin`.
-fn join_text(mut json: Vec<u8>, bin: &[u8]) -> Vec<u8> {
-    json.resize(json.len().next_multiple_of(4), b' ');
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((20 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
-
-/// Bits of a DEFLATE stream, least significant first.
-#[derive(Default)]
-struct Bits {
-    out: Vec<u8>,
-    acc: u64,
-    n: u32,
-}
-
-impl Bits {
-    fn put(&mut self, value: u64, bits: u32) {
-        self.acc |= value << self.n;
-        self.n += bits;
-        while self.n >= 8 {
-            self.out.push(self.acc as u8);
-            self.acc >>= 8;
-            self.n -= 8;
-        }
-    }
-
-    fn code(&mut self, code: u32, bits: u32) {
-        self.put((code.reverse_bits() >> (32 - bits)) as u64, bits);
-    }
-}
-
-/// A zlib stream of `n` (≥ 1) zero bytes, 13 bits per 258 of them.
-fn zlib_zeros(n: u64) -> Vec<u8> {
-    let mut b = Bits::default();
-    b.put(0x78, 8);
-    b.put(0x01, 8);
-    b.put(1, 1);
-    b.put(1, 2);
-    b.code(0x30, 8);
-    let rest = n - 1;
-    for _ in 0..rest / 258 {
-        b.code(0xC5, 8);
-        b.code(0, 5);
-    }
-    for _ in 0..rest % 258 {
-        b.code(0x30, 8);
-    }
-    b.code(0, 7);
-    if b.n > 0 {
-        b.out.push(b.acc as u8);
-    }
-    let adler = ((n % 65521) << 16) | 1;
-    b.out.extend((adler as u32).to_be_bytes());
-    b.out
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 == 1 {
-                0xEDB8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
-}
-
+/// Appends a PNG chunk: its length, kind, data and CRC.
 fn png_chunk(out: &mut Vec<u8>, kind: &[u8], data: &[u8]) {
     out.extend((data.len() as u32).to_be_bytes());
     let start = out.len();

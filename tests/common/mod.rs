@@ -1,6 +1,8 @@
 //! Running the `sdfc` binary from integration tests.
 #![allow(dead_code)]
 
+pub mod glb;
+
 use std::io::Write;
 use std::process::{Command, Stdio};
 

@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::glb::{join_text, split};
+
 use image::{Rgba, RgbaImage};
 use sdfc::bake::export::{check_atlas, check_mesh, check_textures, glb, ktx2, read_glb};
 use sdfc::bake::Atlas;
@@ -234,27 +236,9 @@ fn glb_refuses_bad_input() {
     refused(&mesh, &tex, &l);
 }
 
-/// The JSON and BIN chunks of a GLB written by `glb`.
-fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
-    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let doc = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
-    (doc, bytes[20 + len + 8..].to_vec())
-}
-
 /// A GLB of `doc` and `bin`, padded as the spec says.
 fn join(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).unwrap();
-    json.resize(json.len().next_multiple_of(4), b' ');
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((20 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+    join_text(serde_json::to_vec(doc).unwrap(), bin)
 }
 
 /// What `read_glb` returns must pass the checks (when it accepts a damaged file).

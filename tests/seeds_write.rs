@@ -17,7 +17,6 @@ mod targets;
 use sdfc::ide::seeds::{place_edit, statements};
 use sdfc::ide::Document;
 use sdfc::span::Span;
-use sdfc::syntax::ast::{AtlasStmt, ItemKind};
 use sdfc::uv::seeds::{PlaceOptions, Placement};
 
 /// Surface samples for placing: a coarse grid keeps the tests fast.
@@ -30,37 +29,10 @@ fn doc(text: &str, base: Option<&std::path::Path>) -> Document {
     }
 }
 
-/// The spans of atlas `name`'s seed and merge statements in the syntax tree, sorted,
-/// and the offset of its block's closing brace.
+/// The spans of atlas `name`'s seed and merge statements, sorted, and the offset of
+/// its block's closing brace (the fuzz target's reader of the syntax tree).
 fn statement_spans(doc: &Document, name: &str) -> (Vec<Span>, usize) {
-    let def = doc
-        .analysis
-        .program
-        .atlases
-        .iter()
-        .find(|a| a.name == name)
-        .unwrap();
-    let close = def.span.start + doc.text[def.span.start..def.span.end].rfind('}').unwrap();
-    let body = doc
-        .analysis
-        .parsed
-        .file
-        .items
-        .iter()
-        .find_map(|item| match &item.kind {
-            ItemKind::Atlas { name: n, body, .. } if n.name == name => Some(body),
-            _ => None,
-        })
-        .unwrap();
-    let mut spans: Vec<Span> = body
-        .iter()
-        .filter_map(|s| match s {
-            AtlasStmt::Seed { span, .. } | AtlasStmt::Merge { span, .. } => Some(*span),
-            _ => None,
-        })
-        .collect();
-    spans.sort_by_key(|s| s.start);
-    (spans, close)
+    targets::seed_statement_spans(doc, name)
 }
 
 /// The property (see the module docs): the fuzz target's checker

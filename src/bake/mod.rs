@@ -1,5 +1,6 @@
 //! Baking: a textured implicit scene becomes a textured mesh with a seamless atlas
-//! (Purnomo, Cohen and Kumar, "Seamless Texture Atlases"; `../shared/notes/seamless-atlas-notes.md`).
+//! (Purnomo, Cohen and Kumar, "Seamless Texture Atlases", Symposium on Geometry Processing
+//! 2004; how sdfc applies it: docs/papers.md, "Seamless atlases on an implicit surface").
 //!
 //! The stages, one module each:
 //!

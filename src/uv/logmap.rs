@@ -1,7 +1,8 @@
-//! Alg. 1 of the Implicit UVs paper in f64, with the erratum of
-//! `shared/notes/implicit-uvs-notes.md`: the point-wise log map around one seed,
-//! by a geodesic walk of exactly N steps. `shaders/uv.wgsl` and the generated
-//! walk mirror this function step for step.
+//! Alg. 1 of the Implicit UVs paper (Genest, Gueth, Levallois and Wang, "Implicit UVs:
+//! Real-time semi-global parameterization of implicit surfaces", Computer Graphics Forum,
+//! Eurographics 2025) in f64, with its authors' erratum (docs/papers.md, "The erratum"):
+//! the point-wise log map around one seed, by a geodesic walk of exactly N steps.
+//! `shaders/uv.wgsl` and the generated walk mirror this function step for step.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 
@@ -285,7 +286,7 @@ pub fn turn_curvature(n_next: DVec3, vh: DVec3, arc: f64) -> f64 {
 
 /// Alg. 1: the log map of `x` (on the surface of `f`) around `seed`.
 ///
-/// Departures from the paper, in `shared/notes`' spirit:
+/// Departures from the paper (docs/papers.md, "Our departures from Alg. 1"):
 /// - each step spans an equal part of the remaining arc ([`step_chord`]);
 /// - the sharp-feature test compares the normal's turn with the normal's rate of turn
 ///   over the steps before and after it ([`sharp_turn`]), so a step's test waits for

@@ -34,6 +34,10 @@ pub struct Analysis {
     pub atlases: Vec<Option<Atlas>>,
     /// The lowered scene, once [`check`] found no errors.
     pub scene: Option<Scene>,
+    /// What the scene's displacements and shell maps read on the CPU (its prepared
+    /// atlases and decoded textures; [`ir::NoHeights`] for a scene without them): the
+    /// environment of its fields ([`Analysis::field`]).
+    pub heights: Arc<dyn ir::Heights>,
     /// The validated module for the default options, once [`check_all`] built it.
     pub compiled: Option<Arc<Compiled>>,
 }
@@ -45,6 +49,12 @@ const _: () = {
 };
 
 impl Analysis {
+    /// A shape of this document's scene with the environment of its heights: what the
+    /// CPU reference evaluates ([`ir::eval`]).
+    pub fn field<'a>(&'a self, shape: &'a ir::Shape) -> ir::Field<'a> {
+        ir::Field::new(shape, &*self.heights)
+    }
+
     /// Adds the diagnostics of decoding the file's bytes ([`syntax::decode`]). An invalid
     /// sequence is reported once, by its byte offset, and not again as an unexpected
     /// character.
@@ -145,6 +155,7 @@ pub fn analyze_reusing(
             diagnostics,
             atlases: Vec::new(),
             scene: None,
+            heights: Arc::new(ir::NoHeights),
             compiled: None,
         };
     }
@@ -157,6 +168,7 @@ pub fn analyze_reusing(
         diagnostics,
         atlases: Vec::new(),
         scene: None,
+        heights: Arc::new(ir::NoHeights),
         compiled: None,
     }
 }
@@ -181,13 +193,15 @@ pub fn check_reusing(
 ) -> Analysis {
     let mut analysis = analyze_reusing(source, access, cache);
     if !analysis.has_errors() {
-        let (atlases, diags) = crate::uv::diagnose::prepare_all(&analysis.program);
+        let (atlases, diags) =
+            crate::uv::diagnose::prepare_all(&analysis.program, &crate::reference::Env::shared);
         analysis.atlases = atlases;
         analysis.diagnostics.extend(diags);
         diagnostic::sort(&mut analysis.diagnostics);
     }
     if !analysis.has_errors() {
-        let (scene, problems) = lower_displaced(&analysis.program, &analysis.atlases);
+        let (scene, heights, problems) = lower_displaced(&analysis.program, &analysis.atlases);
+        analysis.heights = heights;
         if !problems.is_empty() {
             analysis.diagnostics.extend(problems);
             diagnostic::sort(&mut analysis.diagnostics);
@@ -205,12 +219,13 @@ pub fn check_reusing(
 }
 
 /// Lowers the scene with the textures its displacements read (decoded only when it has
-/// displacements), gives their CPU evaluators the prepared atlases, and reports heights
-/// whose range or slope has no bound.
+/// displacements), makes the environment its heights are evaluated in on the CPU (the
+/// prepared atlases and the textures), and reports heights whose range or slope has no
+/// bound.
 fn lower_displaced(
     program: &Program,
     atlases: &[Option<crate::uv::Atlas>],
-) -> (Scene, Vec<Diagnostic>) {
+) -> (Scene, Arc<dyn ir::Heights>, Vec<Diagnostic>) {
     let displaced = program
         .defs
         .iter()
@@ -218,9 +233,9 @@ fn lower_displaced(
         .chain(program.render.as_ref().map(|r| &r.target))
         .any(|v| sema::displaced(v).is_some());
     if !displaced {
-        return (ir::lower(program), Vec::new());
+        return (ir::lower(program), Arc::new(ir::NoHeights), Vec::new());
     }
-    let textures = match ir::material::Textures::load(program) {
+    let textures = match ir::texture::Textures::load(program) {
         Ok(t) => t,
         Err(why) => {
             let span = program.textures.first().map(|t| t.span).unwrap_or_default();
@@ -230,13 +245,11 @@ fn lower_displaced(
                 span,
                 "a displacement reads this texture",
             );
-            return (Scene::default(), vec![d]);
+            return (Scene::default(), Arc::new(ir::NoHeights), vec![d]);
         }
     };
     let (scene, errors) = ir::lower_with(program, &textures);
-    for s in scene.shapes.iter().map(|s| &s.shape).chain(&scene.render) {
-        s.bind_heights(atlases, &textures);
-    }
+    let heights = crate::reference::Env::shared(atlases, &textures);
     let diags = errors
         .into_iter()
         .map(|(span, why)| {
@@ -252,7 +265,7 @@ fn lower_displaced(
             )
         })
         .collect();
-    (scene, diags)
+    (scene, heights, diags)
 }
 
 /// Errors for shapes whose derived constants do not fit single precision

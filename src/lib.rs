@@ -32,6 +32,7 @@ pub mod ide;
 pub mod incremental;
 pub mod ir;
 pub mod lsp;
+pub mod reference;
 pub mod sema;
 pub mod span;
 pub mod syntax;

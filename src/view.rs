@@ -2,7 +2,7 @@
 //! from the scene's `render` item (or framed automatically), plus the f64 CPU
 //! sphere trace that the GPU renderer is tested against.
 
-use crate::ir::{eval, Aabb, Shape};
+use crate::ir::{eval, Aabb, Field, Shape};
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{self, RenderDef, RenderSettings};
 use glam::DVec3;
@@ -216,13 +216,14 @@ pub struct Hit {
 
 /// Sphere tracing in f64 with the same rule as the shader; `step_scale` ≤ 1 makes it
 /// more conservative than the shader (the coverage reference for warps).
-pub fn trace_cpu(
-    shape: &Shape,
+pub fn trace_cpu<'s>(
+    shape: impl Into<Field<'s>>,
     view: &View,
     dir: DVec3,
     step_scale: f64,
     max_steps: u32,
 ) -> Option<Hit> {
+    let shape: Field = shape.into();
     let l = shape.lipschitz().max(1.0);
     let mut t = 0.0;
     for _ in 0..max_steps {

@@ -336,10 +336,10 @@ fn flat_layouts_fit_without_overlap() {
 }
 
 /// The baked texels of a textured example against the f64 CPU reference of its
-/// material (`ir::material`), evaluated at the GPU's texel points and normals with the
+/// material (`reference::material`), evaluated at the GPU's texel points and normals with the
 /// texel's footprint. Implicit UVs in f32 may pick another seed on a frontier, and the
 /// sampler's fixed-point filtering differs from the CPU's exact one by up to 3/255
-/// (see `ir::material::texture`): at least 90 % of the texels agree within 3/255.
+/// (see `reference::material::texture`): at least 90 % of the texels agree within 3/255.
 #[test]
 fn baked_textured_texels_match_the_cpu_material_reference() {
     let Some(gpu) = gpu_for_tests() else { return };
@@ -348,8 +348,8 @@ fn baked_textured_texels_match_the_cpu_material_reference() {
     let base = path.parent().unwrap();
     let baked = bake_source(&gpu, &source, base, &small(10)).expect("bakes");
     let analysis = sdfc::driver::check(&source, Some(base));
-    let eval =
-        sdfc::ir::material::MaterialEval::load(&analysis.program, &analysis.atlases).unwrap();
+    let eval = sdfc::reference::material::MaterialEval::load(&analysis.program, &analysis.atlases)
+        .unwrap();
     let (points, texels, footprints) = level0_texels(&baked);
     let (mut within, mut compared) = (0, 0);
     for k in (0..texels.len()).step_by(11) {
@@ -590,15 +590,17 @@ fn baked_normals_carry_the_normal_map() {
     let baked = bake_source(&gpu, &source, base, &small(8)).expect("bakes");
     let analysis = sdfc::driver::check(&source, Some(base));
     let shape = analysis.scene.as_ref().unwrap().render.clone().unwrap();
-    let eval =
-        sdfc::ir::material::MaterialEval::load(&analysis.program, &analysis.atlases).unwrap();
+    let eval = sdfc::reference::material::MaterialEval::load(&analysis.program, &analysis.atlases)
+        .unwrap();
     let (points, texels, footprints) = level0_texels(&baked);
     let (mut within, mut compared, mut tilted) = (0, 0, 0);
     for k in (0..texels.len()).step_by(7) {
         let t = texels[k];
         let x = DVec3::from_array(points[k].map(|v| v as f64));
-        let n = sdfc::ir::eval::gradient(&shape, x).normalize();
-        let want = eval.eval_surface(&shape, x, n, footprints[k]).normal;
+        let n = sdfc::ir::eval::gradient(analysis.field(&shape), x).normalize();
+        let want = eval
+            .eval_surface(analysis.field(&shape), x, n, footprints[k])
+            .normal;
         let got = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize();
         compared += 1;
         if got.angle_between(want).to_degrees() <= 2.0 {

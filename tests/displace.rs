@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use sdfc::driver::{check, Analysis};
-use sdfc::ir::{eval, Op, Shape};
+use sdfc::ir::{eval, Op};
 use std::path::Path;
 
 mod common;
@@ -15,8 +15,9 @@ fn checked(src: &str, dir: Option<&Path>) -> Analysis {
     a
 }
 
-fn render_shape(a: &Analysis) -> &Shape {
-    a.scene.as_ref().unwrap().render.as_ref().unwrap()
+/// The render target with the environment of its heights (textures, atlases).
+fn render_shape(a: &Analysis) -> sdfc::ir::Field<'_> {
+    a.field(a.scene.as_ref().unwrap().render.as_ref().unwrap())
 }
 
 /// A folder with one grey PNG (`w` × `h`, value per texel from `f`).
@@ -148,7 +149,7 @@ fn height_map_on_a_plane_is_the_graph_of_the_height() {
 /// A march with steps f/L from `o` along `dir`; at each step the segment to the next
 /// point is sampled at 32 points: it fails if some sample is inside the displaced
 /// surface (f < 0) before the march reaches the surface. Returns (hit, stepped through).
-fn march(s: &Shape, lipschitz: f64, o: DVec3, dir: DVec3) -> (bool, bool) {
+fn march(s: sdfc::ir::Field, lipschitz: f64, o: DVec3, dir: DVec3) -> (bool, bool) {
     let mut t = 0.0;
     for _ in 0..400 {
         let d = eval::distance(s, o + dir * t);
@@ -220,7 +221,8 @@ atlas skin on base {
 ";
 
 /// The root of `f` along the ray from the origin in direction `w`, between r = 0.5 and 2.
-fn radial_root(s: &Shape, w: DVec3) -> f64 {
+fn radial_root<'a>(s: impl Into<sdfc::ir::Field<'a>>, w: DVec3) -> f64 {
+    let s = s.into();
     let (mut lo, mut hi) = (0.5, 2.0);
     assert!(eval::distance(s, w * lo) < 0.0 && eval::distance(s, w * hi) > 0.0);
     for _ in 0..60 {
@@ -322,7 +324,8 @@ fn an_atlas_on_a_displaced_shape_walks_the_displaced_surface() {
         a.atlases[1].as_ref().unwrap(),
         plain.atlases[0].as_ref().unwrap(),
     );
-    // The height really reads the base's atlas (nested walks), and is bound to it.
+    // The height really reads the base's atlas (nested walks), and the outer atlas's
+    // environment evaluates it (0.1 + 0.01 · clamp(…, 0, 0) = 0.1 everywhere).
     let height = outer
         .shape
         .nodes
@@ -332,7 +335,9 @@ fn an_atlas_on_a_displaced_shape_walks_the_displaced_surface() {
             _ => None,
         })
         .unwrap();
-    assert!(height.atlas.is_some() && height.is_bound());
+    assert!(height.atlas.is_some() && !height.is_constant());
+    let h = outer.heights.scalar(&height, DVec3::Z, DVec3::Z);
+    assert!(h.is_some_and(|h| (h - 0.1).abs() < 1e-12), "{h:?}");
     let mut rng = Rng(12);
     let mut points = Vec::new();
     while points.len() < 60 {

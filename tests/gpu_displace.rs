@@ -8,8 +8,8 @@ use glam::DVec3;
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests, ViewMode};
-use sdfc::ir::material::{MaterialEval, Textures};
-use sdfc::ir::{eval, Op, Shape};
+use sdfc::ir::{eval, Op};
+use sdfc::reference::material::{MaterialEval, Textures};
 use sdfc::view::{trace_cpu, View};
 use std::path::Path;
 
@@ -24,8 +24,9 @@ fn example() -> Analysis {
     a
 }
 
-fn shape(a: &Analysis) -> &Shape {
-    a.scene.as_ref().unwrap().render.as_ref().unwrap()
+/// The render target with the environment of its heights (textures, atlases).
+fn shape(a: &Analysis) -> sdfc::ir::Field<'_> {
+    a.field(a.scene.as_ref().unwrap().render.as_ref().unwrap())
 }
 
 fn module(a: &Analysis) -> sdfc::codegen::Module {
@@ -37,7 +38,7 @@ fn module(a: &Analysis) -> sdfc::codegen::Module {
 }
 
 /// Points on the displaced surface in the chart's reach (the front), by projection.
-fn surface_points(s: &Shape, n: usize) -> Vec<DVec3> {
+fn surface_points(s: sdfc::ir::Field, n: usize) -> Vec<DVec3> {
     let mut r = Rng(17);
     let mut out = Vec::new();
     while out.len() < n {

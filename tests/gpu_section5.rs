@@ -13,7 +13,7 @@ use glam::DVec3;
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
-use sdfc::ir::material::MaterialEval;
+use sdfc::reference::material::MaterialEval;
 use std::path::Path;
 
 mod common;
@@ -40,7 +40,8 @@ fn section_5_examples_agree_with_the_cpu() {
         let m = MaterialEval::load(&a.program, &a.atlases).unwrap();
         // Ground planes are left out: they are no part of §5.
         let unbounded = !target.framing_bounds().is_finite();
-        let points = common::surface_points(&target, 150, 31, |x| !(unbounded && x.y < -1.25));
+        let points =
+            common::surface_points(a.field(&target), 150, 31, |x| !(unbounded && x.y < -1.25));
         // Half a level-0 texel of the bricks at 1.5 repeats per unit.
         let footprint = 0.5 / (1.5 * 128.0);
         let samples: Vec<(DVec3, DVec3, f64)> =
@@ -53,9 +54,9 @@ fn section_5_examples_agree_with_the_cpu() {
         let got = gpu::eval_materials(&gpu, &module, m.textures(), &samples).unwrap();
         let (mut compared, mut colour, mut normal) = (0, 0.0f64, 0.0f64);
         for ((x, n), g) in points.iter().zip(&got) {
-            let cpu = m.eval_surface(&target, *x, *n, footprint);
+            let cpu = m.eval_surface(a.field(&target), *x, *n, footprint);
             let jumps = [DVec3::X, DVec3::Y, DVec3::Z].iter().any(|e| {
-                let c = m.eval_surface(&target, *x + *e * 1e-4, *n, footprint);
+                let c = m.eval_surface(a.field(&target), *x + *e * 1e-4, *n, footprint);
                 (c.color - cpu.color).abs().max_element() > 1.0 / 255.0
                     || (c.normal - cpu.normal).length() > 2e-3
             });

@@ -1,4 +1,4 @@
-//! The CPU reference of materials (`ir::material`): hand-computed values on small
+//! The CPU reference of materials (`reference::material`): hand-computed values on small
 //! inline scenes, then agreement with the GPU's `scene_material` (`cs_material`) on the
 //! examples. GPU tests skip loudly without an adapter (fail with SDFC_REQUIRE_GPU=1).
 
@@ -6,8 +6,10 @@ use glam::{DVec2, DVec3, DVec4};
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests, MaterialSample};
-use sdfc::ir::material::{AtlasValues, MaterialEval, MaterialValue, MipChain, Textures, Wrap};
 use sdfc::ir::{eval, Shape};
+use sdfc::reference::material::{
+    AtlasValues, MaterialEval, MaterialValue, MipChain, Textures, Wrap,
+};
 use std::path::{Path, PathBuf};
 
 mod common;
@@ -409,7 +411,7 @@ fn gpu_procedural_materials_agree_with_the_cpu_within_one_255th() {
 }
 
 /// Textured materials agree within 3/255 per channel, not 1/255: see
-/// `ir::material::texture` for what the CPU cannot reproduce of the GPU's sampler.
+/// `reference::material::texture` for what the CPU cannot reproduce of the GPU's sampler.
 #[test]
 fn gpu_textured_materials_agree_with_the_cpu_within_three_255ths() {
     let Some(gpu) = gpu_for_tests() else { return };

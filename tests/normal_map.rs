@@ -9,7 +9,7 @@ use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
 use sdfc::ir::eval;
-use sdfc::ir::material::{green_sign, normal_map, AtlasValues, MaterialEval, Textures};
+use sdfc::reference::material::{green_sign, normal_map, AtlasValues, MaterialEval, Textures};
 use sdfc::uv::atlas::tangent_frame;
 use sdfc::uv::Status;
 use std::path::Path;

@@ -10,7 +10,7 @@ use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
 use sdfc::ir::eval;
-use sdfc::ir::material::normal_map;
+use sdfc::reference::material::normal_map;
 use sdfc::uv::{Atlas, Status};
 use std::path::Path;
 
@@ -136,7 +136,7 @@ fn mirrored_uv_are_symmetric_and_frames_reflect() {
     assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
     let at = atlas(&a);
     let r = DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0));
-    let m = sdfc::ir::material::MaterialEval::load(&a.program, &a.atlases).unwrap();
+    let m = sdfc::reference::material::MaterialEval::load(&a.program, &a.atlases).unwrap();
     let mut n_ok = 0;
     for x in rest_points(&at.shape, at, 150, 11) {
         let (s, t) = (at.sample_at(x), at.sample_at(r * x));

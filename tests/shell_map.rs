@@ -8,8 +8,8 @@ use glam::DVec3;
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
-use sdfc::ir::material::Textures;
-use sdfc::ir::{eval, Op, Shape};
+use sdfc::ir::{eval, Op};
+use sdfc::reference::material::Textures;
 use std::path::Path;
 
 mod common;
@@ -22,8 +22,9 @@ fn checked(src: &str) -> Analysis {
     a
 }
 
-fn target(a: &Analysis) -> &Shape {
-    a.scene.as_ref().unwrap().render.as_ref().unwrap()
+/// The render target with the environment of its heights (textures, atlases).
+fn target(a: &Analysis) -> sdfc::ir::Field<'_> {
+    a.field(a.scene.as_ref().unwrap().render.as_ref().unwrap())
 }
 
 const EPS: f64 = 0.2;

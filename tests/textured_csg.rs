@@ -10,7 +10,7 @@ use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver::{check, Analysis};
 use sdfc::gpu::{self, gpu_for_tests};
 use sdfc::ir::eval;
-use sdfc::ir::material::{MaterialEval, MaterialValue};
+use sdfc::reference::material::{MaterialEval, MaterialValue};
 use std::path::Path;
 
 mod common;

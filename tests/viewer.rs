@@ -86,9 +86,9 @@ fn the_seed_under_the_cursor_is_the_visible_one() {
     // Both seeds project to the centre; only the front one is visible.
     let (sx, sy, _) = pick::project(&view, DVec3::Z).unwrap();
     assert!((sx - 32.0).abs() < 1e-9 && (sy - 24.0).abs() < 1e-9);
-    let s = pick::seed(&a, shape, &view, sx + 2.0, sy - 1.0, 12.0).unwrap();
+    let s = pick::seed(&a, a.field(shape), &view, sx + 2.0, sy - 1.0, 12.0).unwrap();
     assert_eq!((s.atlas.as_str(), s.seed.as_str()), ("a", "front"));
-    assert!(pick::seed(&a, shape, &view, sx + 20.0, sy, 12.0).is_none());
+    assert!(pick::seed(&a, a.field(shape), &view, sx + 20.0, sy, 12.0).is_none());
     assert_eq!(
         pick::atlas_at(&a, DVec3::X, view.scale).as_deref(),
         Some("a")

@@ -7,7 +7,7 @@
 //! (Ju et al. 2002), which keeps sharp edges and corners where the grid allows. The
 //! vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale).
 
-use crate::ir::{eval, Aabb, Shape};
+use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -54,7 +54,8 @@ impl Grid {
 }
 
 /// Meshes the zero set of `shape` on `grid`. `tolerance` is the projection's |f| bound.
-pub fn dual_contour(shape: &Shape, grid: &Grid, tolerance: f64) -> QuadMesh {
+pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64) -> QuadMesh {
+    let shape: Field = shape.into();
     let [nx, ny, nz] = grid.dims;
     let (px, py) = (nx + 1, ny + 1);
     let at = |i: usize, j: usize, k: usize| i + px * (j + py * k);
@@ -141,13 +142,14 @@ pub fn dual_contour(shape: &Shape, grid: &Grid, tolerance: f64) -> QuadMesh {
 
 /// The vertex of one cell: the QEF minimizer of its edge crossings' tangent planes,
 /// clamped to the cell, then projected onto the surface.
-fn place_vertex(
-    shape: &Shape,
+fn place_vertex<'s>(
+    shape: impl Into<Field<'s>>,
     grid: &Grid,
     field: &[f64],
     [i, j, k]: [usize; 3],
     tolerance: f64,
 ) -> (DVec3, DVec3) {
+    let shape: Field = shape.into();
     let [nx, ny, _] = grid.dims;
     let at = |i: usize, j: usize, k: usize| field[i + (nx + 1) * (j + (ny + 1) * k)];
     let mut points = Vec::with_capacity(12);
@@ -203,7 +205,14 @@ fn place_vertex(
 
 /// Where the surface crosses the segment a–b (opposite signs): a few steps of
 /// regula falsi on the f64 distance.
-fn crossing(shape: &Shape, mut a: DVec3, mut b: DVec3, mut fa: f64, mut fb: f64) -> DVec3 {
+fn crossing<'s>(
+    shape: impl Into<Field<'s>>,
+    mut a: DVec3,
+    mut b: DVec3,
+    mut fa: f64,
+    mut fb: f64,
+) -> DVec3 {
+    let shape: Field = shape.into();
     let mut x = a;
     for _ in 0..12 {
         let t = (fa / (fa - fb)).clamp(0.01, 0.99);
@@ -266,16 +275,17 @@ fn solve_qef(points: &[DVec3], normals: &[DVec3], mass: DVec3, _cell: f64) -> DV
 /// sides as neighbours. (Quad centres rather than the mesh's vertices: dual contouring
 /// puts vertices exactly on sharp edges, where no walk ends well, and a row of them
 /// along every crease would weigh as a strip of surface.)
-pub fn surface_samples(
-    shape: &Shape,
+pub fn surface_samples<'s>(
+    shape: impl Into<Field<'s>>,
     grid: usize,
 ) -> Result<Vec<crate::uv::seeds::SurfaceSample>, String> {
+    let shape: Field = shape.into();
     use crate::ir::eval;
     let bounds = shape.root_node().bounds;
     if !bounds.is_finite() {
         return Err("the atlas's shape has no finite bounds to sample".into());
     }
-    let scale = crate::uv::atlas::scale(shape);
+    let scale = crate::uv::atlas::scale(&shape);
     let mesh = dual_contour(shape, &Grid::over(bounds, grid), 1e-6 * scale);
     if mesh.quads.is_empty() {
         return Err(format!(

@@ -404,27 +404,30 @@ fn plan(gpu: &Gpu, shape: &Shape, options: &Options) -> Result<(Grid, usize), Ba
     Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m))
 }
 
-/// Runs the whole bake of `shape` with the compiled scene `module`. A bake whose
+/// Runs the whole bake of `shape` (with the environment of its heights: a shape of a
+/// scene with displacements comes from `driver::Analysis::field`) with the compiled
+/// scene `module`. A bake whose
 /// [`estimated_peak_bytes`] is over [`MAX_BAKE_BYTES`] is refused before any GPU work
 /// ([`BakeError::Resource`]): its mesh grid before meshing, the rest once the atlas
 /// is laid out.
-pub fn bake(
+pub fn bake<'s>(
     gpu: &Gpu,
     module: &Module,
     base_dir: &Path,
-    shape: &Shape,
+    shape: impl Into<crate::ir::Field<'s>>,
     options: &Options,
     progress: &dyn Progress,
 ) -> Result<Baked, BakeError> {
+    let shape: crate::ir::Field = shape.into();
     let mut report = Report::default();
     let mut clock = Instant::now();
     let mut lap = |report: &mut Report, name: &'static str| {
         report.stages.push((name, clock.elapsed()));
         clock = Instant::now();
     };
-    let (grid, m) = plan(gpu, shape, options)?;
+    let (grid, m) = plan(gpu, &shape, options)?;
     check_memory(&Footprint::grid(&grid))?;
-    let scale = crate::uv::atlas::scale(shape);
+    let scale = crate::uv::atlas::scale(&shape);
     report.grid = grid.dims;
     report.chart_quads = m;
 

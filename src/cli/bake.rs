@@ -262,7 +262,14 @@ pub fn run(args: BakeArgs) -> ExitCode {
         bar: Mutex::new(None),
     };
     let base = super::base_dir(&args.scene);
-    let baked = match pipeline::bake(&gpu, &compiled.module, &base, shape, &options, &bars) {
+    let baked = match pipeline::bake(
+        &gpu,
+        &compiled.module,
+        &base,
+        analysis.field(shape),
+        &options,
+        &bars,
+    ) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
@@ -382,7 +389,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         &gpu,
         &compiled.module,
         &base,
-        shape,
+        analysis.field(shape),
         &options,
         &pipeline::Quiet,
     ) {

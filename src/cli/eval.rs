@@ -114,11 +114,11 @@ fn eval(args: &EvalArgs) -> Result<(), Failed> {
     let atlas_points: Vec<Option<DVec3>> = match atlas {
         Some(a) => points
             .iter()
-            .map(|p| eval::project(&a.shape, *p, 1e-6 * sdfc::uv::atlas::scale(&a.shape)))
+            .map(|p| eval::project(a.field(), *p, 1e-6 * sdfc::uv::atlas::scale(&a.shape)))
             .collect(),
         None => Vec::new(),
     };
-    let mut results = eval::query_all(shape, &points);
+    let mut results = eval::query_all(analysis.field(shape), &points);
     let mut atlas_results = match atlas {
         Some(a) => cpu_atlas_lines(a, &atlas_points, args),
         None => Vec::new(),
@@ -190,7 +190,7 @@ fn gpu_distances(
         sdfc::gpu::eval_points(gpu, module, points)
     } else {
         // A displacement's height samples textures in the field itself.
-        let textures = sdfc::ir::material::Textures::load(program).map_err(|e| fail(e, 2))?;
+        let textures = sdfc::ir::texture::Textures::load(program).map_err(|e| fail(e, 2))?;
         sdfc::gpu::eval_points_textured(gpu, module, &textures, points)
     }
     .map_err(|e| {

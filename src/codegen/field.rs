@@ -235,7 +235,7 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
             let texel = texel?;
             tex.atlases.insert(*k);
             let strength = field(strength, tex)?;
-            let green = lit(crate::ir::material::green_sign(convention));
+            let green = lit(crate::reference::material::green_sign(convention));
             let a = format!("atlas_sample_{}", k.index());
             format!("sdfc_normal_map({texel}, {a}.tangent, {a}.bitangent, n, {strength}, {green})")
         }

@@ -6,7 +6,7 @@ use super::texture::{sampler, upload};
 use super::{cache, Gpu, GpuError};
 use crate::codegen::bindings::{Resource, COMPUTE_GROUP, RENDER_GROUP};
 use crate::codegen::Module;
-use crate::ir::material::Textures;
+use crate::ir::texture::Textures;
 use glam::DVec3;
 
 /// Distance and gradient at each point, from the generated compute shader:
@@ -350,7 +350,7 @@ pub const MATERIAL_CHUNK: usize = 1 << 20;
 /// The module's `scene_material` at surface points, each `(position, unit normal,
 /// footprint)`: the material is `scene_map`'s at the position (as `fs_main` picks it),
 /// evaluated with the normal given (not `scene_normal`'s finite difference), so the
-/// CPU reference (`ir::material::MaterialEval`) can be fed the same. `textures` holds
+/// CPU reference (`reference::material::MaterialEval`) can be fed the same. `textures` holds
 /// the images of the module's texture bindings by path (`Textures::load` of the
 /// program), uploaded with the same mip levels the CPU samples. Inputs of any size are
 /// dispatched in chunks of at most [`MATERIAL_CHUNK`] points; every fallible call runs

@@ -1,13 +1,13 @@
 //! Images and samplers of the materials' textures.
 
 use super::{Gpu, GpuError};
-use crate::ir::material::MipChain;
+use crate::ir::texture::MipChain;
 use std::path::Path;
 
 /// Loads an image with its mip chain ([`MipChain`], the levels the CPU reference
 /// samples), sRGB-decoded by the GPU when `srgb`.
 pub fn load_texture(gpu: &Gpu, path: &Path, srgb: bool) -> Result<wgpu::Texture, GpuError> {
-    let image = crate::ir::material::texture::decode(path).map_err(GpuError::Texture)?;
+    let image = crate::ir::texture::decode(path).map_err(GpuError::Texture)?;
     upload(
         gpu,
         &MipChain::new(image),
@@ -78,10 +78,10 @@ pub fn upload(
 
 pub fn sampler(gpu: &Gpu, wrap: &str) -> wgpu::Sampler {
     // One reading of the wrap modes for the GPU and the CPU reference.
-    let mode = match crate::ir::material::Wrap::parse(wrap) {
-        crate::ir::material::Wrap::Mirror => wgpu::AddressMode::MirrorRepeat,
-        crate::ir::material::Wrap::Clamp => wgpu::AddressMode::ClampToEdge,
-        crate::ir::material::Wrap::Repeat => wgpu::AddressMode::Repeat,
+    let mode = match crate::ir::texture::Wrap::parse(wrap) {
+        crate::ir::texture::Wrap::Mirror => wgpu::AddressMode::MirrorRepeat,
+        crate::ir::texture::Wrap::Clamp => wgpu::AddressMode::ClampToEdge,
+        crate::ir::texture::Wrap::Repeat => wgpu::AddressMode::Repeat,
     };
     gpu.device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some(wrap),

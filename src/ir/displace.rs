@@ -21,20 +21,19 @@
 //! the "exact gradient by differencing" of Sec. E (Sec. E uses central differences, 6
 //! evaluations; the tetrahedral scheme is the 4-evaluation equivalent).
 
-use super::material::{self, AtlasValues, Textures};
+use super::texture::Textures;
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, SurfaceInput, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
-use crate::uv::Atlas;
-use glam::DVec3;
-use std::sync::{Arc, OnceLock};
+use glam::{DVec2, DVec3};
 
 /// Allowance for the atlas's metric distortion (the log map's angular stretch
 /// (r/R)/sin(r/R) is 1.5 at r/R = 1.5 rad) and for Π's stretch inside the band.
 pub const STRETCH: f64 = 1.5;
 
-/// A displacement's height and its derived bounds.
-#[derive(Debug, Clone)]
+/// A displacement's height and its derived bounds: plain data. What evaluating it on
+/// the CPU needs beyond this (atlases, textures) comes in as a [`Heights`].
+#[derive(Debug, Clone, PartialEq)]
 pub struct Height {
     /// The height field as the scene gives it (a float surface field or a constant).
     pub value: Value,
@@ -58,29 +57,6 @@ pub struct Height {
     /// 1 for a displacement's height; 2 for a shell map's uv (`height_ID` then returns
     /// a `vec2<f32>`).
     pub dims: u8,
-    cpu: OnceLock<HeightCpu>,
-}
-
-impl PartialEq for Height {
-    fn eq(&self, o: &Height) -> bool {
-        self.value == o.value
-            && self.scale == o.scale
-            && self.band == o.band
-            && self.lo == o.lo
-            && self.hi == o.hi
-            && self.slope == o.slope
-            && self.atlas == o.atlas
-            && self.id == o.id
-            && self.dims == o.dims
-    }
-}
-
-/// What the CPU needs to evaluate a height: its atlas and textures.
-#[derive(Debug, Clone)]
-struct HeightCpu {
-    atlas: Option<Arc<Atlas>>,
-    atlas_count: usize,
-    textures: Textures,
 }
 
 impl Height {
@@ -104,7 +80,6 @@ impl Height {
             id,
             grad_step,
             dims: 1,
-            cpu: OnceLock::new(),
         }
     }
 
@@ -126,23 +101,6 @@ impl Height {
         h
     }
 
-    /// A shell map's uv at surface point `q` with unit normal `n`; `None` when unbound.
-    pub fn uv_at(&self, q: DVec3, n: DVec3) -> Option<glam::DVec2> {
-        let cpu = self.cpu.get()?;
-        let mut atlas = |k: AtlasId| match (&cpu.atlas, self.atlas) {
-            (Some(a), Some(mine)) if mine == k => AtlasValues::from_sample(&a.sample(q)),
-            _ => AtlasValues::FAILED,
-        };
-        Some(material::eval_vec2(
-            &self.value,
-            q,
-            n,
-            &cpu.textures,
-            cpu.atlas_count,
-            &mut atlas,
-        ))
-    }
-
     /// ε of Eq. 58: the largest displacement.
     pub fn epsilon(&self) -> f64 {
         self.lo.abs().max(self.hi.abs())
@@ -158,48 +116,28 @@ impl Height {
         (base * base + (STRETCH * self.slope).powi(2)).sqrt()
     }
 
-    /// Gives the CPU evaluator the height's atlas (prepared) and textures. Heights that
-    /// were never bound evaluate to the band's conservative value everywhere.
-    pub fn bind(&self, atlases: &[Option<Atlas>], textures: &Textures) {
-        let atlas = self
-            .atlas
-            .and_then(|k| atlases.get(k.index())?.clone())
-            .map(Arc::new);
-        let _ = self.cpu.set(HeightCpu {
-            atlas,
-            atlas_count: atlases.len(),
-            textures: textures.clone(),
-        });
+    /// Whether the height is a constant: then no [`Heights`] is needed to evaluate it.
+    pub fn is_constant(&self) -> bool {
+        matches!(self.value, Value::Float(_))
     }
 
-    pub fn is_bound(&self) -> bool {
-        self.cpu.get().is_some() || (self.dims == 1 && self.lo == self.hi)
-    }
-
-    /// d at surface point `q` with unit normal `n` (the generated `height_ID`).
-    pub fn displacement(&self, q: DVec3, n: DVec3) -> Option<f64> {
+    /// d at surface point `q` with unit normal `n` (the generated `height_ID`), from
+    /// `heights` unless the height is a constant; `None` where `heights` cannot say.
+    pub fn displacement(&self, q: DVec3, n: DVec3, heights: &dyn Heights) -> Option<f64> {
         if let Value::Float(h) = self.value {
             return Some(self.scale * h);
         }
-        let cpu = self.cpu.get()?;
-        let mut atlas = |k: AtlasId| match (&cpu.atlas, self.atlas) {
-            (Some(a), Some(mine)) if mine == k => AtlasValues::from_sample(&a.sample(q)),
-            _ => AtlasValues::FAILED,
-        };
-        let h = material::eval_scalar(
-            &self.value,
-            q,
-            n,
-            &cpu.textures,
-            cpu.atlas_count,
-            &mut atlas,
-        );
-        Some(self.scale * h)
+        Some(self.scale * heights.scalar(self, q, n)?)
     }
 
     /// Eq. 58 given the base's distance `f` at ξ and, inside the band, the projection
     /// and normal (computed only when asked for).
-    pub fn field(&self, f: f64, project: impl FnOnce() -> (DVec3, DVec3)) -> f64 {
+    pub fn field(
+        &self,
+        f: f64,
+        project: impl FnOnce() -> (DVec3, DVec3),
+        heights: &dyn Heights,
+    ) -> f64 {
         let w = self.band_width();
         if f > w {
             return f - self.hi;
@@ -208,12 +146,41 @@ impl Height {
             return f - self.lo;
         }
         let (q, n) = project();
-        match self.displacement(q, n) {
+        match self.displacement(q, n, heights) {
             Some(d) => f - d,
-            // Unbound: the conservative shift on either side.
+            // Not given: the conservative shift on either side.
             None if f >= 0.0 => f - self.hi,
             None => f - self.lo,
         }
+    }
+}
+
+/// What the CPU evaluator needs to evaluate heights and shell-map uv that read
+/// textures or atlases: the environment of a shape's field, passed as an argument
+/// ([`super::eval::Field`]). The CPU reference layer implements it with the scene's
+/// prepared atlases and decoded textures; [`NoHeights`] knows none.
+pub trait Heights: Send + Sync + std::fmt::Debug {
+    /// The unscaled height `h.value` at surface point `q` with unit normal `n` (the
+    /// generated `height_ID` divided by the scale), or `None` when this environment
+    /// cannot evaluate it.
+    fn scalar(&self, h: &Height, q: DVec3, n: DVec3) -> Option<f64>;
+    /// A shell map's uv field `h.value` at `q`, or `None` when it cannot be evaluated.
+    fn uv(&self, h: &Height, q: DVec3, n: DVec3) -> Option<DVec2>;
+}
+
+/// The environment with no atlases and no textures: constant heights are exact;
+/// a displacement that reads a texture or an atlas takes the conservative shift of
+/// its band on either side (never an overestimate of the distance), and a shell map
+/// whose uv reads one has no tiles.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoHeights;
+
+impl Heights for NoHeights {
+    fn scalar(&self, _: &Height, _: DVec3, _: DVec3) -> Option<f64> {
+        None
+    }
+    fn uv(&self, _: &Height, _: DVec3, _: DVec3) -> Option<DVec2> {
+        None
     }
 }
 

@@ -143,10 +143,57 @@ pub fn smin(a: f64, b: f64, k: f64) -> f64 {
     a.min(b) - h * h * k * 0.25
 }
 
+/// A shape's field with what evaluating it needs: the shape (plain IR) and the
+/// environment its heights and shell-map uv read ([`Heights`]: the prepared atlases and
+/// decoded textures). A `&Shape` converts into a field with [`NoHeights`], so the free
+/// functions below take either; a shape whose displacements read textures or atlases
+/// then evaluates them conservatively (the band's shift), the same on every call.
+#[derive(Debug, Clone, Copy)]
+pub struct Field<'a> {
+    pub shape: &'a Shape,
+    pub heights: &'a dyn Heights,
+}
+
+impl<'a> From<&'a Shape> for Field<'a> {
+    fn from(shape: &'a Shape) -> Field<'a> {
+        Field::plain(shape)
+    }
+}
+
+impl<'a> Field<'a> {
+    pub fn new(shape: &'a Shape, heights: &'a dyn Heights) -> Field<'a> {
+        Field { shape, heights }
+    }
+
+    /// The shape with [`NoHeights`].
+    pub fn plain(shape: &'a Shape) -> Field<'a> {
+        Field {
+            shape,
+            heights: &NoHeights,
+        }
+    }
+}
+
+impl<'a> From<&Field<'a>> for Field<'a> {
+    fn from(f: &Field<'a>) -> Field<'a> {
+        *f
+    }
+}
+
+/// A field reads as its shape (bounds, Lipschitz bound, nodes).
+impl std::ops::Deref for Field<'_> {
+    type Target = Shape;
+
+    fn deref(&self) -> &Shape {
+        self.shape
+    }
+}
+
 /// Distance and material id (0 = default) of a shape at `p`: the material that
 /// dominates there ([`Blend::dominant`]).
-pub fn eval(shape: &Shape, p: DVec3) -> (f64, u32) {
-    let (d, m) = eval_node(shape, shape.root(), p, true);
+pub fn eval<'a>(field: impl Into<Field<'a>>, p: DVec3) -> (f64, u32) {
+    let f = field.into();
+    let (d, m) = eval_node(&f, f.shape.root(), p, true);
     (d, m.dominant())
 }
 
@@ -193,37 +240,40 @@ impl Blend {
 }
 
 /// Distance and materials of a shape at `p` (the generated `scene_blend`).
-pub fn eval_blend(shape: &Shape, p: DVec3) -> (f64, Blend) {
-    eval_node(shape, shape.root(), p, true)
+pub fn eval_blend<'a>(field: impl Into<Field<'a>>, p: DVec3) -> (f64, Blend) {
+    let f = field.into();
+    eval_node(&f, f.shape.root(), p, true)
 }
 
 /// Just the distance.
-pub fn distance(shape: &Shape, p: DVec3) -> f64 {
-    eval(shape, p).0
+pub fn distance<'a>(field: impl Into<Field<'a>>, p: DVec3) -> f64 {
+    eval(field, p).0
 }
 
 /// The distance of node `id` (a subtree of the shape) at `p`.
-pub fn node_distance(shape: &Shape, id: NodeId, p: DVec3) -> f64 {
-    eval_node(shape, id, p, true).0
+pub fn node_distance<'a>(field: impl Into<Field<'a>>, id: NodeId, p: DVec3) -> f64 {
+    eval_node(&field.into(), id, p, true).0
 }
 
 /// Distance and materials with every union operand evaluated, none skipped by its
 /// box ([`super::guard`]): the baseline the guards are proven equal to.
-pub fn eval_unguarded(shape: &Shape, p: DVec3) -> (f64, Blend) {
-    eval_node(shape, shape.root(), p, false)
+pub fn eval_unguarded<'a>(field: impl Into<Field<'a>>, p: DVec3) -> (f64, Blend) {
+    let f = field.into();
+    eval_node(&f, f.shape.root(), p, false)
 }
 
-fn eval_node(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
-    stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(shape, id, p, g))
+fn eval_node(f: &Field, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || eval_node_inner(f, id, p, g))
 }
 
-fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
+fn eval_node_inner(f: &Field, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
+    let shape = f.shape;
     if let Some(group) = shape.group(id) {
         // union(leaves…, others…) with a hard union's blends: the nearer, ties first.
         let (mut d, m) = group.eval(p);
         let mut blend = Blend::single(m);
         for &o in &group.others {
-            let (dd, mm) = eval_node(shape, o, p, g);
+            let (dd, mm) = eval_node(f, o, p, g);
             if dd < d {
                 (d, blend) = (dd, mm);
             }
@@ -237,9 +287,9 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend)
             let ((da, ma), (db, mb)) = match shape.guard(id).filter(|_| g) {
                 // The first operand, then the other where its box comes near enough.
                 Some(guard) => {
-                    let first = eval_node(shape, guard.first, p, g);
+                    let first = eval_node(f, guard.first, p, g);
                     let other = if guard.needed(p, first.0) {
-                        eval_node(shape, guard.guarded, p, g)
+                        eval_node(f, guard.guarded, p, g)
                     } else {
                         far
                     };
@@ -249,7 +299,7 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend)
                         (other, first)
                     }
                 }
-                None => (eval_node(shape, *a, p, g), eval_node(shape, *b, p, g)),
+                None => (eval_node(f, *a, p, g), eval_node(f, *b, p, g)),
             };
             match op {
                 Csg::Union => (smin(da, db, *k), Blend::union(da, ma, db, mb, *k)),
@@ -258,7 +308,7 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend)
             }
         }
         Op::Scale { factor, child } => {
-            let (d, m) = eval_node(shape, *child, p / *factor, g);
+            let (d, m) = eval_node(f, *child, p / *factor, g);
             (d * factor.min_element(), m)
         }
         Op::Twist { radius, .. } | Op::Bend { radius, .. } if p.length() > warp_outer(*radius) => {
@@ -272,42 +322,41 @@ fn eval_node_inner(shape: &Shape, id: NodeId, p: DVec3, g: bool) -> (f64, Blend)
         | Op::Mirror { child, .. }
         | Op::Elongate { child, .. } => {
             let op = &shape[id].op;
-            eval_node(shape, *child, super::rest::child_point(op, p), g)
+            eval_node(f, *child, super::rest::child_point(op, p), g)
         }
         Op::Round { r, child } => {
-            let (d, m) = eval_node(shape, *child, p, g);
+            let (d, m) = eval_node(f, *child, p, g);
             (d - r, m)
         }
         Op::Shell { thickness, child } => {
-            let (d, m) = eval_node(shape, *child, p, g);
+            let (d, m) = eval_node(f, *child, p, g);
             (d.abs() - thickness * 0.5, m)
         }
-        Op::Paint { material, child } => {
-            (eval_node(shape, *child, p, g).0, Blend::single(*material))
-        }
+        Op::Paint { material, child } => (eval_node(f, *child, p, g).0, Blend::single(*material)),
         Op::Displace { height, child } => {
-            let (f, m) = eval_node(shape, *child, p, g);
-            let d = height.field(f, || project_onto(shape, *child, p, f, g));
+            let (fd, m) = eval_node(f, *child, p, g);
+            let d = height.field(fd, || project_onto(f, *child, p, fd, g), f.heights);
             (d, m)
         }
         Op::ShellMap { map, base, tile } => {
-            let fb = eval_node(shape, *base, p, g);
+            let fb = eval_node(f, *base, p, g);
             map.field(
                 fb,
-                || project_onto(shape, *base, p, fb.0, g),
-                |s| eval_node(shape, *tile, s, g),
+                || project_onto(f, *base, p, fb.0, g),
+                |s| eval_node(f, *tile, s, g),
+                f.heights,
             )
         }
     }
 }
 
-/// Π_f (Eq. 57) onto node `child`'s surface from p, where its distance is `f`, with
+/// Π_f (Eq. 57) onto node `child`'s surface from p, where its distance is `fp`, with
 /// the gradient by central differences: the point and the unit normal.
-fn project_onto(shape: &Shape, child: NodeId, p: DVec3, f: f64, g: bool) -> (DVec3, DVec3) {
+fn project_onto(f: &Field, child: NodeId, p: DVec3, fp: f64, g: bool) -> (DVec3, DVec3) {
     let h = GRADIENT_STEP;
-    let diff = |o: DVec3| eval_node(shape, child, p + o, g).0 - eval_node(shape, child, p - o, g).0;
+    let diff = |o: DVec3| eval_node(f, child, p + o, g).0 - eval_node(f, child, p - o, g).0;
     let grad = DVec3::new(diff(DVec3::X * h), diff(DVec3::Y * h), diff(DVec3::Z * h)) / (2.0 * h);
-    let q = p - grad * (f / grad.length_squared().max(1e-300));
+    let q = p - grad * (fp / grad.length_squared().max(1e-300));
     (q, grad.normalize_or_zero())
 }
 
@@ -315,23 +364,25 @@ fn project_onto(shape: &Shape, child: NodeId, p: DVec3, f: f64, g: bool) -> (DVe
 pub const GRADIENT_STEP: f64 = 1e-6;
 
 /// The gradient by central differences in f64.
-pub fn gradient(shape: &Shape, p: DVec3) -> DVec3 {
+pub fn gradient<'a>(field: impl Into<Field<'a>>, p: DVec3) -> DVec3 {
+    let f = field.into();
     let h = GRADIENT_STEP;
-    let d = |o: DVec3| distance(shape, p + o) - distance(shape, p - o);
+    let d = |o: DVec3| distance(f, p + o) - distance(f, p - o);
     DVec3::new(d(DVec3::X * h), d(DVec3::Y * h), d(DVec3::Z * h)) / (2.0 * h)
 }
 
 /// Projects a point onto the zero set with Newton steps along the gradient
 /// (Π_f, Eq. 18 of the Implicit UVs paper), iterated until |f| < `tolerance`.
 /// `None` when it does not converge (a flat gradient, or no surface nearby).
-pub fn project(shape: &Shape, p: DVec3, tolerance: f64) -> Option<DVec3> {
+pub fn project<'a>(field: impl Into<Field<'a>>, p: DVec3, tolerance: f64) -> Option<DVec3> {
+    let f = field.into();
     let mut x = p;
     for _ in 0..200 {
-        let d = distance(shape, x);
+        let d = distance(f, x);
         if d.abs() < tolerance {
             return Some(x);
         }
-        let g = gradient(shape, x);
+        let g = gradient(f, x);
         let g2 = g.length_squared();
         // Written so that a NaN gradient also stops the projection.
         if g2.is_nan() || g2 <= 1e-12 || !d.is_finite() {
@@ -352,14 +403,15 @@ pub struct Query {
 }
 
 /// Evaluates many points in parallel.
-pub fn query_all(shape: &Shape, points: &[DVec3]) -> Vec<Query> {
+pub fn query_all<'a>(field: impl Into<Field<'a>>, points: &[DVec3]) -> Vec<Query> {
+    let f = field.into();
     points
         .par_iter()
         .map(|&p| Query {
             point: p,
-            distance: distance(shape, p),
-            gradient: gradient(shape, p),
-            surface: project(shape, p, 1e-10),
+            distance: distance(f, p),
+            gradient: gradient(f, p),
+            surface: project(f, p, 1e-10),
         })
         .collect()
 }

@@ -1,7 +1,7 @@
 //! Lowering: folded shape values of the checked program → IR nodes with bounds
 //! and Lipschitz constants.
 
-use super::material::Textures;
+use super::texture::Textures;
 use super::*;
 use crate::sema::{DefKind, Program, Ty, Value};
 use crate::span::Span;

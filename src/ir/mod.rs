@@ -13,11 +13,12 @@ pub mod eval;
 pub mod group;
 pub mod guard;
 mod lower;
-pub mod material;
 pub mod rest;
 pub mod shell;
+pub mod texture;
 
-pub use displace::Height;
+pub use displace::{Height, Heights, NoHeights};
+pub use eval::Field;
 pub use lower::{lower, lower_shape, lower_shape_textured, lower_with};
 
 use glam::{DMat3, DVec3};
@@ -243,21 +244,6 @@ impl Shape {
             .filter(|h| displace::samples_texture(&h.value))
             .map(|h| (h.hi - h.lo) / 255.0)
             .fold(0.0, f64::max)
-    }
-
-    /// Gives every displacement's CPU evaluator its atlas and textures.
-    pub fn bind_heights(
-        &self,
-        atlases: &[Option<crate::uv::Atlas>],
-        textures: &material::Textures,
-    ) {
-        for n in &self.nodes {
-            match &n.op {
-                Op::Displace { height, .. } => height.bind(atlases, textures),
-                Op::ShellMap { map, .. } => map.uv.bind(atlases, textures),
-                _ => {}
-            }
-        }
     }
 
     /// Whether some smooth union has a painted operand: its materials then blend across

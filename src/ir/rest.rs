@@ -148,7 +148,12 @@ impl RestQuery {
 
     /// The occurrence a point belongs to (the one whose rest point is nearest the
     /// atlas's surface; the first on ties) and its rest point; `None` without any.
-    pub fn locate(&self, atlas_shape: &Shape, p: DVec3) -> Option<(usize, DVec3)> {
+    pub fn locate<'a>(
+        &self,
+        atlas_shape: impl Into<eval::Field<'a>>,
+        p: DVec3,
+    ) -> Option<(usize, DVec3)> {
+        let atlas_shape = atlas_shape.into();
         let mut best: Option<(usize, DVec3, f64)> = None;
         for (i, o) in self.occurrences.iter().enumerate() {
             let q = o.apply(p);

@@ -30,7 +30,7 @@
 //! is max(L_f, L_g · s · √((k·c)² + (L_f/ε)²)). As with `repeat`, the tile must stay
 //! inside its cell: `fract` jumps at the cell's borders.
 
-use super::displace::{Height, STRETCH};
+use super::displace::{Height, Heights, STRETCH};
 use glam::DVec3;
 
 /// A shell map's constants.
@@ -96,24 +96,25 @@ impl ShellMap {
 
     /// The field from the base's (distance, material) at x, the projection (computed
     /// only inside the shell) and the tile's evaluation at shell coordinates; the
-    /// material is the tile's where the tile is nearer.
+    /// material is the tile's where the tile is nearer. `heights` evaluates the uv.
     pub fn field<M: Copy>(
         &self,
         f: (f64, M),
         project: impl FnOnce() -> (DVec3, DVec3),
         tile: impl FnOnce(DVec3) -> (f64, M),
+        heights: &dyn Heights,
     ) -> (f64, M) {
         let bound = self.bound(f.0);
         let t = if !self.in_band(f.0) {
             (bound, f.1)
         } else {
             let (q, n) = project();
-            match self.uv.uv_at(q, n) {
+            match heights.uv(&self.uv, q, n) {
                 Some(uv) => {
                     let (g, m) = tile(self.coords(f.0, uv));
                     ((self.scale * g).max(bound), m)
                 }
-                // Unbound (no atlas or textures given to the CPU): no tiles.
+                // Not given (no atlas or textures in `heights`): no tiles.
                 None => (f64::INFINITY, f.1),
             }
         };

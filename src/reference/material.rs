@@ -26,13 +26,12 @@
 //! arguments were from the nearest jump, so that comparisons can leave such points out.
 
 mod interp;
-pub mod texture;
 
 use interp::{is_field_builtin, Cx, V};
 
-pub use texture::{MipChain, Textures, Wrap};
+pub use crate::ir::texture::{self, MipChain, Textures, Wrap};
 
-use crate::ir::{eval, Shape};
+use crate::ir::eval;
 use crate::sema::builtins::BuiltinId;
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, MaterialAttrs, Program, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
@@ -287,10 +286,17 @@ impl<'a> MaterialEval<'a> {
             .value
     }
 
-    /// The generated `scene_surface` at surface point `p` of the render target `shape`:
+    /// The generated `scene_surface` at surface point `p` of the render target `shape`
+    /// (with its heights' environment where it has displacements):
     /// the materials of [`eval::eval_blend`], mixed with b's weight across a smooth
     /// union's band (textured CSG), the normal renormalized.
-    pub fn eval_surface(&self, shape: &Shape, p: DVec3, n: DVec3, footprint: f64) -> MaterialValue {
+    pub fn eval_surface<'s>(
+        &self,
+        shape: impl Into<eval::Field<'s>>,
+        p: DVec3,
+        n: DVec3,
+        footprint: f64,
+    ) -> MaterialValue {
         let (_, bl) = eval::eval_blend(shape, p);
         let a = self.eval(bl.a, p, n, footprint);
         if bl.t <= 0.0 {

@@ -7,9 +7,10 @@ use super::grid::SeedGrid;
 use super::logmap::{gradient, log_map, LogMap, Params, Seed, Status};
 use super::merge::{self, MergeGraph};
 use crate::ir::rest::RestQuery;
-use crate::ir::{eval, Shape};
+use crate::ir::{eval, Field, Heights, NoHeights, Shape};
 use crate::sema::AtlasDef;
 use glam::{DMat3, DVec2, DVec3};
+use std::sync::Arc;
 
 /// A seed after projection, with what the user should be told about it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,7 +43,7 @@ impl PreparedSeed {
 }
 
 /// An atlas ready to evaluate: its shape, projected seeds and parameters.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Atlas {
     pub name: String,
     /// Seed names, in declaration order.
@@ -62,6 +63,26 @@ pub struct Atlas {
     /// Where the atlas's shape occurs in the render target: materials query the uv at
     /// the rest pose ([`Atlas::sample_at`]); set by `diagnose::prepare_all`.
     pub rest: RestQuery,
+    /// What the shape's heights read (the atlases declared before this one, the
+    /// textures): the environment of its field ([`Atlas::field`]).
+    pub heights: Arc<dyn Heights>,
+}
+
+/// Atlases are equal when their data are: the environment of the field is left out,
+/// as it is derived from the atlases before this one and the textures.
+impl PartialEq for Atlas {
+    fn eq(&self, o: &Atlas) -> bool {
+        self.name == o.name
+            && self.seed_names == o.seed_names
+            && self.shape == o.shape
+            && self.seeds == o.seeds
+            && self.params == o.params
+            && self.graph == o.graph
+            && self.sigma == o.sigma
+            && self.coincident == o.coincident
+            && self.mirror == o.mirror
+            && self.rest == o.rest
+    }
 }
 
 /// Choices for [`Atlas::sample_with`].
@@ -113,22 +134,34 @@ pub fn frame(n: DVec3, tangent: Option<DVec3>) -> (DVec3, DVec3, bool) {
 }
 
 impl Atlas {
-    /// Projects the seeds (Π_f iterated until |f| < 1e-6 · scale) and builds their frames.
+    /// Projects the seeds (Π_f iterated until |f| < 1e-6 · scale) and builds their
+    /// frames, on the shape's field with no atlases or textures ([`NoHeights`]).
     pub fn prepare(def: &AtlasDef, shape: &Shape) -> Result<Atlas, PrepareError> {
+        Atlas::prepare_in(def, shape, Arc::new(NoHeights))
+    }
+
+    /// [`Atlas::prepare`] on the field of `shape` with `heights` (what its
+    /// displacements and shell maps read).
+    pub fn prepare_in(
+        def: &AtlasDef,
+        shape: &Shape,
+        heights: Arc<dyn Heights>,
+    ) -> Result<Atlas, PrepareError> {
+        let field = Field::new(shape, &*heights);
         let s = scale(shape);
         let mut seeds = Vec::new();
         for (i, sd) in def.seeds.iter().enumerate() {
             let written = DVec3::from_array(sd.position);
-            let p = eval::project(shape, written, 1e-6 * s)
+            let p = eval::project(field, written, 1e-6 * s)
                 .ok_or(PrepareError::SeedOffSurface { seed: i })?;
-            let n = eval::gradient(shape, p).normalize_or_zero();
+            let n = eval::gradient(field, p).normalize_or_zero();
             let (e1, e2, default_tangent) = frame(n, sd.tangent.map(DVec3::from_array));
             seeds.push(PreparedSeed {
                 seed: Seed { p, n, e1, e2 },
                 moved: (p - written).length(),
                 default_tangent,
                 written,
-                written_distance: eval::distance(shape, written),
+                written_distance: eval::distance(field, written),
                 offset: DVec2::ZERO,
             });
         }
@@ -163,7 +196,7 @@ impl Atlas {
             .collect();
         let fixed: Vec<bool> = seeds.iter().map(|s| !s.default_tangent).collect();
         let mut plain: Vec<Seed> = seeds.iter().map(|s| s.seed).collect();
-        let f = |q: DVec3| eval::distance(shape, q);
+        let f = |q: DVec3| eval::distance(field, q);
         let fine = Params {
             h_gradient: 1e-6 * s,
             ..params.reference()
@@ -194,7 +227,13 @@ impl Atlas {
             coincident,
             mirror: a.mirror.map(|n| DVec3::from_array(n).normalize()),
             rest: RestQuery::default(),
+            heights: heights.clone(),
         })
+    }
+
+    /// The atlas's shape with the environment of its heights.
+    pub fn field(&self) -> Field<'_> {
+        Field::new(&self.shape, &*self.heights)
     }
 
     /// The f64 reference uses much finer difference steps than f32 can: the errors left
@@ -210,7 +249,7 @@ impl Atlas {
 
     /// Alg. 1 around seed `i`, with maximum distance `max_distance`.
     pub fn walk(&self, x: DVec3, i: usize, max_distance: f64) -> LogMap {
-        let f = |q: DVec3| eval::distance(&self.shape, q);
+        let f = |q: DVec3| eval::distance(self.field(), q);
         let params = Params {
             max_distance,
             ..self.params
@@ -366,7 +405,7 @@ impl Atlas {
     /// `onto` (the atlas views sample as they are, `atlas_K_at(p, false)`).
     pub fn sample_at_with(&self, p: DVec3, onto: bool) -> Sample {
         let at = |q: DVec3| if onto { self.onto(q) } else { q };
-        let Some((i, q)) = self.rest.locate(&self.shape, p) else {
+        let Some((i, q)) = self.rest.locate(self.field(), p) else {
             return self.sample(at(p));
         };
         let mut s = self.sample(at(q));
@@ -447,17 +486,17 @@ impl Atlas {
     /// [`Atlas::onto_tolerance`] (one step of Eq. 57, the generated `atlas_K_onto`), as
     /// on a displaced shape painted with its base's atlas.
     pub fn onto(&self, x: DVec3) -> DVec3 {
-        let f = eval::distance(&self.shape, x);
+        let f = eval::distance(self.field(), x);
         if f.abs() <= self.onto_tolerance() {
             return x;
         }
-        let g = eval::gradient(&self.shape, x);
+        let g = eval::gradient(self.field(), x);
         x - g * (f / g.length_squared().max(1e-300))
     }
 
     /// The surface normal used at a point.
     pub fn normal(&self, x: DVec3) -> DVec3 {
-        let f = |q: DVec3| eval::distance(&self.shape, q);
+        let f = |q: DVec3| eval::distance(self.field(), q);
         gradient(&f, x, self.params.h_gradient).normalize_or_zero()
     }
 }

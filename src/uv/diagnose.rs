@@ -7,9 +7,11 @@ use super::merge::{self, Remedy, Unreachable, HOLONOMY_LIMIT_DEG, RESIDUAL_LIMIT
 use super::Status;
 use crate::codes;
 use crate::diagnostic::Diagnostic;
+use crate::ir::texture::Textures;
 use crate::ir::{self, eval};
 use crate::sema::{AtlasDef, Program};
 use glam::DVec3;
+use std::sync::Arc;
 
 /// The inputs [`Atlas::prepare`] reads, without spans: the shape's IR, the atlas's
 /// name and settings, its seeds' names, positions and tangents, its merges.
@@ -42,10 +44,14 @@ pub static PREPARE_STATS: [std::sync::atomic::AtomicUsize; 2] = [
     std::sync::atomic::AtomicUsize::new(0),
 ];
 
-fn prepare_cached(def: &AtlasDef, shape: &ir::Shape) -> Result<Atlas, PrepareError> {
+fn prepare_cached(
+    def: &AtlasDef,
+    shape: &ir::Shape,
+    heights: impl FnOnce() -> Arc<dyn ir::Heights>,
+) -> Result<Atlas, PrepareError> {
     use std::sync::atomic::Ordering::Relaxed;
     if !shape.heights().is_empty() {
-        return Atlas::prepare(def, shape);
+        return Atlas::prepare_in(def, shape, heights());
     }
     let key = prepare_key(def, shape);
     // A poisoned lock (a panic elsewhere while holding it) only loses the cache.
@@ -71,9 +77,18 @@ fn prepare_cached(def: &AtlasDef, shape: &ir::Shape) -> Result<Atlas, PrepareErr
     value
 }
 
+/// What an atlas on a displaced shape evaluates its heights with: the environment
+/// made of the atlases prepared before it and the program's textures (the CPU
+/// reference layer's `reference::Env::shared`, which lies above this one).
+pub type MakeHeights<'a> = &'a dyn Fn(&[Option<Atlas>], &Textures) -> Arc<dyn ir::Heights>;
+
 /// Every atlas of a checked, error-free program prepared (None where it cannot be),
-/// with the diagnostics of their geometry.
-pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
+/// with the diagnostics of their geometry. `heights` makes the environment of an
+/// atlas whose shape has displacements or shell maps.
+pub fn prepare_all(
+    program: &Program,
+    heights: MakeHeights,
+) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
     let mut out = Vec::new();
     let mut diags = Vec::new();
     // What one evaluation of each atlas's shape costs, and one walk of the atlas: an
@@ -89,9 +104,9 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
         .chain(program.render.as_ref().map(|r| &r.target))
         .any(|v| crate::sema::displaced(v).is_some());
     let textures = if displaced {
-        ir::material::Textures::load(program).unwrap_or_default()
+        Textures::load(program).unwrap_or_default()
     } else {
-        ir::material::Textures::default()
+        Textures::default()
     };
     let target = program
         .render
@@ -103,8 +118,8 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
             walks.push(f64::INFINITY);
             continue;
         };
-        // A height that reads an atlas declared later is not bound yet: the CPU evaluates
-        // its band's bound, not a walk.
+        // A height that reads an atlas declared later is not in the environment yet: the
+        // CPU evaluates its band's bound, not a walk.
         let cost = shape.eval_cost(|k| walks.get(k.index()).copied().unwrap_or(1.0));
         walks.push(walk_evals(def) * cost);
         if !(cost <= MAX_EVAL_COST) {
@@ -112,8 +127,7 @@ pub fn prepare_all(program: &Program) -> (Vec<Option<Atlas>>, Vec<Diagnostic>) {
             out.push(None);
             continue;
         }
-        shape.bind_heights(&out, &textures);
-        match prepare_cached(def, &shape) {
+        match prepare_cached(def, &shape, || heights(&out, &textures)) {
             Ok(mut a) => {
                 if let Some(t) = &target {
                     a.rest = ir::rest::RestQuery::find(t, &shape);
@@ -425,7 +439,7 @@ fn unreachable_merges(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) 
 /// What fixes an unreachable merge: a setting under which the walk succeeds, tried at
 /// compile time ([`merge::remedy`]), or else how to place the merge.
 fn help(atlas: &Atlas, u: &Unreachable) -> String {
-    let f = |q: DVec3| eval::distance(&atlas.shape, q);
+    let f = |q: DVec3| eval::distance(atlas.field(), q);
     let seeds: Vec<_> = atlas.seeds.iter().map(|s| s.seed).collect();
     let params = atlas.params.reference();
     match merge::remedy(&f, &seeds, u.a, u.b, u.status, &params) {

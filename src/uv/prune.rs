@@ -27,7 +27,7 @@
 //! are replaced by 1e30, which leaves smin(a, 1e30, k) = a exactly, in f32 as in f64.
 
 use crate::ir::group::box_distance;
-use crate::ir::{Csg, NodeId, Op, Shape};
+use crate::ir::{Csg, Field, NodeId, Op, Shape};
 use glam::DVec3;
 
 /// Bits of the pruning mask (one `u32`).
@@ -182,35 +182,38 @@ impl Pruning {
 
     /// The field as the generated code evaluates it in a walk: the pruned value inside
     /// the guard and the window, the full one elsewhere.
-    pub fn field(&self, shape: &Shape, p: DVec3, walk: WalkMask) -> f64 {
+    pub fn field<'a>(&self, field: impl Into<Field<'a>>, p: DVec3, walk: WalkMask) -> f64 {
+        let field = field.into();
         if walk.mask != u32::MAX && (p - walk.centre).length() <= GUARD * walk.reach + self.eps {
-            let v = self.pruned(shape, p, walk.mask);
+            let v = self.pruned(field, p, walk.mask);
             if v.abs() < WINDOW * walk.reach + self.eps {
                 return v;
             }
         }
-        crate::ir::eval::distance(shape, p)
+        crate::ir::eval::distance(field, p)
     }
 
     /// The field with the candidates whose bits are clear replaced by 1e30 (no guard).
-    pub fn pruned(&self, shape: &Shape, p: DVec3, mask: u32) -> f64 {
-        self.node(shape, shape.root(), p, mask)
+    pub fn pruned<'a>(&self, field: impl Into<Field<'a>>, p: DVec3, mask: u32) -> f64 {
+        let field = field.into();
+        self.node(field, field.shape.root(), p, mask)
     }
 
-    fn node(&self, shape: &Shape, id: NodeId, p: DVec3, mask: u32) -> f64 {
+    fn node(&self, field: Field, id: NodeId, p: DVec3, mask: u32) -> f64 {
+        let shape = field.shape;
         if !self.on_chain[id.index()] {
-            return crate::ir::eval::node_distance(shape, id, p);
+            return crate::ir::eval::node_distance(field, id, p);
         }
         match shape[id].op {
             Op::Csg { k, a, b, .. } => {
                 let value = |c: NodeId| match self.bit(c) {
                     Some(bit) if mask & (1 << bit) == 0 => 1e30,
-                    _ => self.node(shape, c, p, mask),
+                    _ => self.node(field, c, p, mask),
                 };
                 crate::ir::eval::smin(value(a), value(b), k)
             }
-            Op::Paint { child, .. } => self.node(shape, child, p, mask),
-            _ => crate::ir::eval::node_distance(shape, id, p),
+            Op::Paint { child, .. } => self.node(field, child, p, mask),
+            _ => crate::ir::eval::node_distance(field, id, p),
         }
     }
 }

@@ -6,7 +6,7 @@
 //! the seed under a pixel.
 
 use crate::driver::Analysis;
-use crate::ir::{eval, Shape};
+use crate::ir::{eval, Field};
 use crate::view::{trace_cpu, View};
 use glam::DVec3;
 
@@ -20,7 +20,13 @@ pub struct SurfacePick {
 
 /// The surface point seen through pixel position (`px`, `py`) (pixel centres at +0.5,
 /// y down) of `view`, or `None` on a miss.
-pub fn surface(shape: &Shape, view: &View, px: f64, py: f64) -> Option<SurfacePick> {
+pub fn surface<'s>(
+    shape: impl Into<Field<'s>>,
+    view: &View,
+    px: f64,
+    py: f64,
+) -> Option<SurfacePick> {
+    let shape: Field = shape.into();
     let c = &view.camera;
     let dir = c.ray(px, py, view.width as f64, view.height as f64);
     // A conservative trace (half steps) to the first hit, then Newton along the ray.
@@ -89,7 +95,7 @@ pub fn project(view: &View, p: DVec3) -> Option<(f64, f64, f64)> {
 /// something in front of it).
 pub fn seed(
     analysis: &Analysis,
-    shape: &Shape,
+    shape: Field<'_>,
     view: &View,
     px: f64,
     py: f64,
@@ -131,7 +137,7 @@ pub fn atlas_at(analysis: &Analysis, p: DVec3, scale: f64) -> Option<String> {
     }
     prepared
         .iter()
-        .filter(|a| eval::distance(&a.shape, p).abs() < 1e-3 * scale)
+        .filter(|a| eval::distance(a.field(), p).abs() < 1e-3 * scale)
         .min_by(|a, b| {
             let near = |a: &crate::uv::Atlas| {
                 a.seeds

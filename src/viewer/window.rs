@@ -11,7 +11,6 @@ use super::reload::{Outcome, Reloader};
 use super::{interactive_divisor, Orbit, VIEWS};
 use crate::codegen;
 use crate::gpu::{Backend, Gpu, Renderer, Targets, ViewMode};
-use crate::ir::Shape;
 use crate::view::View;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -223,10 +222,13 @@ impl App {
         eprintln!("{message}");
     }
 
-    fn shape(&self) -> Option<&Shape> {
+    /// The shape on screen with the environment of its heights (for picking).
+    fn shape(&self) -> Option<crate::ir::Field<'_>> {
         let loaded = self.reloader.good.as_ref()?;
-        let scene = loaded.doc.analysis.scene.as_ref()?;
-        crate::driver::pick_shape(scene, self.options.shape.as_deref()).ok()
+        let analysis = &loaded.doc.analysis;
+        let scene = analysis.scene.as_ref()?;
+        let shape = crate::driver::pick_shape(scene, self.options.shape.as_deref()).ok()?;
+        Some(analysis.field(shape))
     }
 
     /// The view the loaded scene asks for (its `render` item; framed with `--shape`), as
@@ -237,7 +239,7 @@ impl App {
             Some(_) => None,
             None => loaded.doc.analysis.program.render.as_ref(),
         };
-        Some(View::new(render, self.shape()?))
+        Some(View::new(render, self.shape()?.shape))
     }
 
     /// The view of the loaded scene at the window's size, with the viewer's camera.

@@ -194,13 +194,14 @@ pub fn assert_borders_identical(
 /// `n` points on the surface of `shape` with their unit normals: random points of its
 /// framing box projected onto the zero set (to 1e-9), where the gradient is not
 /// degenerate and `keep` accepts the point. Deterministic for a `seed`.
-pub fn surface_points(
-    shape: &sdfc::ir::Shape,
+pub fn surface_points<'a>(
+    shape: impl Into<sdfc::ir::Field<'a>>,
     n: usize,
     seed: u64,
     keep: impl Fn(glam::DVec3) -> bool,
 ) -> Vec<(glam::DVec3, glam::DVec3)> {
     use glam::DVec3;
+    let shape: sdfc::ir::Field = shape.into();
     let b = shape.framing_bounds();
     let mut rng = Rng(seed);
     let mut out = Vec::new();

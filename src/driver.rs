@@ -335,11 +335,7 @@ pub fn check_all_reusing(
         (None, Some(first)) => Some(first.name.clone()),
         (None, None) => return analysis,
     };
-    let options = codegen::Options {
-        shape,
-        ..Default::default()
-    };
-    match compile(&analysis, &options) {
+    match compile_shape(&analysis, shape.as_deref(), &codegen::Options::default()) {
         Ok(c) => analysis.compiled = Some(Arc::new(c)),
         Err(CompileError::Scene(d)) => analysis.diagnostics.extend(d),
         Err(CompileError::Internal { diagnostic, .. }) => analysis.diagnostics.push(*diagnostic),
@@ -353,12 +349,22 @@ pub fn check_all_reusing(
 /// Code generation and naga validation of a checked scene, reusing its IR scene and
 /// prepared atlases.
 pub fn compile(analysis: &Analysis, options: &codegen::Options) -> Result<Compiled, CompileError> {
-    let module = generate(analysis, options)?;
+    compile_shape(analysis, None, options)
+}
+
+/// [`compile`] with the named `let` shape rendered instead of the render item's target
+/// (`--shape NAME`; `None`: the target).
+pub fn compile_shape(
+    analysis: &Analysis,
+    shape: Option<&str>,
+    options: &codegen::Options,
+) -> Result<Compiled, CompileError> {
+    let module = generate_shape(analysis, shape, options)?;
     #[cfg(feature = "test-hooks")]
     let module = test_hooks::corrupt(module);
     match codegen::validate(&module.wgsl) {
         Ok(validated) => {
-            if let Some(d) = inlined_too_large(analysis, options, &validated.module) {
+            if let Some(d) = inlined_too_large(analysis, shape, options, &validated.module) {
                 return Err(CompileError::Scene(vec![d]));
             }
             Ok(Compiled {
@@ -379,6 +385,7 @@ pub fn compile(analysis: &Analysis, options: &codegen::Options) -> Result<Compil
 /// atlas on a displaced shape (walks nested in walks are what multiplies).
 fn inlined_too_large(
     analysis: &Analysis,
+    shape: Option<&str>,
     options: &codegen::Options,
     module: &naga::Module,
 ) -> Option<Diagnostic> {
@@ -388,7 +395,7 @@ fn inlined_too_large(
         return None;
     }
     let program = &analysis.program;
-    let span = match options.shape.as_deref() {
+    let span = match shape {
         Some(name) => program.defs.iter().find(|d| d.name == name).map(|d| d.span),
         None => program.render.as_ref().map(|r| r.target_span),
     }
@@ -434,6 +441,15 @@ fn inlined_too_large(
 
 /// The generated (not yet validated) module of a checked scene.
 pub fn generate(analysis: &Analysis, options: &codegen::Options) -> Result<Module, CompileError> {
+    generate_shape(analysis, None, options)
+}
+
+/// [`generate`] for the named `let` shape (`None`: the render item's target).
+pub fn generate_shape(
+    analysis: &Analysis,
+    name: Option<&str>,
+    options: &codegen::Options,
+) -> Result<Module, CompileError> {
     let scene = match &analysis.scene {
         Some(s) if !analysis.has_errors() => s,
         _ => {
@@ -441,7 +457,6 @@ pub fn generate(analysis: &Analysis, options: &codegen::Options) -> Result<Modul
             return Err(CompileError::Scene(errors.cloned().collect()));
         }
     };
-    let name = options.shape.as_deref();
     let shape = pick_shape(scene, name).map_err(CompileError::Usage)?;
     if let Some(name) = options.atlas.as_deref() {
         pick_atlas(&analysis.program, Some(name)).map_err(CompileError::Usage)?;

@@ -135,17 +135,20 @@ fn bad_span_of(text: &str, diagnostics: &[sdfc::diagnostic::Diagnostic]) -> Opti
     None
 }
 
-/// The options `check_all` compiles with, with the loop walk.
-fn loop_options(analysis: &sdfc::driver::Analysis) -> sdfc::codegen::Options {
+/// What `check_all` compiles (the render target, else the first shape), with the loop
+/// walk.
+fn compile_loop(
+    analysis: &sdfc::driver::Analysis,
+) -> Result<sdfc::driver::Compiled, sdfc::driver::CompileError> {
     let shape = match (&analysis.program.render, analysis.scene.as_ref()) {
-        (None, Some(scene)) => scene.shapes.first().map(|s| s.name.clone()),
+        (None, Some(scene)) => scene.shapes.first().map(|s| s.name.as_str()),
         _ => None,
     };
-    sdfc::codegen::Options {
-        shape,
+    let options = sdfc::codegen::Options {
         walk: sdfc::codegen::WalkForm::Loop,
         ..Default::default()
-    }
+    };
+    sdfc::driver::compile_shape(analysis, shape, &options)
 }
 
 /// Runs one scene through `check_all` on its own thread (8 MiB of stack, as the main
@@ -187,7 +190,7 @@ fn run_with(text: &str, limit: Duration, loop_walk: bool) -> Outcome {
                     analysis
                         .diagnostics
                         .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
-                    match sdfc::driver::compile(&analysis, &loop_options(&analysis)) {
+                    match compile_loop(&analysis) {
                         Ok(_) => loop_ok = Some(true),
                         Err(sdfc::driver::CompileError::Internal { diagnostic, .. }) => {
                             failure = Some(Outcome::Internal(format!(
@@ -898,7 +901,7 @@ fn one_seed() {
             .diagnostics
             .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
         if analysis.scene.is_some() {
-            match sdfc::driver::compile(&analysis, &loop_options(&analysis)) {
+            match compile_loop(&analysis) {
                 Ok(_) => eprintln!("the loop walk builds it"),
                 Err(sdfc::driver::CompileError::Scene(d)) => eprintln!(
                     "with the loop walk:\n{}",

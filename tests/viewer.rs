@@ -357,7 +357,7 @@ fn the_reload_state_machine_keeps_the_last_good_scene() {
     let other = "render sphere(2) { size = [8, 8]; }";
     let bad = "render sphere(oops) { size = [8, 8]; }";
     let access = sdfc::access::Access::new(None);
-    let mut r: Reloader<u32> = Reloader::new("scene.sdf", access, Default::default());
+    let mut r: Reloader<u32> = Reloader::new("scene.sdf", access, None, Default::default());
     let mut builds = 0;
     let mut build = |_: &sdfc::driver::Compiled| {
         builds += 1;

@@ -228,7 +228,6 @@ pub fn run(args: BakeArgs) -> ExitCode {
         }
     }
     let codegen_options = sdfc::codegen::Options {
-        shape: args.shape.clone(),
         walk: args.walk,
         seed_grid: sdfc::codegen::SeedGridChoice::Auto,
         atlas: None,
@@ -240,10 +239,11 @@ pub fn run(args: BakeArgs) -> ExitCode {
         seed_data: sdfc::codegen::SeedData::Auto,
         bounds: sdfc::codegen::Bounds::Off,
     };
-    let (_, analysis, compiled) = match compile::build(&args.scene, &codegen_options) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
+    let (_, analysis, compiled) =
+        match compile::build(&args.scene, args.shape.as_deref(), &codegen_options) {
+            Ok(x) => x,
+            Err(code) => return code,
+        };
     let Some(scene) = &analysis.scene else {
         return ExitCode::from(exit::SCENE);
     };
@@ -363,11 +363,10 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
     };
     let base = super::base_dir(scene);
     let codegen = sdfc::codegen::Options {
-        shape: args.shape.clone(),
         walk: sdfc::codegen::WalkForm::Loop,
         ..Default::default()
     };
-    let (_, analysis, compiled) = match compile::build(scene, &codegen) {
+    let (_, analysis, compiled) = match compile::build(scene, args.shape.as_deref(), &codegen) {
         Ok(x) => x,
         Err(code) => return code,
     };

@@ -47,10 +47,9 @@ pub fn run(args: BenchArgs) -> ExitCode {
     };
     let t = Instant::now();
     let base = Options {
-        shape: args.shape.clone(),
         ..Default::default()
     };
-    let (source, analysis, unrolled) = match compile::build(&scene, &base) {
+    let (source, analysis, unrolled) = match compile::build(&scene, args.shape.as_deref(), &base) {
         Ok(x) => x,
         Err(code) => return code,
     };
@@ -58,7 +57,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
     let name = scene.display().to_string();
     // The other forms from the same analysis: the geometry and lowering ran once.
     let variant = |options: Options| {
-        sdfc::driver::compile(&analysis, &options)
+        sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &options)
             .map(|c| c.module)
             .map_err(|e| compile::report(&name, &source, e))
     };
@@ -213,7 +212,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
                 walk,
                 ..base.clone()
             };
-            match sdfc::driver::compile(&without, &options) {
+            match sdfc::driver::compile_shape(&without, args.shape.as_deref(), &options) {
                 Ok(c) => unmapped.push(c.module),
                 Err(e) => return compile::report(&name, &source, e),
             }
@@ -237,7 +236,7 @@ pub fn run(args: BenchArgs) -> ExitCode {
                 walk: WalkForm::Loop,
                 ..base.clone()
             };
-            match sdfc::driver::compile(&with, &options) {
+            match sdfc::driver::compile_shape(&with, args.shape.as_deref(), &options) {
                 Ok(c) => refined.push(c.module),
                 Err(e) => return compile::report(&name, &source, e),
             }

@@ -13,11 +13,13 @@ use std::process::ExitCode;
 /// come back as the exit status.
 pub fn build(
     path: &Path,
+    shape: Option<&str>,
     options: &codegen::Options,
 ) -> Result<(String, Analysis, Compiled), ExitCode> {
     let (source, analysis) = load(path)?;
     let name = path.display().to_string();
-    let compiled = driver::compile(&analysis, options).map_err(|e| report(&name, &source, e))?;
+    let compiled =
+        driver::compile_shape(&analysis, shape, options).map_err(|e| report(&name, &source, e))?;
     Ok((source, analysis, compiled))
 }
 
@@ -83,7 +85,6 @@ pub(super) fn save_for_report(name: &str, wgsl: &str) {
 
 pub fn run(args: CompileArgs) -> ExitCode {
     let options = codegen::Options {
-        shape: args.shape.clone(),
         walk: args.walk,
         seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
@@ -104,7 +105,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         );
         return ExitCode::from(super::exit::USAGE);
     }
-    let (_, _, compiled) = match build(&args.scene, &options) {
+    let (_, _, compiled) = match build(&args.scene, args.shape.as_deref(), &options) {
         Ok(x) => x,
         Err(code) => return code,
     };

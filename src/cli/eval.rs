@@ -168,12 +168,11 @@ fn compile(
     source: &str,
 ) -> Result<sdfc::codegen::Module, Failed> {
     let options = sdfc::codegen::Options {
-        shape: args.shape.clone(),
         atlas: args.atlas.clone(),
         ..Default::default()
     };
     let name = args.scene.display().to_string();
-    driver::compile(analysis, &options)
+    driver::compile_shape(analysis, args.shape.as_deref(), &options)
         .map(|c| c.module)
         .map_err(|e| super::compile::report(&name, source, e))
 }

@@ -94,7 +94,6 @@ pub fn run(args: RenderArgs) -> ExitCode {
     }
     let compile_start = Instant::now();
     let options = sdfc::codegen::Options {
-        shape: args.shape.clone(),
         walk: args.walk,
         seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
@@ -106,7 +105,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
         seed_data: args.seed_data,
         bounds: args.bounds,
     };
-    let (_, analysis, compiled) = match compile::build(&args.scene, &options) {
+    let (_, analysis, compiled) = match compile::build(&args.scene, args.shape.as_deref(), &options)
+    {
         Ok(x) => x,
         Err(code) => return code,
     };

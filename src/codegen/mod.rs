@@ -174,8 +174,6 @@ pub const ENTRY_POINTS: &[(&str, &str)] = &[
 /// Choices for [`generate`].
 #[derive(Debug, Clone, Default)]
 pub struct Options {
-    /// Render this named shape instead of the render item's target.
-    pub shape: Option<String>,
     pub walk: WalkForm,
     /// The atlas of the atlas views and `cs_atlas` (default: the first).
     pub atlas: Option<String>,

@@ -43,6 +43,8 @@ pub struct Reloader<P> {
     /// The file's name in reports.
     name: String,
     access: Access,
+    /// The `let` shape shown instead of the render item's target (`--shape`).
+    shape: Option<String>,
     options: codegen::Options,
     pub good: Option<Loaded<P>>,
     /// The report of the file as it is, while it does not build: the window is stale.
@@ -52,10 +54,16 @@ pub struct Reloader<P> {
 }
 
 impl<P> Reloader<P> {
-    pub fn new(name: impl Into<String>, access: Access, options: codegen::Options) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        access: Access,
+        shape: Option<String>,
+        options: codegen::Options,
+    ) -> Self {
         Reloader {
             name: name.into(),
             access,
+            shape,
             options,
             good: None,
             stale: None,
@@ -86,15 +94,17 @@ impl<P> Reloader<P> {
                 false,
             ))
         } else {
-            driver::compile(&analysis, &self.options).map_err(|e| match e {
-                CompileError::Scene(d) => diagnostic::render(&self.name, text, &d, false),
-                CompileError::Usage(m) => format!("error: {m}\n"),
-                CompileError::Internal {
-                    diagnostic, naga, ..
-                } => format!(
-                    "{}{naga}\n",
-                    diagnostic::render(&self.name, text, &[*diagnostic], false)
-                ),
+            driver::compile_shape(&analysis, self.shape.as_deref(), &self.options).map_err(|e| {
+                match e {
+                    CompileError::Scene(d) => diagnostic::render(&self.name, text, &d, false),
+                    CompileError::Usage(m) => format!("error: {m}\n"),
+                    CompileError::Internal {
+                        diagnostic, naga, ..
+                    } => format!(
+                        "{}{naga}\n",
+                        diagnostic::render(&self.name, text, &[*diagnostic], false)
+                    ),
+                }
             })
         };
         let compile_time = started.elapsed();

@@ -137,12 +137,16 @@ pub fn run(options: Options) -> Result<(), ViewError> {
         _ => PathBuf::from("."),
     };
     let codegen_options = codegen::Options {
-        shape: options.shape.clone(),
         walk: options.walk,
         ..Default::default()
     };
     let mut app = App {
-        reloader: Reloader::new(name.clone(), options.access.clone(), codegen_options),
+        reloader: Reloader::new(
+            name.clone(),
+            options.access.clone(),
+            options.shape.clone(),
+            codegen_options,
+        ),
         editor: SeedEditor::new(&options.scene, options.access.clone()),
         proxy: event_loop.create_proxy(),
         mode: VIEWS

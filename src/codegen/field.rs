@@ -4,6 +4,7 @@
 
 use super::emit::lit;
 use crate::sema::builtins::BuiltinId;
+use crate::sema::math::{self, Math};
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, SurfaceInput, Ty, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 
@@ -187,15 +188,8 @@ fn binary(
         _ => Ty::Float,
     };
     let (a, b) = (widen(l, &numeric, tex)?, widen(r, &numeric, tex)?);
-    Ok(match op {
-        BinaryOp::Or => format!("({a} || {b})"),
-        BinaryOp::And => format!("({a} && {b})"),
-        BinaryOp::Rem => format!("({a} - {b} * floor({a} / {b}))"),
-        BinaryOp::Eq | BinaryOp::Ne if matches!(numeric, Ty::Vec(_)) && *ty == Ty::Bool => {
-            format!("all({a} {} {b})", op.symbol())
-        }
-        _ => format!("({a} {} {b})", op.symbol()),
-    })
+    let vectors = matches!(numeric, Ty::Vec(_)) && *ty == Ty::Bool;
+    Ok(math::wgsl_binary(op, &a, &b, vectors))
 }
 
 fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Unsupported> {
@@ -206,6 +200,20 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
         .map(|a| a.ty().base().clone())
         .find(|t| matches!(t, Ty::Vec(_)))
         .unwrap_or(Ty::Float);
+    if let Some(m) = Math::of(builtin) {
+        // The row's WGSL function, on arguments widened to the call's type.
+        let written = args
+            .iter()
+            .map(|a| {
+                if m.widens() {
+                    widen(a, &t_ty, tex)
+                } else {
+                    field(a, tex)
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        return Ok(m.wgsl_call(&written, t_ty == Ty::Float));
+    }
     let mut f = |v: &Value| field(v, tex);
     Ok(match builtin {
         B::Checker => format!("sdfc_checker({}, {})", f(&args[0])?, f(&args[1])?),
@@ -239,87 +247,8 @@ fn call(builtin: BuiltinId, args: &[Value], tex: &mut Uses) -> Result<String, Un
             let a = format!("atlas_sample_{}", k.index());
             format!("sdfc_normal_map({texel}, {a}.tangent, {a}.bitangent, n, {strength}, {green})")
         }
-        B::Cross => format!("cross({}, {})", f(&args[0])?, f(&args[1])?),
-        // WGSL's normalize takes only vectors; a float's is its sign.
-        B::Normalize if args[0].ty().base() == &Ty::Float => format!("sign({})", f(&args[0])?),
-        B::Length | B::Normalize => format!("{name}({})", f(&args[0])?),
-        // WGSL's dot takes only vectors; two floats' is their product.
-        B::Dot if t_ty == Ty::Float => format!("({} * {})", f(&args[0])?, f(&args[1])?),
-        // The WGSL builtin of the same name, on arguments widened to the call's type.
-        B::Sin
-        | B::Cos
-        | B::Tan
-        | B::Asin
-        | B::Acos
-        | B::Atan
-        | B::Atan2
-        | B::Sqrt
-        | B::Abs
-        | B::Floor
-        | B::Ceil
-        | B::Fract
-        | B::Sign
-        | B::Exp
-        | B::Log
-        | B::Pow
-        | B::Min
-        | B::Max
-        | B::Clamp
-        | B::Mix
-        | B::Smoothstep
-        | B::Step
-        | B::Distance
-        | B::Dot
-        | B::Radians
-        | B::Degrees => format!(
-            "{name}({})",
-            args.iter()
-                .map(|a| widen(a, &t_ty, tex))
-                .collect::<Result<Vec<_>, _>>()?
-                .join(", ")
-        ),
-        B::Sphere
-        | B::Box
-        | B::RoundBox
-        | B::BoxFrame
-        | B::Torus
-        | B::Capsule
-        | B::Cylinder
-        | B::Cone
-        | B::CappedCone
-        | B::Plane
-        | B::Ellipsoid
-        | B::Octahedron
-        | B::HexPrism
-        | B::TriPrism
-        | B::Pyramid
-        | B::Link
-        | B::Union
-        | B::Intersection
-        | B::Difference
-        | B::SmoothUnion
-        | B::SmoothIntersection
-        | B::SmoothDifference
-        | B::Translate
-        | B::Rotate
-        | B::RotateX
-        | B::RotateY
-        | B::RotateZ
-        | B::Scale
-        | B::Paint
-        | B::Displace
-        | B::ShellMap
-        | B::Twist
-        | B::Bend
-        | B::Repeat
-        | B::Mirror
-        | B::Elongate
-        | B::Round
-        | B::Shell
-        | B::Image
-        | B::Orbit
-        | B::LookAt
-        | B::Sun => return Err(Unsupported(format!("`{name}` is not a surface field"))),
+        // Shapes, images and render settings; math builtins are written above.
+        _ => return Err(Unsupported(format!("`{name}` is not a surface field"))),
     })
 }
 

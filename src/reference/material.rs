@@ -14,9 +14,9 @@
 //! - the atlas attributes of the generated `atlas_K(p)` ([`AtlasValues`]), sampled once
 //!   per evaluation at `p`, failed statuses included (uv 0, distance 3e38, identity
 //!   transport);
-//! - every builtin the emitter accepts in a field, with WGSL's conventions where they
-//!   differ from the constant folder's (`normalize` of a float is its sign, `==`/`!=`
-//!   of vectors are `all(a op b)`, `%` is `a - b * floor(a / b)`), and textures through
+//! - every builtin the emitter accepts in a field, the math builtins and operators by
+//!   their one definition in `sema::math` (which the constant folder and the emitter
+//!   read too, so folded and run values agree), and textures through
 //!   [`texture::MipChain::sample_grad`] (sRGB-decoded in `color` and `emission`, linear
 //!   in `roughness` and `metallic`, as the emitter picks the texture format).
 //!

@@ -12,6 +12,7 @@ mod check;
 mod displace;
 mod expr;
 pub mod fold;
+pub mod math;
 pub mod settings;
 pub mod size;
 pub mod types;

@@ -3,6 +3,7 @@
 //! accepts in a field.
 
 use super::*;
+use crate::sema::math::{self, Math};
 
 /// A per-point value: up to four components, or a bool.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,15 +201,14 @@ impl Cx<'_> {
         match op {
             Or => V::Bool(a.bool() || b.bool()),
             And => V::Bool(a.bool() && b.bool()),
-            Add => a.zip(b, |x, y| x + y),
-            Sub => a.zip(b, |x, y| x - y),
-            Mul => a.zip(b, |x, y| x * y),
-            Div => a.zip(b, |x, y| x / y),
+            Add | Sub | Mul | Div => {
+                a.zip(b, |x, y| math::arithmetic(op, x, y).unwrap_or(f64::NAN))
+            }
             Rem => {
                 for (x, y) in a.comps().iter().zip(b.comps()) {
                     self.jump(to_integer(x / y));
                 }
-                a.zip(b, |x, y| x - y * (x / y).floor())
+                a.zip(b, |x, y| math::arithmetic(op, x, y).unwrap_or(f64::NAN))
             }
             Eq | Ne => {
                 if let (V::Bool(x), V::Bool(y)) = (a, b) {
@@ -217,23 +217,13 @@ impl Cx<'_> {
                 for (x, y) in a.comps().iter().zip(b.comps()) {
                     self.jump((x - y).abs());
                 }
-                // `all(a == b)` / `all(a != b)` for vectors, as the emitter writes it.
-                V::Bool(
-                    a.comps()
-                        .iter()
-                        .zip(b.comps())
-                        .all(|(x, y)| (x == y) == (op == Eq)),
-                )
+                // `all(a == b)` / `any(a != b)` for vectors, as the emitter writes it.
+                V::Bool(math::vectors_equal(op, a.comps(), b.comps()))
             }
             Lt | Le | Gt | Ge => {
                 let (x, y) = (a.x(), b.x());
                 self.jump((x - y).abs());
-                V::Bool(match op {
-                    Lt => x < y,
-                    Le => x <= y,
-                    Gt => x > y,
-                    _ => x >= y,
-                })
+                V::Bool(math::compare(op, x, y) == Some(true))
             }
         }
     }
@@ -247,14 +237,6 @@ impl Cx<'_> {
             return self.sample_normal(args);
         }
         let vals: Vec<V> = args.iter().map(|a| self.value(a)).collect();
-        // The call's type: the first vector argument's (the emitter's `t_ty`).
-        let n = args
-            .iter()
-            .find_map(|a| match a.ty().base() {
-                Ty::Vec(k) => Some(*k as usize),
-                _ => None,
-            })
-            .unwrap_or(1);
         let arg = |i: usize| vals.get(i).copied().unwrap_or(V::float(0.0));
         match builtin {
             B::Checker => {
@@ -272,155 +254,32 @@ impl Cx<'_> {
                 }
                 V::float(if f.x < width || f.y < width { 1.0 } else { 0.0 })
             }
-            B::Cross => vec3v(arg(0).vec3().cross(arg(1).vec3())),
-            B::Normalize if n == 1 => {
-                let x = arg(0).x();
-                self.jump(x.abs());
-                V::float(wgsl_sign(x))
-            }
-            B::Normalize => {
-                let len = arg(0).comps().iter().map(|x| x * x).sum::<f64>().sqrt();
-                arg(0).map(|x| x / len)
-            }
-            B::Length => V::float(arg(0).comps().iter().map(|x| x * x).sum::<f64>().sqrt()),
-            B::Dot if n == 1 => V::float(arg(0).x() * arg(1).x()),
-            _ => {
-                let widened: Vec<V> = vals.iter().map(|v| v.widen(n)).collect();
-                self.math(builtin, &widened)
-            }
+            _ => match Math::of(builtin) {
+                Some(m) => self.math(m, args, &vals),
+                // Not surface fields (rejected by `MaterialEval::new`, as by the emitter).
+                None => V::float(0.0),
+            },
         }
     }
 
-    /// The builtins the emitter writes as the WGSL builtin of the same name, on
-    /// arguments widened to the call's type.
-    pub(super) fn math(&mut self, builtin: BuiltinId, a: &[V]) -> V {
-        use BuiltinId as B;
-        let arg = |i: usize| a.get(i).copied().unwrap_or(V::float(0.0));
-        let x = arg(0);
-        match builtin {
-            B::Sin => x.map(f64::sin),
-            B::Cos => x.map(f64::cos),
-            B::Tan => x.map(f64::tan),
-            B::Asin => x.map(f64::asin),
-            B::Acos => x.map(f64::acos),
-            B::Atan => x.map(f64::atan),
-            B::Atan2 => x.zip(arg(1), f64::atan2),
-            B::Sqrt => x.map(f64::sqrt),
-            B::Abs => x.map(f64::abs),
-            B::Floor | B::Ceil | B::Fract => {
-                for c in x.comps() {
-                    self.jump(to_integer(*c));
-                }
-                x.map(match builtin {
-                    B::Floor => f64::floor,
-                    B::Ceil => f64::ceil,
-                    _ => |v: f64| v - v.floor(),
-                })
-            }
-            B::Sign => {
-                for c in x.comps() {
-                    self.jump(c.abs());
-                }
-                x.map(wgsl_sign)
-            }
-            B::Exp => x.map(f64::exp),
-            B::Log => x.map(f64::ln),
-            B::Pow => x.zip(arg(1), f64::powf),
-            B::Min => x.zip(arg(1), f64::min),
-            B::Max => x.zip(arg(1), f64::max),
-            B::Clamp => x.zip(arg(1), f64::max).zip(arg(2), f64::min),
-            B::Mix => {
-                let t = arg(2);
-                let one_minus = t.map(|t| 1.0 - t);
-                x.zip(one_minus, |a, w| a * w)
-                    .zip(arg(1).zip(t, |b, t| b * t), |p, q| p + q)
-            }
-            B::Smoothstep => {
-                let (lo, hi) = (x, arg(1));
-                let mut out = arg(2);
-                if let V::Num(c, k) = &mut out {
-                    for ((v, l), h) in c[..*k].iter_mut().zip(lo.comps()).zip(hi.comps()) {
-                        let t = ((*v - l) / (h - l)).clamp(0.0, 1.0);
-                        *v = t * t * (3.0 - 2.0 * t);
-                    }
-                }
-                out
-            }
-            B::Step => {
-                for (e, v) in x.comps().iter().zip(arg(1).comps()) {
-                    self.jump((v - e).abs());
-                }
-                x.zip(arg(1), |e, v| if e <= v { 1.0 } else { 0.0 })
-            }
-            B::Distance => V::float(
-                x.comps()
-                    .iter()
-                    .zip(arg(1).comps())
-                    .map(|(p, q)| (p - q) * (p - q))
-                    .sum::<f64>()
-                    .sqrt(),
-            ),
-            B::Dot => V::float(
-                x.comps()
-                    .iter()
-                    .zip(arg(1).comps())
-                    .map(|(p, q)| p * q)
-                    .sum(),
-            ),
-            B::Radians => x.map(f64::to_radians),
-            B::Degrees => x.map(f64::to_degrees),
-            // Handled by `call`, or not surface fields (rejected by `MaterialEval::new`,
-            // as by the emitter).
-            B::Checker
-            | B::Grid
-            | B::Sample
-            | B::SampleNormal
-            | B::Cross
-            | B::Normalize
-            | B::Length
-            | B::Sphere
-            | B::Box
-            | B::RoundBox
-            | B::BoxFrame
-            | B::Torus
-            | B::Capsule
-            | B::Cylinder
-            | B::Cone
-            | B::CappedCone
-            | B::Plane
-            | B::Ellipsoid
-            | B::Octahedron
-            | B::HexPrism
-            | B::TriPrism
-            | B::Pyramid
-            | B::Link
-            | B::Union
-            | B::Intersection
-            | B::Difference
-            | B::SmoothUnion
-            | B::SmoothIntersection
-            | B::SmoothDifference
-            | B::Translate
-            | B::Rotate
-            | B::RotateX
-            | B::RotateY
-            | B::RotateZ
-            | B::Scale
-            | B::Paint
-            | B::Displace
-            | B::ShellMap
-            | B::Twist
-            | B::Bend
-            | B::Repeat
-            | B::Mirror
-            | B::Elongate
-            | B::Round
-            | B::Shell
-            | B::Image
-            | B::Orbit
-            | B::LookAt
-            | B::Sun => V::float(0.0),
-        }
+    /// A math builtin by its one definition ([`Math`]), on arguments widened to the
+    /// call's type (the first vector argument's, the emitter's `t_ty`), noting how near
+    /// its jumps the arguments are.
+    pub(super) fn math(&mut self, m: Math, args: &[Value], vals: &[V]) -> V {
+        let n = args
+            .iter()
+            .find_map(|a| match a.ty().base() {
+                Ty::Vec(k) => Some(*k as usize),
+                _ => None,
+            })
+            .unwrap_or(1);
+        let widened: Vec<V> = vals
+            .iter()
+            .map(|v| if m.widens() { v.widen(n) } else { *v })
+            .collect();
+        let comps: Vec<&[f64]> = widened.iter().map(|v| v.comps()).collect();
+        self.jump(m.jump(&comps));
+        V::from_slice(&m.eval(&comps))
     }
 
     /// `sample_normal(texture, uv, strength, convention, wrap)`: the texel sampled as
@@ -471,96 +330,10 @@ impl Cx<'_> {
     }
 }
 
-/// WGSL's `sign`: 0 at 0.
-pub(super) fn wgsl_sign(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
-
-/// Whether the emitter accepts `builtin` in a surface field. Exhaustive: a new builtin
-/// must be sorted here (and in [`Cx::math`]) before this compiles.
+/// Whether the emitter accepts `builtin` in a surface field: the patterns, texture
+/// samples and every math builtin ([`Math`]).
 pub(super) fn is_field_builtin(builtin: BuiltinId) -> bool {
     use BuiltinId as B;
-    match builtin {
-        B::Checker
-        | B::Grid
-        | B::Sample
-        | B::SampleNormal
-        | B::Cross
-        | B::Normalize
-        | B::Length
-        | B::Dot
-        | B::Sin
-        | B::Cos
-        | B::Tan
-        | B::Asin
-        | B::Acos
-        | B::Atan
-        | B::Atan2
-        | B::Sqrt
-        | B::Abs
-        | B::Floor
-        | B::Ceil
-        | B::Fract
-        | B::Sign
-        | B::Exp
-        | B::Log
-        | B::Pow
-        | B::Min
-        | B::Max
-        | B::Clamp
-        | B::Mix
-        | B::Smoothstep
-        | B::Step
-        | B::Distance
-        | B::Radians
-        | B::Degrees => true,
-        B::Sphere
-        | B::Box
-        | B::RoundBox
-        | B::BoxFrame
-        | B::Torus
-        | B::Capsule
-        | B::Cylinder
-        | B::Cone
-        | B::CappedCone
-        | B::Plane
-        | B::Ellipsoid
-        | B::Octahedron
-        | B::HexPrism
-        | B::TriPrism
-        | B::Pyramid
-        | B::Link
-        | B::Union
-        | B::Intersection
-        | B::Difference
-        | B::SmoothUnion
-        | B::SmoothIntersection
-        | B::SmoothDifference
-        | B::Translate
-        | B::Rotate
-        | B::RotateX
-        | B::RotateY
-        | B::RotateZ
-        | B::Scale
-        | B::Paint
-        | B::Displace
-        | B::ShellMap
-        | B::Twist
-        | B::Bend
-        | B::Repeat
-        | B::Mirror
-        | B::Elongate
-        | B::Round
-        | B::Shell
-        | B::Image
-        | B::Orbit
-        | B::LookAt
-        | B::Sun => false,
-    }
+    matches!(builtin, B::Checker | B::Grid | B::Sample | B::SampleNormal)
+        || Math::of(builtin).is_some()
 }

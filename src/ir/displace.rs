@@ -23,6 +23,7 @@
 
 use super::texture::Textures;
 use crate::sema::builtins::BuiltinId;
+use crate::sema::math::{Jumps, Math};
 use crate::sema::{AtlasAttr, AtlasId, FieldExpr, SurfaceInput, Value};
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use glam::{DVec2, DVec3};
@@ -489,6 +490,10 @@ fn call(builtin: BuiltinId, args: &[Value], textures: &Textures) -> Result<B, St
         }
     }
     let name = builtin.name();
+    // Where a builtin jumps is a fact of its one definition: no slope bound there.
+    if Math::of(builtin).is_some_and(|m| m.row().jumps != Jumps::Never) {
+        return Err(format!("`{name}` jumps"));
+    }
     Ok(match builtin {
         Bi::Sample => {
             let (Some(Value::Texture(node)), Some(Value::Str(wrap))) = (args.first(), args.get(2))
@@ -557,9 +562,7 @@ fn call(builtin: BuiltinId, args: &[Value], textures: &Textures) -> Result<B, St
                     .fold((0.0, 0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1, s.2 + x.2));
             B::from_comps(vec![c])
         }
-        Bi::Checker | Bi::Grid | Bi::Floor | Bi::Ceil | Bi::Fract | Bi::Sign | Bi::Step => {
-            return Err(format!("`{name}` jumps"))
-        }
+        Bi::Checker | Bi::Grid => return Err(format!("`{name}` jumps")),
         _ => return Err(format!("`{name}` has no slope bound here")),
     })
 }

@@ -21,6 +21,7 @@ pub mod access;
 pub mod asset;
 pub mod bake;
 pub mod bench;
+pub mod choice;
 pub mod codegen;
 pub mod codes;
 pub mod diagnostic;
@@ -31,6 +32,7 @@ mod id;
 pub mod ide;
 pub mod incremental;
 pub mod ir;
+#[cfg(feature = "lsp")]
 pub mod lsp;
 pub mod reference;
 pub mod sema;
@@ -38,6 +40,7 @@ pub mod span;
 pub mod syntax;
 pub mod uv;
 pub mod view;
+#[cfg(feature = "viewer")]
 pub mod viewer;
 
 pub use diagnostic::{Diagnostic, Severity};

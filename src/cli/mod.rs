@@ -16,6 +16,19 @@ pub mod seeds;
 pub mod sweep;
 pub mod view;
 
+/// The value parser of a library type with named values ([`Choice`]): its names, each
+/// with its help. (The library has no command line of its own and does not depend on
+/// clap.)
+pub fn choice<T: Choice + Clone>() -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(
+        T::CHOICES
+            .iter()
+            .map(|(_, name, help)| PossibleValue::new(*name).help(*help)),
+    )
+    .map(|name| T::from_name(&name).expect("one of the possible values"))
+}
+
 /// The exit statuses, one meaning each (the README's table).
 /// The GPU of `backend`, or the error printed and its exit status.
 pub fn open_gpu(backend: sdfc::gpu::Backend) -> Result<sdfc::gpu::Gpu, std::process::ExitCode> {
@@ -69,6 +82,7 @@ pub fn access(path: &Path) -> sdfc::access::Access {
 }
 
 use clap::{Parser, Subcommand, ValueEnum};
+use sdfc::choice::Choice;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
@@ -253,7 +267,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "50")]
     pub edits: u32,
     /// The walk form of the sweep (the scene benchmark measures both).
-    #[arg(long, value_enum, default_value = "unrolled")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
     /// Frames per measurement (the median is reported).
     #[arg(long, default_value = "5")]
@@ -262,7 +276,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub shape: Option<String>,
     /// The graphics API.
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
     /// Also write the figures to this file as JSON, for tracking across commits (every
     /// bench: the scene's rows and ratios, the seed sweep, --bake and --lsp-latency).
@@ -284,16 +298,16 @@ pub struct RenderArgs {
     #[arg(long)]
     pub shape: Option<String>,
     /// What to show.
-    #[arg(long, value_enum, default_value = "color")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::ViewMode>(), default_value = "color")]
     pub view: sdfc::gpu::ViewMode,
     /// Also write a 32-bit float EXR: depth, normal, position, steps, or uv (u, v, status) (repeatable).
     #[arg(long, value_name = "NAME=FILE.exr", value_parser = render::parse_aov)]
     pub aov: Vec<(String, PathBuf)>,
     /// The graphics API.
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
     /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
-    #[arg(long, value_enum, default_value = "unrolled")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
     /// Prune each walk's field to the union operands within its reach (exact; off by
     /// default, as it measured slower on the software adapter: see the README's Performance).
@@ -302,15 +316,15 @@ pub struct RenderArgs {
     /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
     /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
     /// baked up to 64 seeds; see the README's Performance).
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::SeedData>(), default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
     /// Skip unions' operands by their bounding boxes where they cannot change the union
     /// (exact; costly: operands of several primitives; off by default, as the software
     /// adapter's `if` never skips work: see the README's Performance).
-    #[arg(long, value_enum, default_value = "off")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::Bounds>(), default_value = "off")]
     pub bounds: sdfc::codegen::Bounds,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::SeedGridChoice>(), default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
@@ -387,10 +401,10 @@ pub struct BakeArgs {
     #[arg(long, value_name = "FILE")]
     pub charts: Option<PathBuf>,
     /// The graphics API.
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
     /// How the geodesic walk is emitted.
-    #[arg(long, value_enum, default_value = "loop")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "loop")]
     pub walk: sdfc::codegen::WalkForm,
 }
 
@@ -402,7 +416,7 @@ pub struct CompileArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Output language.
-    #[arg(long, value_enum, default_value = "wgsl")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::Target>(), default_value = "wgsl")]
     pub target: sdfc::codegen::Target,
     /// Also write a JSON description of the entry points and bindings.
     #[arg(long, value_name = "FILE")]
@@ -411,10 +425,10 @@ pub struct CompileArgs {
     #[arg(long)]
     pub shape: Option<String>,
     /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
-    #[arg(long, value_enum, default_value = "unrolled")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::SeedGridChoice>(), default_value = "auto")]
     pub seed_grid: sdfc::codegen::SeedGridChoice,
     /// Large unions (16 or more primitives under moves, turns and paints) as code, one
     /// call per primitive, instead of data in the `tables` buffer walked through a
@@ -428,12 +442,12 @@ pub struct CompileArgs {
     /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
     /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
     /// baked up to 64 seeds; see the README's Performance).
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::SeedData>(), default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
     /// Skip unions' operands by their bounding boxes where they cannot change the union
     /// (exact; costly: operands of several primitives; off by default, as the software
     /// adapter's `if` never skips work: see the README's Performance).
-    #[arg(long, value_enum, default_value = "off")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::Bounds>(), default_value = "off")]
     pub bounds: sdfc::codegen::Bounds,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
@@ -490,7 +504,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub atlas: Option<String>,
     /// The graphics API for --gpu.
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
     /// Also report every seed's own log map, status and offset (`"seeds"`, CPU reference).
     #[arg(long)]

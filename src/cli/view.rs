@@ -1,6 +1,6 @@
 //! `sdfc view`: the live viewer ([`sdfc::viewer`]) from the command line.
 
-use super::exit;
+use super::{choice, exit};
 use sdfc::viewer::window::ViewError;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,7 +13,7 @@ pub struct ViewArgs {
     #[arg(long)]
     pub shape: Option<String>,
     /// The graphics API.
-    #[arg(long, value_enum, default_value = "auto")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
     /// The window's size, WIDTHxHEIGHT (default: the `render` item's size).
     #[arg(long, value_parser = super::render::parse_size)]
@@ -21,11 +21,11 @@ pub struct ViewArgs {
     /// How the geodesic walk is emitted. The viewer rebuilds its pipeline on every
     /// change, so it takes the loop, which builds several times faster on software
     /// adapters; `unrolled` shows what `sdfc render` draws by default.
-    #[arg(long, value_enum, default_value = "loop")]
+    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "loop")]
     pub walk: sdfc::codegen::WalkForm,
     /// The view at start (the number keys switch: colour, normal, checker, seeds,
     /// blend, distortion, seams, status, steps).
-    #[arg(long, value_enum, default_value = "color")]
+    #[arg(long, value_parser = choice::<sdfc::gpu::ViewMode>(), default_value = "color")]
     pub view: sdfc::gpu::ViewMode,
     /// For tests and scripts: draw this many frames, save --screenshot and quit.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=10000))]

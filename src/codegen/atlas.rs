@@ -5,15 +5,15 @@
 //! graph, σ and the grid are constants. The scene-independent pieces are in
 //! `shaders/uv.wgsl`.
 
+crate::choice::choice_enum! {
 /// Whether the nearest-seed search uses the seed grid ([`SeedGrid`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SeedGridChoice {
-    /// The grid for atlases of more than 4 seeds (the default).
     #[default]
-    Auto,
-    On,
-    /// A plain scan of every seed.
-    Off,
+    Auto = "auto": "The grid for atlases of more than 4 seeds (the default).",
+    On = "on": "The grid for every atlas.",
+    Off = "off": "A plain scan of every seed.",
+}
 }
 
 impl SeedGridChoice {
@@ -27,17 +27,15 @@ impl SeedGridChoice {
     }
 }
 
+crate::choice::choice_enum! {
 /// Where an atlas's seeds (positions, frames, offsets) and merge graph live.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SeedData {
-    /// Baked in for atlases of up to [`AUTO_BAKED_SEEDS`] seeds, in the buffer above
-    /// (the default).
     #[default]
-    Auto,
-    /// Baked into the shader as `var<private>` arrays.
-    Baked,
-    /// In the `tables` storage buffer.
-    Buffer,
+    Auto = "auto": "Baked in for atlases of up to 64 seeds (AUTO_BAKED_SEEDS), in the buffer above (the default).",
+    Baked = "baked": "Baked into the shader as `var<private>` arrays.",
+    Buffer = "buffer": "In the `tables` storage buffer.",
+}
 }
 
 /// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (README,
@@ -66,14 +64,14 @@ use crate::uv::prune;
 use crate::uv::Atlas;
 use glam::DVec3;
 
+crate::choice::choice_enum! {
 /// How the walk's N steps are emitted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum WalkForm {
-    /// N calls of the step, each with its constant N − i (the default).
     #[default]
-    Unrolled,
-    /// A loop of N iterations.
-    Loop,
+    Unrolled = "unrolled": "N calls of the step, each with its constant N − i (the default).",
+    Loop = "loop": "A loop of N iterations.",
+}
 }
 
 /// The WGSL of atlas `k`, from the template `shaders/atlas.wgsl.in`;

@@ -205,20 +205,19 @@ pub struct Options {
     pub bounds: Bounds,
 }
 
+crate::choice::choice_enum! {
 /// Which unions' operands the generated code skips by their bounding boxes
 /// (`ir::guard`: exact, the field is unchanged everywhere). Off by default: on Mesa's
 /// software adapter an `if` never skips work (gallivm runs both sides under lane masks),
 /// so the box tests only add cost there (csg.sdf 1.14×, robot.sdf 1.15× slower plain
 /// traces, `sdfc bench`); a GPU, whose warps branch, may decide otherwise.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Bounds {
-    /// None: every operand evaluated everywhere (the default).
     #[default]
-    Off,
-    /// The operands that cost several primitives ([`ir::guard::MIN_COST`]).
-    Costly,
-    /// Every operand that has a box, however cheap.
-    All,
+    Off = "off": "None: every operand evaluated everywhere (the default).",
+    Costly = "costly": "The operands that cost several primitives (ir::guard::MIN_COST).",
+    All = "all": "Every operand that has a box, however cheap.",
+}
 }
 
 impl Bounds {

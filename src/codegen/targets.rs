@@ -4,13 +4,15 @@
 
 use std::fmt;
 
+crate::choice::choice_enum! {
 /// An output language.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Target {
-    Wgsl,
-    Spirv,
-    Glsl,
-    Msl,
+    Wgsl = "wgsl": "WGSL text, as validated.",
+    Spirv = "spirv": "SPIR-V binary.",
+    Glsl = "glsl": "GLSL for one entry point (`--entry`).",
+    Msl = "msl": "Metal Shading Language.",
+}
 }
 
 /// A module naga has parsed and validated.

@@ -19,13 +19,14 @@ pub use render::{eval_stats, render, render_timed, Frame, Renderer, Targets, Tim
 use std::fmt;
 use std::sync::Arc;
 
-/// Which graphics API to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Backend {
-    /// The best available adapter.
-    Auto,
-    Vulkan,
-    Gl,
+crate::choice::choice_enum! {
+    /// Which graphics API to use.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub enum Backend {
+        Auto = "auto": "The best available adapter.",
+        Vulkan = "vulkan": "Vulkan (Mesa's lavapipe where there is no GPU).",
+        Gl = "gl": "OpenGL ES through EGL (Mesa's llvmpipe where there is no GPU).",
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -10,40 +10,26 @@ use crate::view::View;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+crate::choice::choice_enum! {
 /// What the fragment shader shows (the `resolution.w` uniform).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ViewMode {
-    Color,
-    Normal,
-    Depth,
-    /// Sphere-tracing steps.
-    Steps,
-    /// The atlas's uv (fract, red-green).
-    Uv,
-    /// A checkerboard on the atlas's uv.
-    Checker,
-    /// The walk's status: ok green, too_far blue, heuristic_failed yellow, sharp_feature red, not_reached purple.
-    Status,
-    /// Isolines of the geodesic distance.
-    Distance,
-    /// Geodesic Voronoi cells of the seeds in distinct colours.
-    Seeds,
-    /// Blend weights: black inside cells, red to yellow in the bands between merged seeds.
-    Blend,
-    /// Distortion: black (isometric) to red and yellow (stretched by 50% or more).
-    Distortion,
-    /// Seams: red on frontiers between seeds that are not merged.
-    Seams,
-    /// The unlit base colour, tonemapped as the colour view is (to compare a bake with
-    /// the scene exactly).
-    Albedo,
-    /// Baked meshes only: the flat atlas's level chosen per fragment (Eq. 2 of the
-    /// seamless-atlas paper), blue (level 0) to red (the last level).
-    Level,
-    /// SDF evaluations per pixel (the render target's and the atlases' fields) while
-    /// shading as the colour view does, as a heat map: black (1) through red to yellow
-    /// (4096 and more), on a log scale. The normal AOV's w holds the count.
-    Evals,
+    Color = "color": "The shaded scene.",
+    Normal = "normal": "The surface normal as a colour.",
+    Depth = "depth": "The distance along the ray.",
+    Steps = "steps": "Sphere-tracing steps.",
+    Uv = "uv": "The atlas's uv (fract, red-green).",
+    Checker = "checker": "A checkerboard on the atlas's uv.",
+    Status = "status": "The walk's status: ok green, too_far blue, heuristic_failed yellow, sharp_feature red, not_reached purple.",
+    Distance = "distance": "Isolines of the geodesic distance.",
+    Seeds = "seeds": "Geodesic Voronoi cells of the seeds in distinct colours.",
+    Blend = "blend": "Blend weights: black inside cells, red to yellow in the bands between merged seeds.",
+    Distortion = "distortion": "Distortion: black (isometric) to red and yellow (stretched by 50% or more).",
+    Seams = "seams": "Seams: red on frontiers between seeds that are not merged.",
+    Albedo = "albedo": "The unlit base colour, tonemapped as the colour view is (to compare a bake with the scene exactly).",
+    Level = "level": "Baked meshes only: the flat atlas's level chosen per fragment (Eq. 2 of the seamless-atlas paper), blue (level 0) to red (the last level).",
+    Evals = "evals": "SDF evaluations per pixel (the render target's and the atlases' fields) while shading as the colour view does, as a heat map: black (1) through red to yellow (4096 and more), on a log scale. The normal AOV's w holds the count.",
+}
 }
 
 impl ViewMode {

@@ -17,19 +17,25 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
+    /// A fact worth knowing (an `N` code); never fails a check.
     Note,
+    /// Probably a mistake (a `W` code); the scene still compiles.
     Warning,
+    /// The scene cannot be compiled (an `E` code); the CLI exits with status 1.
     Error,
 }
 
 /// A span with a message, pointing into the source.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Label {
+    /// The bytes the label points at.
     pub span: Span,
+    /// What it says there.
     pub message: String,
 }
 
 impl Label {
+    /// A label of `message` on `span`.
     pub fn new(span: Span, message: impl Into<String>) -> Self {
         Label {
             span,
@@ -41,35 +47,45 @@ impl Label {
 /// One replacement of source text.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Edit {
+    /// The bytes replaced (empty for an insertion).
     pub span: Span,
+    /// What replaces them.
     pub text: String,
 }
 
 /// A fix that can be applied mechanically (a code action in the editor).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Fix {
+    /// What the fix does, as an editor offers it.
     pub title: String,
+    /// The replacements, none overlapping.
     pub edits: Vec<Edit>,
 }
 
 /// One problem (or fact) about a source file.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostic {
+    /// Error, warning or note.
     pub severity: Severity,
     /// Stable code, see [`crate::codes`].
     pub code: &'static str,
+    /// The one-line message.
     pub message: String,
     /// Where in the scene: None for a diagnostic about no place in it (explicitly
     /// unlocated, never a label at byte 0).
     pub primary: Option<Label>,
+    /// Other places that explain the problem.
     pub secondary: Vec<Label>,
+    /// Background: why this is a problem.
     pub notes: Vec<String>,
+    /// What to do about it.
     pub help: Option<String>,
     /// Machine-applicable fixes, offered as code actions.
     pub fixes: Vec<Fix>,
 }
 
 impl Diagnostic {
+    /// An error with code `code` and `message`, labelled `label` at `span`.
     pub fn error(
         code: &'static str,
         message: impl Into<String>,
@@ -79,6 +95,7 @@ impl Diagnostic {
         Self::new(Severity::Error, code, message, span, label)
     }
 
+    /// A warning with code `code` and `message`, labelled `label` at `span`.
     pub fn warning(
         code: &'static str,
         message: impl Into<String>,
@@ -88,6 +105,7 @@ impl Diagnostic {
         Self::new(Severity::Warning, code, message, span, label)
     }
 
+    /// A note with code `code` and `message`, labelled `label` at `span`.
     pub fn note_diag(
         code: &'static str,
         message: impl Into<String>,
@@ -136,16 +154,19 @@ impl Diagnostic {
         self.primary.as_ref().map(|l| l.span)
     }
 
+    /// Adds a secondary label.
     pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Self {
         self.secondary.push(Label::new(span, message));
         self
     }
 
+    /// Adds a note.
     pub fn with_note(mut self, note: impl Into<String>) -> Self {
         self.notes.push(note.into());
         self
     }
 
+    /// Sets the help.
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
         self
@@ -177,6 +198,7 @@ impl Diagnostic {
         }
     }
 
+    /// Whether this is an error.
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
     }

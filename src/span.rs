@@ -5,11 +5,14 @@ use serde::Serialize;
 /// A half-open byte range `start..end` into the source text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, PartialOrd, Ord)]
 pub struct Span {
+    /// The first byte.
     pub start: usize,
+    /// One past the last byte.
     pub end: usize,
 }
 
 impl Span {
+    /// `start..end` (an `end` before `start` is taken as `start`).
     pub fn new(start: usize, end: usize) -> Self {
         Span {
             start,
@@ -22,18 +25,22 @@ impl Span {
         Span::new(self.start.min(other.start), self.end.max(other.end))
     }
 
+    /// Its length in bytes.
     pub fn len(self) -> usize {
         self.end - self.start
     }
 
+    /// Whether it covers no byte.
     pub fn is_empty(self) -> bool {
         self.start == self.end
     }
 
+    /// Whether `offset` lies in it or at its end (where a cursor after it is).
     pub fn contains(self, offset: usize) -> bool {
         self.start <= offset && offset <= self.end
     }
 
+    /// As a range, for slicing the source.
     pub fn range(self) -> std::ops::Range<usize> {
         self.start..self.end
     }
@@ -52,6 +59,7 @@ pub struct LineIndex {
 }
 
 impl LineIndex {
+    /// The index of `text`'s lines.
     pub fn new(text: &str) -> Self {
         let mut starts = vec![0];
         starts.extend(

@@ -139,6 +139,21 @@ pub struct View {
 }
 
 impl View {
+    /// The view of a checked document: its `render` item's camera, light and settings
+    /// on its target, or, with `shape`, the named `let` shape framed by its bounds.
+    pub fn of(analysis: &crate::driver::Analysis, shape: Option<&str>) -> Result<View, String> {
+        let scene = analysis
+            .scene
+            .as_ref()
+            .ok_or_else(|| String::from("the scene has errors"))?;
+        let target = crate::driver::pick_shape(scene, shape)?;
+        let render = match shape {
+            Some(_) => None,
+            None => analysis.program.render.as_ref(),
+        };
+        Ok(View::new(render, target))
+    }
+
     /// Resolves the view from the render item (when there is one) for a shape.
     pub fn new(render: Option<&RenderDef>, shape: &Shape) -> View {
         let defaults;

@@ -605,17 +605,11 @@ pub fn view_for(
     analysis: &sdfc::driver::Analysis,
     shape: Option<&str>,
 ) -> Result<sdfc::view::View, std::process::ExitCode> {
-    let Some(scene) = &analysis.scene else {
+    if analysis.scene.is_none() {
         return Err(std::process::ExitCode::from(exit::SCENE));
-    };
-    let target = sdfc::driver::pick_shape(scene, shape).map_err(|e| {
+    }
+    sdfc::view::View::of(analysis, shape).map_err(|e| {
         eprintln!("error: {e}");
         std::process::ExitCode::from(exit::USAGE)
-    })?;
-    let render_item = if shape.is_some() {
-        None
-    } else {
-        analysis.program.render.as_ref()
-    };
-    Ok(sdfc::view::View::new(render_item, target))
+    })
 }

@@ -1,7 +1,7 @@
 //! A smoke pass of every fuzz target (`fuzz/fuzz_targets/targets.rs`) over its seed
 //! corpus, the examples and the UI cases, plus a few byte-level mutations of each, on
 //! stable in every `cargo test`: the targets keep compiling and their properties hold
-//! on the seeds. The long runs use cargo-fuzz on nightly (README, Tests).
+//! on the seeds. The long runs use cargo-fuzz on nightly (CONTRIBUTING.md).
 
 #[path = "../fuzz/fuzz_targets/targets.rs"]
 mod targets;

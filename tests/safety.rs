@@ -1,4 +1,4 @@
-//! Limits and safety (the README's section): what sdfc does to the user's files, which
+//! Limits and safety (docs/limits.md): what sdfc does to the user's files, which
 //! files a scene may read, and how bad input and resource limits are reported.
 
 mod common;

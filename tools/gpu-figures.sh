@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The performance figures that need a real GPU (README, Performance), in one run:
+# The performance figures that need a real GPU (docs/performance.md), in one run:
 # robot.sdf and sphere.sdf at 1080p with every variant `sdfc bench` compares (unrolled
 # and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
 # and the seed sweep with its chart, both walk forms. Each bench writes its --json next to its log.

@@ -29,7 +29,7 @@ pub fn choice<T: Choice + Clone>() -> impl clap::builder::TypedValueParser<Value
     .map(|name| T::from_name(&name).expect("one of the possible values"))
 }
 
-/// The exit statuses, one meaning each (the README's table).
+/// The exit statuses, one meaning each (docs/commands.md, Exit status).
 /// The GPU of `backend`, or the error printed and its exit status.
 pub fn open_gpu(backend: sdfc::gpu::Backend) -> Result<sdfc::gpu::Gpu, std::process::ExitCode> {
     sdfc::gpu::Gpu::new(backend).map_err(|e| {
@@ -310,17 +310,17 @@ pub struct RenderArgs {
     #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
     pub walk: sdfc::codegen::WalkForm,
     /// Prune each walk's field to the union operands within its reach (exact; off by
-    /// default, as it measured slower on the software adapter: see the README's Performance).
+    /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]
     pub prune: bool,
     /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
     /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
-    /// baked up to 64 seeds; see the README's Performance).
+    /// baked up to 64 seeds; see docs/performance.md).
     #[arg(long, value_parser = choice::<sdfc::codegen::SeedData>(), default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
     /// Skip unions' operands by their bounding boxes where they cannot change the union
     /// (exact; costly: operands of several primitives; off by default, as the software
-    /// adapter's `if` never skips work: see the README's Performance).
+    /// adapter's `if` never skips work: see docs/performance.md).
     #[arg(long, value_parser = choice::<sdfc::codegen::Bounds>(), default_value = "off")]
     pub bounds: sdfc::codegen::Bounds,
     /// Whether the nearest-seed search uses the compile-time seed grid (auto: above 4 seeds).
@@ -432,21 +432,21 @@ pub struct CompileArgs {
     pub seed_grid: sdfc::codegen::SeedGridChoice,
     /// Large unions (16 or more primitives under moves, turns and paints) as code, one
     /// call per primitive, instead of data in the `tables` buffer walked through a
-    /// bounding-volume hierarchy (the default; see the README's Big scenes).
+    /// bounding-volume hierarchy (the default; see docs/performance.md, Big scenes).
     #[arg(long)]
     pub unions_as_code: bool,
     /// Prune each walk's field to the union operands within its reach (exact; off by
-    /// default, as it measured slower on the software adapter: see the README's Performance).
+    /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]
     pub prune: bool,
     /// Where the atlases' seeds and merge graphs live: baked into the shader, or in the
     /// `tables` buffer (faster to compile and, for many seeds, to build and render; auto:
-    /// baked up to 64 seeds; see the README's Performance).
+    /// baked up to 64 seeds; see docs/performance.md).
     #[arg(long, value_parser = choice::<sdfc::codegen::SeedData>(), default_value = "auto")]
     pub seed_data: sdfc::codegen::SeedData,
     /// Skip unions' operands by their bounding boxes where they cannot change the union
     /// (exact; costly: operands of several primitives; off by default, as the software
-    /// adapter's `if` never skips work: see the README's Performance).
+    /// adapter's `if` never skips work: see docs/performance.md).
     #[arg(long, value_parser = choice::<sdfc::codegen::Bounds>(), default_value = "off")]
     pub bounds: sdfc::codegen::Bounds,
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).

@@ -38,7 +38,7 @@ pub enum SeedData {
 }
 }
 
-/// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (README,
+/// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (docs/performance.md,
 /// Performance): baked renders faster up to here (sphere.sdf 1.27×, robot.sdf's 42 seeds
 /// 1.07×, plate.sdf's 64 seeds even); above, the buffer wins everything (a 1,200-sphere
 /// city with 200 seeds: pipeline 1.74 → 0.99 s, frame 1.10 → 0.79 s, the language
@@ -372,7 +372,7 @@ pub const SEED_WORDS: usize = 11;
 /// The seeds (position, normal, e1, offset) and the merge graph's adjacency (CSR, with
 /// edge lengths) are baked in as `var<private>` arrays, as the design asks; with
 /// `in_buffer` ([`SeedData`]: large atlases, or `--seed-data buffer`) they go to the
-/// `tables` buffer instead, a record of [`SEED_WORDS`] floats per seed. Measured on lavapipe (README, Performance): baked,
+/// `tables` buffer instead, a record of [`SEED_WORDS`] floats per seed. Measured on lavapipe (docs/performance.md): baked,
 /// the driver folds them and few-seed atlases render faster (sphere.sdf's loop walk
 /// 18.5–19.0 against 22.6 ms), but naga parses every literal (about 13,000 instructions
 /// each), so the buffer compiles faster (robot 10.5 → 9.5 ms, plate 11.8 → 9.1 ms). A

@@ -11,7 +11,7 @@
 //!
 //! Across processes, the drivers keep their own caches (Mesa's shader cache in
 //! `~/.cache/mesa_shader_cache`, NVIDIA's in `~/.nv`), which already make a second
-//! `sdfc render` of the same scene start warm; see the README's Performance.
+//! `sdfc render` of the same scene start warm; see docs/performance.md.
 
 use std::any::Any;
 use std::path::PathBuf;

@@ -38,8 +38,8 @@ pub enum SeedData {
 }
 }
 
-/// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (docs/performance.md,
-/// Performance): baked renders faster up to here (sphere.sdf 1.27×, robot.sdf's 42 seeds
+/// The most seeds [`SeedData::Auto`] bakes in. Measured on lavapipe (docs/performance.md):
+/// baked renders faster up to here (sphere.sdf 1.27×, robot.sdf's 42 seeds
 /// 1.07×, plate.sdf's 64 seeds even); above, the buffer wins everything (a 1,200-sphere
 /// city with 200 seeds: pipeline 1.74 → 0.99 s, frame 1.10 → 0.79 s, the language
 /// server's full analysis p95 46 → 28 ms).

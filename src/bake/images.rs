@@ -1,9 +1,8 @@
 //! Stage 6: the atlas images (flat §3.3, packed §3.4) and the exported mesh.
 
-use super::charts::{side_texel, ChartTable, Samples};
+use super::charts::{bilinear, side_texel, ChartTable, Samples};
 use super::mesh::QuadMesh;
-use super::mips::Texel;
-use super::pipeline::{bilinear, CHANNELS};
+use super::mips::{Texel, CHANNELS};
 use super::{Atlas, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};

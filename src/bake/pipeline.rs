@@ -1,6 +1,6 @@
 //! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
 
-use super::charts::{ChartTable, Samples};
+use super::charts::{bilinear, ChartTable, Samples};
 use super::gpu::{BakePass, Shaded};
 use super::images;
 use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
@@ -15,9 +15,8 @@ use glam::DVec3;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-/// The channels filtered through the mip chain: colour (3), roughness, metallic,
-/// emission (3), object-space normal (3).
-pub const CHANNELS: usize = 11;
+/// The channels of a baked texel (the mip chain's, re-exported for the memory estimate).
+pub use super::mips::CHANNELS;
 
 /// How fine the mesh is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -210,14 +209,6 @@ pub fn sample_points(mesh: &QuadMesh, table: &ChartTable, n: usize) -> Samples<[
             pack(p, size * spacing)
         },
     )
-}
-
-/// The chart's bilinear patch: corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1), 3 at (0, 1).
-pub fn bilinear(q: [DVec3; 4], u: f64, v: f64) -> DVec3 {
-    q[0] * ((1.0 - u) * (1.0 - v))
-        + q[1] * (u * (1.0 - v))
-        + q[2] * (u * v)
-        + q[3] * ((1.0 - u) * v)
 }
 
 /// What a bake's memory depends on: see [`estimated_peak_bytes`].

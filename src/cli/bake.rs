@@ -423,7 +423,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
                 "s": d.as_secs_f64(),
             })).collect::<Vec<_>>(),
         });
-        if let Err(code) = super::bench::write_json(path, &json) {
+        if let Err(code) = super::report::write_json(path, &json) {
             return code;
         }
     }

@@ -503,22 +503,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
                 "measured": if how.is_empty() { "one after the other" } else { how },
             })).collect::<Vec<_>>(),
         });
-        if let Err(code) = write_json(path, &json) {
+        if let Err(code) = super::report::write_json(path, &json) {
             return code;
         }
     }
     ExitCode::SUCCESS
-}
-
-/// Writes a bench's `--json` report atomically.
-pub fn write_json(path: &std::path::Path, json: &serde_json::Value) -> Result<(), ExitCode> {
-    let text = serde_json::to_string_pretty(json).unwrap_or_default() + "\n";
-    if let Err(e) = sdfc::fsutil::write_output(path, text.as_bytes()) {
-        eprintln!("error: cannot write {}: {e}", path.display());
-        return Err(ExitCode::from(super::exit::USAGE));
-    }
-    eprintln!("wrote {}", path.display());
-    Ok(())
 }
 
 /// The CPU reference with its unions' guards (`ir::guard`, always on) against every

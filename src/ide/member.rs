@@ -7,7 +7,7 @@
 //! `let` after the items before the cursor's, so it sees the same names the
 //! receiver does, even when the text around the cursor does not parse.
 
-use super::complete::{function, Completion, CompletionKind};
+use super::completion::{function, Completion, CompletionKind};
 use super::Document;
 use crate::sema::builtins::{Builtin, PTy, Ret, BUILTINS};
 use crate::sema::{AtlasAttr, DefKind, Ty};

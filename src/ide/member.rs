@@ -95,7 +95,7 @@ fn is_method_of(b: &Builtin, receiver: &Ty) -> bool {
         && !matches!(first.ty, PTy::Shape | PTy::Texture);
     !constructor
         && (!receiver.is_field() || b.kind.lifts_fields())
-        && PTy::accepts(first.ty, receiver.base())
+        && receiver.base().fits(first.ty)
 }
 
 /// Swizzles of a vector with `n` components: single components and the leading runs

@@ -538,7 +538,7 @@ impl Writer {
 }
 
 /// The WGSL of the point at which a point-mapping op evaluates its child (the
-/// `ir::rest::child_point` of the CPU), for the point expression `p`; `None` for ops
+/// `ir::Op::child_point` of the CPU), for the point expression `p`; `None` for ops
 /// that are not point maps.
 pub fn point_expr(op: &Op, p: &str) -> Option<String> {
     Some(match op {

@@ -3,7 +3,7 @@
 use super::charts::{bilinear, side_texel, ChartTable, Samples};
 use super::mesh::QuadMesh;
 use super::mips::{Texel, CHANNELS};
-use super::{Atlas, FlatLayout, MeshData, Patches, Textures};
+use super::{ChartLayout, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
 
@@ -151,7 +151,7 @@ pub fn atlas_images(
     exported: &MeshData,
     m: usize,
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> Textures {
@@ -186,7 +186,7 @@ pub fn atlas_images(
             }
         }
     }
-    if let Atlas::Flat(layout @ FlatLayout { gutter: 1.., .. }) = atlas {
+    if let ChartLayout::Flat(layout @ FlatLayout { gutter: 1.., .. }) = atlas {
         let g = layout.gutter as i64;
         let level = &levels[0];
         let n = level.n as i64;
@@ -291,7 +291,7 @@ pub fn stacked_level(
 pub fn mesh_data(
     mesh: &QuadMesh,
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     m: usize,
     project: &(dyn Fn(DVec3) -> DVec3 + Sync),
@@ -352,7 +352,7 @@ pub fn mesh_data(
 /// border texels are identical between charts, like the colours'.
 pub fn object_normals(
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> RgbaImage {

@@ -6,7 +6,7 @@ use super::images;
 use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
 use super::mips::{self, Texel};
 use super::patches::{self, Patches};
-use super::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
+use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
 use crate::gpu::compute::MAX_POINTS_PER_DISPATCH;
 use crate::gpu::{Gpu, GpuError};
@@ -157,7 +157,7 @@ pub struct Baked {
     pub table: ChartTable,
     /// The cells' charts (one per cell in a flat atlas).
     pub patches: Patches,
-    pub atlas: Atlas,
+    pub atlas: ChartLayout,
     /// Every level's samples, level 0 first.
     pub levels: Vec<Samples<Texel<CHANNELS>>>,
     /// Level 0's projected sample points.
@@ -237,7 +237,13 @@ impl Footprint {
 
     /// The whole bake's, once the atlas is laid out: `n` samples a cell side at level 0
     /// over `table`'s charts, on a mesh of `vertices` vertices, `m` quads a chart side.
-    pub fn of(grid: &Grid, table: &ChartTable, vertices: usize, atlas: &Atlas, m: usize) -> Self {
+    pub fn of(
+        grid: &Grid,
+        table: &ChartTable,
+        vertices: usize,
+        atlas: &ChartLayout,
+        m: usize,
+    ) -> Self {
         let n = atlas.cell_size() as u64;
         let inner = n.saturating_sub(2);
         let cells = table.len() as u64;
@@ -437,9 +443,9 @@ pub fn bake(
     // (After growing: the quads are turned to their charts' directions.)
     let table = ChartTable::new(&quads);
     let (charts, size) = (patches.len(), options.size);
-    let atlas: Atlas = match options.style {
-        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(Atlas::Flat),
-        Style::Packed => PackedLayout::fit(&patches.dims, size).map(Atlas::Packed),
+    let atlas: ChartLayout = match options.style {
+        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(ChartLayout::Flat),
+        Style::Packed => PackedLayout::fit(&patches.dims, size).map(ChartLayout::Packed),
     }
     .ok_or_else(|| {
         BakeError::Resource(format!(

@@ -16,7 +16,7 @@
 
 use super::render::{self, Frame, Timings, ViewMode};
 use super::{Gpu, GpuError};
-use crate::asset::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
+use crate::asset::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::mesh::{mesh_module, MeshIce};
 use crate::ir::Aabb;
 use crate::view::View;
@@ -227,10 +227,10 @@ fn packed_charts(mesh: &MeshData, layout: &PackedLayout) -> Result<Vec<[f32; 4]>
 
 /// Checks that the attributes, indices and images of a mesh agree with each other and
 /// with the layout.
-fn check_input(mesh: &MeshData, textures: &Textures, atlas: &Atlas) -> Result<(), String> {
+fn check_input(mesh: &MeshData, textures: &Textures, atlas: &ChartLayout) -> Result<(), String> {
     match atlas {
-        Atlas::Flat(layout) => check_layout(layout)?,
-        Atlas::Packed(layout) => layout.check()?,
+        ChartLayout::Flat(layout) => check_layout(layout)?,
+        ChartLayout::Packed(layout) => layout.check()?,
     }
     let layout = atlas;
     let n = mesh.positions.len();
@@ -281,7 +281,7 @@ impl MeshRenderer {
         gpu: &Gpu,
         mesh: &MeshData,
         textures: &Textures,
-        layout: &Atlas,
+        layout: &ChartLayout,
     ) -> Result<MeshRenderer, MeshError> {
         check_input(mesh, textures, layout).map_err(MeshError::Input)?;
         let side = gpu.device.limits().max_texture_dimension_2d;
@@ -293,8 +293,8 @@ impl MeshRenderer {
             ))));
         }
         let charts = match layout {
-            Atlas::Flat(_) => Vec::new(),
-            Atlas::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
+            ChartLayout::Flat(_) => Vec::new(),
+            ChartLayout::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
         };
         let (wgsl, _) = mesh_module(layout).map_err(MeshError::Internal)?;
         let formats = render::formats(gpu);

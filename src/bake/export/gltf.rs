@@ -21,8 +21,8 @@
 //!   emissiveFactor [1, 1, 1];
 //! - one sampler for every texture: LINEAR magnification and minification, no mipmap
 //!   filter (the atlas holds its own levels side by side in the image, selected by the
-//!   renderer, see [`Atlas`]), CLAMP_TO_EDGE in both directions;
-//! - the layout of the atlas, `serde_json` of [`Atlas`] (a flat or a packed layout,
+//!   renderer, see [`ChartLayout`]), CLAMP_TO_EDGE in both directions;
+//! - the layout of the atlas, `serde_json` of [`ChartLayout`] (a flat or a packed layout,
 //!   whose table gives each chart's place), in the root's
 //!   `extras.sdfc_atlas`, where glTF readers that do not know it ignore it.
 //!
@@ -59,7 +59,7 @@ use gltf_json::{Texture, Value};
 use image::{ExtendedColorType, ImageEncoder, ImageFormat, RgbaImage};
 
 use super::{check_atlas, check_mesh, check_textures};
-use crate::bake::{Atlas, MeshData, Textures};
+use crate::bake::{ChartLayout, MeshData, Textures};
 
 /// The key of the atlas layout in the root's `extras`.
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
@@ -148,7 +148,7 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 pub fn glb(
     mesh: &MeshData,
     textures: &Textures,
-    layout: &Atlas,
+    layout: &ChartLayout,
     name: &str,
 ) -> Result<Vec<u8>, String> {
     check_mesh(mesh)?;
@@ -432,7 +432,7 @@ fn encode_png(image: &RgbaImage) -> image::ImageResult<Vec<u8>> {
 /// layout in `extras.sdfc_atlas`). Any other input is an error, never a panic; what
 /// is over a limit (see the module's documentation) is a [`ReadError::Limit`],
 /// found before the work it bounds.
-pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, Atlas), ReadError> {
+pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, ChartLayout), ReadError> {
     let (json, bin) = split_glb(bytes)?;
     check_json(json)?;
     let root = Root::from_slice(json).map_err(|e| format!("the glTF's JSON: {e}"))?;
@@ -623,7 +623,7 @@ impl<'de> serde::de::Visitor<'de> for IsExtras {
 
 /// Checks the decoded size of `images` textures of `layout`'s size before any is
 /// decoded: [`MAX_IMAGE_SIZE`] a side and [`MAX_TEXTURE_BYTES`] in all.
-fn check_texture_size(layout: &Atlas, images: usize) -> Result<(), ReadError> {
+fn check_texture_size(layout: &ChartLayout, images: usize) -> Result<(), ReadError> {
     let (w, h) = (layout.width(), layout.height());
     if w > MAX_IMAGE_SIZE || h > MAX_IMAGE_SIZE {
         return Err(ReadError::Limit(format!(
@@ -692,7 +692,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], &[u8]), String> {
 /// The atlas layout from the root's `extras.sdfc_atlas`, parsed from the text into the
 /// layout's own types (no JSON values are built: a packed layout's table can be
 /// large).
-fn read_layout(root: &Root) -> Result<Atlas, String> {
+fn read_layout(root: &Root) -> Result<ChartLayout, String> {
     #[derive(serde::Deserialize)]
     struct Extras<'a> {
         #[serde(borrow, rename = "sdfc_atlas")]
@@ -704,10 +704,10 @@ fn read_layout(root: &Root) -> Result<Atlas, String> {
     let extras: Extras =
         serde_json::from_str(extras.get()).map_err(|e| format!("the glTF's extras: {e}"))?;
     let layout = extras.atlas.ok_or_else(missing)?.get();
-    // As `Atlas`'s untagged form reads it: packed, else flat.
+    // As `ChartLayout`'s untagged form reads it: packed, else flat.
     serde_json::from_str(layout)
-        .map(Atlas::Packed)
-        .or_else(|_| serde_json::from_str(layout).map(Atlas::Flat))
+        .map(ChartLayout::Packed)
+        .or_else(|_| serde_json::from_str(layout).map(ChartLayout::Flat))
         .map_err(|e| format!("the glTF's atlas layout (neither packed nor flat): {e}"))
 }
 
@@ -813,7 +813,7 @@ impl Reader<'_> {
     /// The image of texture `index`, a PNG in a buffer view, as RGBA. Images of
     /// another size than `layout`'s are refused before they are decoded (a
     /// [`ReadError::Limit`] when over [`MAX_IMAGE_SIZE`]).
-    fn image(&self, index: Index<Texture>, layout: &Atlas) -> Result<RgbaImage, ReadError> {
+    fn image(&self, index: Index<Texture>, layout: &ChartLayout) -> Result<RgbaImage, ReadError> {
         let texture = self
             .root
             .get(index)

@@ -426,41 +426,14 @@ pub fn bake(
     report.chart_quads = m;
 
     // 1. Mesh.
-    progress.stage("mesh", 1);
-    let mut quads = dual_contour(shape, &grid, 1e-5 * scale);
-    progress.finish();
-    if quads.quads.is_empty() {
-        return Err(BakeError::Empty(grid.cell));
-    }
+    let mut quads = contour(shape, &grid, scale, progress)?;
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");
 
     // 2. Charts and layout.
-    let patches = match options.style {
-        Style::Flat => Patches::singles(quads.quads.len()),
-        Style::Packed => patches::grow(&mut quads, options.max_chart),
-    };
-    // (After growing: the quads are turned to their charts' directions.)
-    let table = ChartTable::new(&quads);
-    let (charts, size) = (patches.len(), options.size);
-    let atlas: ChartLayout = match options.style {
-        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(ChartLayout::Flat),
-        Style::Packed => PackedLayout::fit(&patches.dims, size).map(ChartLayout::Packed),
-    }
-    .ok_or_else(|| {
-        BakeError::Resource(format!(
-            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
-        ))
-    })?;
-    check_memory(&Footprint::of(
-        &grid,
-        &table,
-        quads.vertices.len(),
-        &atlas,
-        m,
-    ))?;
+    let (patches, table, atlas) = lay_out_charts(&mut quads, &grid, m, options)?;
     report.cells = table.len();
-    report.charts = charts;
+    report.charts = patches.len();
     report.chart_size = atlas.cell_size();
     report.levels = atlas.levels();
     lap(&mut report, "charts");
@@ -508,6 +481,58 @@ pub fn bake(
         textures,
         report,
     })
+}
+
+/// Stage 1: the mesh of `shape` by dual contouring over `grid`; an error when it has
+/// no quads.
+fn contour(
+    shape: &Shape,
+    grid: &Grid,
+    scale: f64,
+    progress: &dyn Progress,
+) -> Result<QuadMesh, BakeError> {
+    progress.stage("mesh", 1);
+    let quads = dual_contour(shape, grid, 1e-5 * scale);
+    progress.finish();
+    if quads.quads.is_empty() {
+        return Err(BakeError::Empty(grid.cell));
+    }
+    Ok(quads)
+}
+
+/// Stage 2: the charts (one a cell, or grown, which turns the quads to their charts'
+/// directions), the chart table and the atlas's layout; refused when the layout does
+/// not fit, or when the rest of the bake would take too much memory.
+fn lay_out_charts(
+    quads: &mut QuadMesh,
+    grid: &Grid,
+    m: usize,
+    options: &Options,
+) -> Result<(Patches, ChartTable, ChartLayout), BakeError> {
+    let patches = match options.style {
+        Style::Flat => Patches::singles(quads.quads.len()),
+        Style::Packed => patches::grow(quads, options.max_chart),
+    };
+    // (After growing: the quads are turned to their charts' directions.)
+    let table = ChartTable::new(quads);
+    let (charts, size) = (patches.len(), options.size);
+    let atlas: ChartLayout = match options.style {
+        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(ChartLayout::Flat),
+        Style::Packed => PackedLayout::fit(&patches.dims, size).map(ChartLayout::Packed),
+    }
+    .ok_or_else(|| {
+        BakeError::Resource(format!(
+            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
+        ))
+    })?;
+    check_memory(&Footprint::of(
+        grid,
+        &table,
+        quads.vertices.len(),
+        &atlas,
+        m,
+    ))?;
+    Ok((patches, table, atlas))
 }
 
 /// Stages 3 and 4: level 0's texel points (each shared one once), shaded on the GPU:

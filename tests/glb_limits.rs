@@ -1,5 +1,6 @@
-//! The `.glb` reader's limits (src/bake/export/gltf.rs) on hostile files, through the
-//! library and through `sdfc render MESH.glb`: an atlas layout that claims 16384² (or
+//! The `.glb` reader's limits (src/bake/export/gltf.rs, the reader in gltf/read.rs) on
+//! hostile files, through the library and through `sdfc render MESH.glb`: an atlas
+//! layout that claims 16384² (or
 //! 8192² of textures, over the memory limit) with solid PNGs of that size, a PNG
 //! larger than its layout, a JSON chunk over its size limit and one with too many
 //! values. Each is refused before anything large is decoded or parsed, with exit 5

@@ -1,7 +1,8 @@
 //! Tidy: the rooms of `src/` use only their own layer and the layers below, as the
 //! table of ARCHITECTURE.md says (read from it: one truth), apart from the arrows back
-//! up that ARCHITECTURE.md lists as still to remove; and inside each room the modules
-//! import each other without a cycle.
+//! up that ARCHITECTURE.md lists as still to remove; inside each room the modules
+//! import each other without a cycle; and no function runs over 150 lines but the flat
+//! tables ARCHITECTURE.md lists.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -532,4 +533,267 @@ fn the_circle_checker_follows_re_exports_and_spares_parents() {
     assert!(!graph.contains_key(&m("r/mod.rs")));
     let found: Vec<String> = cycles(&graph).iter().map(|c| show_cycle(c)).collect();
     assert_eq!(found, ["r::a → r::b → r::a (src/r/a.rs:1, src/r/b.rs:1)"]);
+}
+
+// ---- Short functions ---------------------------------------------------------------
+
+/// The most lines a function of `src/` may span (from its `fn` line to its closing
+/// brace) unless ARCHITECTURE.md lists it under "Flat tables".
+const MAX_FN_LINES: usize = 150;
+
+/// A file's lines with comments, string and character literals blanked (their
+/// characters become spaces; lines keep their numbers), so that braces and `fn`s in them
+/// do not count.
+fn blank_literals(text: &str) -> Vec<String> {
+    #[derive(PartialEq)]
+    enum In {
+        Code,
+        Block(usize),
+        Str,
+        Raw(usize),
+    }
+    let mut state = In::Code;
+    let mut lines = Vec::new();
+    for line in text.lines() {
+        let c: Vec<char> = line.chars().collect();
+        let mut out = String::new();
+        let mut i = 0;
+        while i < c.len() {
+            let next = c.get(i + 1).copied();
+            match state {
+                In::Block(depth) => {
+                    if c[i] == '*' && next == Some('/') {
+                        state = if depth == 1 {
+                            In::Code
+                        } else {
+                            In::Block(depth - 1)
+                        };
+                        i += 1;
+                    } else if c[i] == '/' && next == Some('*') {
+                        state = In::Block(depth + 1);
+                        i += 1;
+                    }
+                }
+                In::Str => {
+                    if c[i] == '\\' {
+                        i += 1;
+                    } else if c[i] == '"' {
+                        state = In::Code;
+                    }
+                }
+                In::Raw(hashes) => {
+                    if c[i] == '"' && c[i + 1..].iter().take_while(|&&h| h == '#').count() >= hashes
+                    {
+                        state = In::Code;
+                        i += hashes;
+                    }
+                }
+                In::Code => {
+                    let word_before = i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_');
+                    if c[i] == '/' && next == Some('/') {
+                        break;
+                    } else if c[i] == '/' && next == Some('*') {
+                        state = In::Block(1);
+                        i += 1;
+                    } else if c[i] == '"' {
+                        state = In::Str;
+                    } else if (c[i] == 'r' || (c[i] == 'b' && next == Some('r'))) && !word_before {
+                        // r"…", r#"…"#, br"…"
+                        let from = if c[i] == 'b' { i + 2 } else { i + 1 };
+                        let hashes = c[from.min(c.len())..]
+                            .iter()
+                            .take_while(|&&h| h == '#')
+                            .count();
+                        if c.get(from + hashes) == Some(&'"') {
+                            state = In::Raw(hashes);
+                            i = from + hashes;
+                        } else {
+                            out.push(c[i]);
+                        }
+                    } else if c[i] == '\'' {
+                        // A character literal ('x', '\n', '\u{7f}'), not a lifetime.
+                        let len = if next == Some('\\') {
+                            let escaped = c.get(i + 3..).unwrap_or_default();
+                            escaped.iter().position(|&q| q == '\'').map(|p| p + 4)
+                        } else {
+                            (c.get(i + 2) == Some(&'\'')).then_some(3)
+                        };
+                        match len {
+                            Some(len) => i += len - 1,
+                            None => out.push(c[i]),
+                        }
+                    } else {
+                        out.push(c[i]);
+                    }
+                }
+            }
+            // Keep columns: one character out for each read (blanks for literals).
+            while out.chars().count() <= i {
+                out.push(' ');
+            }
+            i += 1;
+        }
+        lines.push(out);
+    }
+    lines
+}
+
+/// Every function with a body: (name, first line, lines spanned), lines numbered from 1.
+fn functions(text: &str) -> Vec<(String, usize, usize)> {
+    let lines = blank_literals(text);
+    let mut out = Vec::new();
+    for (n, line) in lines.iter().enumerate() {
+        let mut from = 0;
+        while let Some(k) = line[from..].find("fn ") {
+            let at = from + k;
+            from = at + 3;
+            if line[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+                continue;
+            }
+            let rest = line[at + 3..].trim_start();
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            if name.is_empty() {
+                continue;
+            }
+            if let Some(end) = body_end(&lines, n, at) {
+                out.push((name, n + 1, end - n + 1));
+            }
+        }
+    }
+    out
+}
+
+/// The line of the brace that closes the body of the `fn` at `lines[line][col..]`;
+/// None for a declaration without a body.
+fn body_end(lines: &[String], line: usize, col: usize) -> Option<usize> {
+    let (mut depth, mut body) = (0i64, false);
+    for (n, text) in lines.iter().enumerate().skip(line) {
+        let text = if n == line { &text[col..] } else { &text[..] };
+        for c in text.chars() {
+            match c {
+                '(' | '[' if !body => depth += 1,
+                ')' | ']' if !body => depth -= 1,
+                ';' if !body && depth == 0 => return None,
+                '{' if !body && depth == 0 => {
+                    body = true;
+                    depth = 1;
+                }
+                '{' if body => depth += 1,
+                '}' if body => {
+                    depth -= 1;
+                    if depth == 0 {
+                        return Some(n);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    None
+}
+
+/// ARCHITECTURE.md's "Flat tables": lines "- `PATH::NAME`: why" under that heading,
+/// PATH below `src/`: (PATH, NAME) → why.
+fn flat_tables(doc: &str) -> BTreeMap<(String, String), String> {
+    let section = format!("\n{doc}");
+    let section = section
+        .split("\n## ")
+        .find(|s| s.starts_with("Flat tables"))
+        .expect("ARCHITECTURE.md has a \"## Flat tables\" section");
+    section
+        .lines()
+        .filter_map(|l| {
+            let rest = l.strip_prefix("- `")?;
+            let (item, why) = rest.split_once("`:")?;
+            let (path, name) = item.rsplit_once("::")?;
+            Some(((path.to_string(), name.to_string()), why.trim().to_string()))
+        })
+        .collect()
+}
+
+#[test]
+fn no_function_runs_long() {
+    let doc = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let tables = flat_tables(&doc);
+    for ((path, name), why) in &tables {
+        assert!(
+            !why.is_empty(),
+            "Flat tables: `{path}::{name}` needs a reason"
+        );
+    }
+    let src = root().join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut long = Vec::new();
+    let mut seen = BTreeSet::new();
+    let mut count = 0;
+    for path in &files {
+        let rel = path
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let text = std::fs::read_to_string(path).unwrap();
+        for (name, line, len) in functions(&text) {
+            count += 1;
+            if len <= MAX_FN_LINES {
+                continue;
+            }
+            let key = (rel.clone(), name.clone());
+            if tables.contains_key(&key) {
+                seen.insert(key);
+            } else {
+                long.push(format!("src/{rel}:{line}: `{name}` is {len} lines"));
+            }
+        }
+    }
+    assert!(
+        count > 1000,
+        "the function count fell to {count}: the scan broke"
+    );
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FN_LINES} lines (split them, or list a flat table under \
+         ARCHITECTURE.md's \"Flat tables\"):\n{}",
+        long.join("\n")
+    );
+    let gone: Vec<_> = tables.keys().filter(|k| !seen.contains(*k)).collect();
+    assert!(
+        gone.is_empty(),
+        "these flat tables are gone or no longer long: remove them from ARCHITECTURE.md: {gone:?}"
+    );
+}
+
+#[test]
+fn the_length_checker_skips_literals_and_declarations() {
+    let text = r##"trait T {
+    fn declared(&self) -> [u8; 4];
+}
+fn outer(x: [u8; 2]) -> impl Fn(f64) -> f64 {
+    let s = "} fn fake() {";
+    let r = r#"}}"#;
+    let c = '}';
+    let l: &'static str = "\"}";
+    /* } fn in_comment() { */
+    // }
+    fn inner() {}
+    move |y| y
+}
+"##;
+    let found = functions(text);
+    assert_eq!(
+        found,
+        [("outer".to_string(), 4, 10), ("inner".to_string(), 11, 1)]
+    );
+    let doc = "## Flat tables\n\nText.\n\n- `ir/eval.rs::prim`: one arm a primitive\n\n## Next\n- `a.rs::b`: not here\n";
+    let tables = flat_tables(doc);
+    assert_eq!(tables.len(), 1);
+    assert_eq!(
+        tables[&("ir/eval.rs".to_string(), "prim".to_string())],
+        "one arm a primitive"
+    );
 }

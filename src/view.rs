@@ -72,7 +72,7 @@ impl Camera {
         let fov = BuiltinId::Orbit
             .builtin()
             .param("fov")
-            .and_then(|(_, p)| p.default?.value().as_float())
+            .and_then(|(_, p)| sema::Value::from(p.default?).as_float())
             .expect("`orbit` has a default `fov`");
         Camera::orbit(
             b.center(),

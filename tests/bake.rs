@@ -551,8 +551,8 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
     // The gutter holds the neighbours' texels, and the borders stay identical.
     let file = ChartsFile::new(&baked.table, &baked.atlas, &baked.patches);
     let flat = |b: &Baked| match &b.atlas {
-        sdfc::bake::Atlas::Flat(l) => l.clone(),
-        sdfc::bake::Atlas::Packed(_) => panic!("a flat bake"),
+        sdfc::bake::ChartLayout::Flat(l) => l.clone(),
+        sdfc::bake::ChartLayout::Packed(_) => panic!("a flat bake"),
     };
     assert_eq!(flat(&baked).gutter, flat(&baked).chart_size / 2);
     assert_borders_identical(&baked.textures.base_color, &file, "with a gutter");

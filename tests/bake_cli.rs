@@ -103,8 +103,8 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         let file: ChartsFile = serde_json::from_slice(&std::fs::read(&charts).unwrap()).unwrap();
         assert_eq!(file.layout, layout, "{stem}");
         let cells = match &layout {
-            sdfc::bake::Atlas::Flat(_) => file.charts.len(),
-            sdfc::bake::Atlas::Packed(p) => p
+            sdfc::bake::ChartLayout::Flat(_) => file.charts.len(),
+            sdfc::bake::ChartLayout::Packed(p) => p
                 .charts
                 .iter()
                 .map(|c| (c.cells[0] * c.cells[1]) as usize)
@@ -116,7 +116,10 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             "{stem}: two triangles per cell"
         );
         if packed {
-            assert!(matches!(layout, sdfc::bake::Atlas::Packed(_)), "{stem}");
+            assert!(
+                matches!(layout, sdfc::bake::ChartLayout::Packed(_)),
+                "{stem}"
+            );
             // (At this coarse grid a few charts grow: tests/bake_packed.rs measures more.)
             assert!(
                 file.charts.len() < cells,
@@ -410,7 +413,7 @@ fn the_footprint_counts_the_samples_the_bake_shades() {
     use sdfc::bake::charts::ChartTable;
     use sdfc::bake::mesh::{dual_contour, Grid};
     use sdfc::bake::pipeline::{sample_points, Footprint};
-    use sdfc::bake::{Atlas, FlatLayout, PackedLayout, Patches};
+    use sdfc::bake::{ChartLayout, FlatLayout, PackedLayout, Patches};
     let dir = tempfile::tempdir().unwrap();
     let source = "material m { color = [1, 0, 0]; }\nrender box([1, 0.5, 0.7]).paint(m);";
     let analysis = sdfc::driver::check(source, Some(dir.path()));
@@ -422,8 +425,8 @@ fn the_footprint_counts_the_samples_the_bake_shades() {
     let singles = Patches::singles(table.len());
     for (size, m) in [(256, 1), (1024, 2)] {
         for atlas in [
-            Atlas::Flat(FlatLayout::fit(table.len(), size).unwrap()),
-            Atlas::Packed(PackedLayout::fit(&singles.dims, size).unwrap()),
+            ChartLayout::Flat(FlatLayout::fit(table.len(), size).unwrap()),
+            ChartLayout::Packed(PackedLayout::fit(&singles.dims, size).unwrap()),
         ] {
             let f = Footprint::of(&grid, &table, quads.vertices.len(), &atlas, m);
             let points = sample_points(&quads, &table, atlas.cell_size() as usize);

@@ -8,7 +8,7 @@ use common::glb::{join_text, split};
 
 use image::{Rgba, RgbaImage};
 use sdfc::bake::export::{check_atlas, check_mesh, check_textures, glb, ktx2, read_glb};
-use sdfc::bake::Atlas;
+use sdfc::bake::ChartLayout;
 use sdfc::bake::{FlatLayout, MeshData, Textures};
 use serde_json::{json, Value};
 
@@ -93,7 +93,7 @@ fn glb_round_trip() {
         let bytes = glb(
             &mesh,
             &textures,
-            &Atlas::from(layout.clone()),
+            &ChartLayout::from(layout.clone()),
             "quad and cube",
         )
         .unwrap();
@@ -101,7 +101,7 @@ fn glb_round_trip() {
         assert_eq!(bytes.len() % 4, 0);
         let (mesh2, textures2, layout2) = read_glb(&bytes).unwrap();
         assert_eq!(mesh2, mesh);
-        assert_eq!(layout2, Atlas::from(layout.clone()));
+        assert_eq!(layout2, ChartLayout::from(layout.clone()));
         assert_textures_eq(&textures2, &textures);
     }
 }
@@ -112,7 +112,7 @@ fn glb_document_structure() {
     let bytes = glb(
         &mesh,
         &textures(&layout, true),
-        &Atlas::from(layout.clone()),
+        &ChartLayout::from(layout.clone()),
         "q",
     )
     .unwrap();
@@ -147,7 +147,7 @@ fn glb_document_structure() {
     let plain = glb(
         &mesh,
         &textures(&layout, false),
-        &Atlas::from(layout.clone()),
+        &ChartLayout::from(layout.clone()),
         "q",
     )
     .unwrap();
@@ -168,7 +168,7 @@ fn glb_passes_the_khronos_validator() {
         let bytes = glb(
             &mesh,
             &textures(&layout, emissive),
-            &Atlas::from(layout.clone()),
+            &ChartLayout::from(layout.clone()),
             "quad and cube",
         )
         .unwrap();
@@ -205,7 +205,7 @@ fn glb_refuses_bad_input() {
     let tex = textures(&layout, true);
     let refused = |mesh: &MeshData, tex: &Textures, layout: &FlatLayout| {
         assert!(
-            glb(mesh, tex, &Atlas::from(layout.clone()), "x").is_err(),
+            glb(mesh, tex, &ChartLayout::from(layout.clone()), "x").is_err(),
             "bad input accepted"
         );
     };
@@ -256,7 +256,7 @@ fn read_glb_rejects_garbage_and_truncations() {
     let bytes = glb(
         &mesh,
         &textures(&layout, true),
-        &Atlas::from(layout.clone()),
+        &ChartLayout::from(layout.clone()),
         "q",
     )
     .unwrap();
@@ -285,7 +285,7 @@ fn read_glb_survives_flipped_bytes() {
     let bytes = glb(
         &mesh,
         &textures(&layout, true),
-        &Atlas::from(layout.clone()),
+        &ChartLayout::from(layout.clone()),
         "q",
     )
     .unwrap();
@@ -311,7 +311,7 @@ fn read_glb_rejects_inconsistent_documents() {
     let bytes = glb(
         &mesh,
         &textures(&layout, false),
-        &Atlas::from(layout.clone()),
+        &ChartLayout::from(layout.clone()),
         "q",
     )
     .unwrap();

@@ -9,7 +9,7 @@ mod common;
 use common::assert_borders_identical;
 use sdfc::bake::pipeline::{self, Baked, Options, Quiet, Resolution, Style};
 use sdfc::bake::table::ChartsFile;
-use sdfc::bake::Atlas;
+use sdfc::bake::ChartLayout;
 use sdfc::gpu::{gpu_for_tests, Gpu, MeshRenderer, ViewMode};
 
 /// A box and a sphere beside it: flat faces (where charts grow) and a curved surface
@@ -55,7 +55,7 @@ fn bake(gpu: &Gpu, style: Style, max_chart: usize) -> Baked {
 fn grown_charts_conform_and_keep_borders_identical_at_every_level() {
     let Some(gpu) = gpu_for_tests() else { return };
     let baked = bake(&gpu, Style::Packed, 6);
-    let Atlas::Packed(layout) = &baked.atlas else {
+    let ChartLayout::Packed(layout) = &baked.atlas else {
         panic!("a packed atlas")
     };
     layout.check().unwrap();

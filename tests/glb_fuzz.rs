@@ -30,7 +30,7 @@ mod targets;
 use image::{ExtendedColorType, ImageEncoder, Rgba, RgbaImage};
 use sdfc::bake::export::gltf::MAX_JSON_VALUES;
 use sdfc::bake::export::{glb, read_glb, ReadError};
-use sdfc::bake::{Atlas, FlatLayout, MeshData, PackedChart, PackedLayout, Textures};
+use sdfc::bake::{ChartLayout, FlatLayout, MeshData, PackedChart, PackedLayout, Textures};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::panic::AssertUnwindSafe;
@@ -187,14 +187,20 @@ impl Base {
 /// One quad, one chart, written by the library: a flat layout with an emissive
 /// texture (four images), or a packed one.
 fn library_quad(packed: bool) -> Vec<u8> {
-    let (layout, tc): (Atlas, Box<dyn Fn(f64, f64) -> [f32; 2]>) = if packed {
+    let (layout, tc): (ChartLayout, Box<dyn Fn(f64, f64) -> [f32; 2]>) = if packed {
         let l = PackedLayout::fit(&[[1, 1]], 64).unwrap();
         let c = l.clone();
-        (Atlas::Packed(l), Box::new(move |u, v| c.texcoord(0, u, v)))
+        (
+            ChartLayout::Packed(l),
+            Box::new(move |u, v| c.texcoord(0, u, v)),
+        )
     } else {
         let l = FlatLayout::fit(1, 64).unwrap();
         let c = l.clone();
-        (Atlas::Flat(l), Box::new(move |u, v| c.texcoord(0, u, v)))
+        (
+            ChartLayout::Flat(l),
+            Box::new(move |u, v| c.texcoord(0, u, v)),
+        )
     };
     let mut mesh = MeshData::default();
     for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
@@ -2003,7 +2009,7 @@ fn chart_search(_: &Base, rng: &mut Rng, big: bool) -> Made {
         normal: image,
         emissive: None,
     };
-    let bytes = glb(&mesh, &textures, &Atlas::Packed(layout), "search").unwrap();
+    let bytes = glb(&mesh, &textures, &ChartLayout::Packed(layout), "search").unwrap();
     made(
         bytes,
         format!("{n} vertices on one packed chart (number {target} of 1024 in one 64-texel tile)"),
@@ -2038,7 +2044,7 @@ fn overdraw(_: &Base, rng: &mut Rng, big: bool) -> Made {
         normal: image,
         emissive: None,
     };
-    let bytes = glb(&mesh, &textures, &Atlas::Flat(layout), "overdraw").unwrap();
+    let bytes = glb(&mesh, &textures, &ChartLayout::Flat(layout), "overdraw").unwrap();
     made(
         bytes,
         format!("{n} copies of a triangle covering half the frame"),

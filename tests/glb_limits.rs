@@ -1,5 +1,6 @@
-//! The `.glb` reader's limits (src/bake/export/gltf.rs) on hostile files, through the
-//! library and through `sdfc render MESH.glb`: an atlas layout that claims 16384² (or
+//! The `.glb` reader's limits (src/bake/export/gltf.rs, the reader in gltf/read.rs) on
+//! hostile files, through the library and through `sdfc render MESH.glb`: an atlas
+//! layout that claims 16384² (or
 //! 8192² of textures, over the memory limit) with solid PNGs of that size, a PNG
 //! larger than its layout, a JSON chunk over its size limit and one with too many
 //! values. Each is refused before anything large is decoded or parsed, with exit 5
@@ -16,7 +17,7 @@ use sdfc::bake::export::gltf::{
     texture_bytes, MAX_IMAGE_SIZE, MAX_JSON_BYTES, MAX_JSON_VALUES, MAX_TEXTURE_BYTES,
 };
 use sdfc::bake::export::{glb, read_glb, ReadError};
-use sdfc::bake::{Atlas, FlatLayout, MeshData, Textures};
+use sdfc::bake::{ChartLayout, FlatLayout, MeshData, Textures};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -61,7 +62,7 @@ fn quad_glb() -> Vec<u8> {
         normal: image,
         emissive: None,
     };
-    glb(&mesh, &textures, &Atlas::from(layout), "quad").unwrap()
+    glb(&mesh, &textures, &ChartLayout::from(layout), "quad").unwrap()
 }
 
 fn join(doc: &Value, bin: &[u8]) -> Vec<u8> {
@@ -265,7 +266,7 @@ fn the_writer_refuses_a_json_chunk_over_the_readers_limit() {
             })
         })
         .collect();
-    let layout = Atlas::Packed(PackedLayout {
+    let layout = ChartLayout::Packed(PackedLayout {
         width,
         height: 2 * rows,
         cell_size: 2,

@@ -504,11 +504,11 @@ pub fn glb(data: &[u8]) -> Result<(), sdfc::bake::export::ReadError> {
 
 /// Every chart of every level of `atlas` inside its image, computed in u64 (no
 /// overflow): the flat layout's grid at each level, each packed chart's whole block.
-pub fn layout_inside(atlas: &sdfc::bake::Atlas) -> Result<(), String> {
-    use sdfc::bake::Atlas;
+pub fn layout_inside(atlas: &sdfc::bake::ChartLayout) -> Result<(), String> {
+    use sdfc::bake::ChartLayout;
     let (w, h) = (atlas.width() as u64, atlas.height() as u64);
     match atlas {
-        Atlas::Flat(l) => {
+        ChartLayout::Flat(l) => {
             let n = l.chart_size as u64;
             if n < 2 || !n.is_power_of_two() || l.gutter as u64 > n {
                 return Err(format!("chart size {n}, gutter {}", l.gutter));
@@ -531,7 +531,7 @@ pub fn layout_inside(atlas: &sdfc::bake::Atlas) -> Result<(), String> {
                 }
             }
         }
-        Atlas::Packed(l) => {
+        ChartLayout::Packed(l) => {
             let n = l.cell_size as u64;
             if n < 2 || !n.is_power_of_two() || l.levels as u64 != n.ilog2() as u64 {
                 return Err(format!("cell size {n} with {} levels", l.levels));

@@ -1,5 +1,5 @@
 //! Baked assets as plain data: a triangle mesh with its attributes, its texture
-//! images, and the layout of its atlas (flat or packed). `bake` makes them, `gpu`
+//! images, and the [`ChartLayout`] of its atlas (flat or packed). `bake` makes them, `gpu`
 //! renders them, `codegen` writes the mesh renderer's shader for them, and
 //! `bake::export` reads and writes them as glTF; so they live in a leaf module below
 //! all of those (ARCHITECTURE.md).
@@ -164,76 +164,77 @@ impl FlatLayout {
     }
 }
 
-/// The atlas's layout: flat (§3.3, one chart per quad, all the same size) or packed
-/// (§3.4, grown rectangular charts of their own sizes). Serialized into the glTF's
-/// `extras.sdfc_atlas` as the one or the other's fields (a flat layout's JSON is
-/// unchanged from before packed layouts existed).
+/// Where a baked image's charts lie: flat (§3.3, one chart per quad, all the same
+/// size) or packed (§3.4, grown rectangular charts of their own sizes). (Not the
+/// atlas of Implicit UVs, `uv::Atlas`, nor an `atlas` item, `sema::AtlasDef`.)
+/// Serialized into the glTF's `extras.sdfc_atlas` as the one or the other's fields (a
+/// flat layout's JSON is unchanged from before packed layouts existed).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
-pub enum Atlas {
+pub enum ChartLayout {
     Packed(PackedLayout),
     Flat(FlatLayout),
 }
 
-impl From<FlatLayout> for Atlas {
-    fn from(l: FlatLayout) -> Atlas {
-        Atlas::Flat(l)
+impl From<FlatLayout> for ChartLayout {
+    fn from(l: FlatLayout) -> ChartLayout {
+        ChartLayout::Flat(l)
     }
 }
 
-impl From<PackedLayout> for Atlas {
-    fn from(l: PackedLayout) -> Atlas {
-        Atlas::Packed(l)
+impl From<PackedLayout> for ChartLayout {
+    fn from(l: PackedLayout) -> ChartLayout {
+        ChartLayout::Packed(l)
     }
 }
 
-impl Atlas {
+impl ChartLayout {
     pub fn width(&self) -> u32 {
         match self {
-            Atlas::Flat(l) => l.width,
-            Atlas::Packed(l) => l.width,
+            ChartLayout::Flat(l) => l.width,
+            ChartLayout::Packed(l) => l.width,
         }
     }
 
     pub fn height(&self) -> u32 {
         match self {
-            Atlas::Flat(l) => l.height,
-            Atlas::Packed(l) => l.height,
+            ChartLayout::Flat(l) => l.height,
+            ChartLayout::Packed(l) => l.height,
         }
     }
 
     pub fn levels(&self) -> usize {
         match self {
-            Atlas::Flat(l) => l.levels(),
-            Atlas::Packed(l) => l.levels(),
+            ChartLayout::Flat(l) => l.levels(),
+            ChartLayout::Packed(l) => l.levels(),
         }
     }
 
     /// A cell's (mesh quad's) level-0 samples a side: the flat layout's chart size.
     pub fn cell_size(&self) -> u32 {
         match self {
-            Atlas::Flat(l) => l.chart_size,
-            Atlas::Packed(l) => l.cell_size,
+            ChartLayout::Flat(l) => l.chart_size,
+            ChartLayout::Packed(l) => l.cell_size,
         }
     }
 
     /// Chart `p`'s rectangle `[x, y, width, height]` at level `l`.
     pub fn rect(&self, p: usize, l: usize) -> [u32; 4] {
         match self {
-            Atlas::Flat(layout) => {
+            ChartLayout::Flat(layout) => {
                 let [x, y] = layout.chart_origin(p, l);
                 let n = layout.size_at(l);
                 [x, y, n, n]
             }
-            Atlas::Packed(layout) => layout.rect(p, l),
+            ChartLayout::Packed(layout) => layout.rect(p, l),
         }
     }
 
     /// The texels that hold samples over the image's.
     pub fn utilisation(&self, charts: usize) -> f64 {
         match self {
-            Atlas::Flat(l) => l.utilisation(charts),
-            Atlas::Packed(l) => l.utilisation(),
+            ChartLayout::Flat(l) => l.utilisation(charts),
+            ChartLayout::Packed(l) => l.utilisation(),
         }
     }
 }

@@ -13,7 +13,16 @@
 //! values in, so two charts' border texels are the same value, bitwise, by construction.
 
 use super::mesh::QuadMesh;
+use glam::DVec3;
 use std::collections::HashMap;
+
+/// The chart's bilinear patch: corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1), 3 at (0, 1).
+pub fn bilinear(q: [DVec3; 4], u: f64, v: f64) -> DVec3 {
+    q[0] * ((1.0 - u) * (1.0 - v))
+        + q[1] * (u * (1.0 - v))
+        + q[2] * (u * v)
+        + q[3] * ((1.0 - u) * v)
+}
 
 /// One mesh edge: its vertices (`a < b`) and the charts that have it as a side.
 #[derive(Debug, Clone, PartialEq)]

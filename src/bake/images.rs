@@ -1,10 +1,9 @@
 //! Stage 6: the atlas images (flat §3.3, packed §3.4) and the exported mesh.
 
-use super::charts::{side_texel, ChartTable, Samples};
+use super::charts::{bilinear, side_texel, ChartTable, Samples};
 use super::mesh::QuadMesh;
-use super::mips::Texel;
-use super::pipeline::{bilinear, CHANNELS};
-use super::{Atlas, FlatLayout, MeshData, Patches, Textures};
+use super::mips::{Texel, CHANNELS};
+use super::{ChartLayout, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
 
@@ -152,7 +151,7 @@ pub fn atlas_images(
     exported: &MeshData,
     m: usize,
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> Textures {
@@ -187,7 +186,7 @@ pub fn atlas_images(
             }
         }
     }
-    if let Atlas::Flat(layout @ FlatLayout { gutter: 1.., .. }) = atlas {
+    if let ChartLayout::Flat(layout @ FlatLayout { gutter: 1.., .. }) = atlas {
         let g = layout.gutter as i64;
         let level = &levels[0];
         let n = level.n as i64;
@@ -292,7 +291,7 @@ pub fn stacked_level(
 pub fn mesh_data(
     mesh: &QuadMesh,
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     m: usize,
     project: &(dyn Fn(DVec3) -> DVec3 + Sync),
@@ -353,7 +352,7 @@ pub fn mesh_data(
 /// border texels are identical between charts, like the colours'.
 pub fn object_normals(
     table: &ChartTable,
-    atlas: &Atlas,
+    atlas: &ChartLayout,
     patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
 ) -> RgbaImage {

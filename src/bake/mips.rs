@@ -17,6 +17,10 @@
 use super::charts::{corner_texel, side_texel, ChartTable, Samples};
 use rayon::prelude::*;
 
+/// The channels filtered through the mip chain: colour (3), roughness, metallic,
+/// emission (3), object-space normal (3).
+pub const CHANNELS: usize = 11;
+
 /// A sample's channels.
 pub type Texel<const K: usize> = [f32; K];
 

@@ -21,5 +21,7 @@ pub mod patches;
 pub mod pipeline;
 pub mod table;
 
-pub use crate::asset::{packed, Atlas, FlatLayout, MeshData, PackedChart, PackedLayout, Textures};
+pub use crate::asset::{
+    packed, ChartLayout, FlatLayout, MeshData, PackedChart, PackedLayout, Textures,
+};
 pub use patches::Patches;

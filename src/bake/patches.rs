@@ -29,7 +29,7 @@
 
 use super::charts::ChartTable;
 use super::mesh::QuadMesh;
-use crate::asset::Atlas;
+use crate::asset::ChartLayout;
 
 /// The grown charts of a quad mesh.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -485,10 +485,10 @@ pub fn grow(mesh: &mut QuadMesh, max_side: usize) -> Patches {
 /// Where the atlas layout puts each cell: the packed layout through the patches.
 impl Patches {
     /// The top-left texel of cell `c`'s `n_l × n_l` samples at level `l`.
-    pub fn cell_origin(&self, atlas: &Atlas, c: usize, l: usize) -> [u32; 2] {
+    pub fn cell_origin(&self, atlas: &ChartLayout, c: usize, l: usize) -> [u32; 2] {
         match atlas {
-            Atlas::Flat(layout) => layout.chart_origin(c, l),
-            Atlas::Packed(layout) => {
+            ChartLayout::Flat(layout) => layout.chart_origin(c, l),
+            ChartLayout::Packed(layout) => {
                 let [p, i, j] = self.place[c];
                 layout.cell_origin(p as usize, i, j, l)
             }
@@ -496,10 +496,10 @@ impl Patches {
     }
 
     /// The level-0 atlas coordinate (glTF TEXCOORD_0) of cell `c`'s local (u, v).
-    pub fn texcoord(&self, atlas: &Atlas, c: usize, u: f64, v: f64) -> [f32; 2] {
+    pub fn texcoord(&self, atlas: &ChartLayout, c: usize, u: f64, v: f64) -> [f32; 2] {
         match atlas {
-            Atlas::Flat(layout) => layout.texcoord(c, u, v),
-            Atlas::Packed(layout) => {
+            ChartLayout::Flat(layout) => layout.texcoord(c, u, v),
+            ChartLayout::Packed(layout) => {
                 let [p, i, j] = self.place[c];
                 let [a, b] = self.dims[p as usize];
                 layout.texcoord(

@@ -1,12 +1,12 @@
 //! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
 
-use super::charts::{ChartTable, Samples};
+use super::charts::{bilinear, ChartTable, Samples};
 use super::gpu::{BakePass, Shaded};
 use super::images;
 use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
 use super::mips::{self, Texel};
 use super::patches::{self, Patches};
-use super::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
+use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
 use crate::gpu::compute::MAX_POINTS_PER_DISPATCH;
 use crate::gpu::{Gpu, GpuError};
@@ -15,9 +15,8 @@ use glam::DVec3;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-/// The channels filtered through the mip chain: colour (3), roughness, metallic,
-/// emission (3), object-space normal (3).
-pub const CHANNELS: usize = 11;
+/// The channels of a baked texel (the mip chain's, re-exported for the memory estimate).
+pub use super::mips::CHANNELS;
 
 /// How fine the mesh is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,7 +157,7 @@ pub struct Baked {
     pub table: ChartTable,
     /// The cells' charts (one per cell in a flat atlas).
     pub patches: Patches,
-    pub atlas: Atlas,
+    pub atlas: ChartLayout,
     /// Every level's samples, level 0 first.
     pub levels: Vec<Samples<Texel<CHANNELS>>>,
     /// Level 0's projected sample points.
@@ -212,14 +211,6 @@ pub fn sample_points(mesh: &QuadMesh, table: &ChartTable, n: usize) -> Samples<[
     )
 }
 
-/// The chart's bilinear patch: corner 0 at (0, 0), 1 at (1, 0), 2 at (1, 1), 3 at (0, 1).
-pub fn bilinear(q: [DVec3; 4], u: f64, v: f64) -> DVec3 {
-    q[0] * ((1.0 - u) * (1.0 - v))
-        + q[1] * (u * (1.0 - v))
-        + q[2] * (u * v)
-        + q[3] * ((1.0 - u) * v)
-}
-
 /// What a bake's memory depends on: see [`estimated_peak_bytes`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Footprint {
@@ -246,7 +237,13 @@ impl Footprint {
 
     /// The whole bake's, once the atlas is laid out: `n` samples a cell side at level 0
     /// over `table`'s charts, on a mesh of `vertices` vertices, `m` quads a chart side.
-    pub fn of(grid: &Grid, table: &ChartTable, vertices: usize, atlas: &Atlas, m: usize) -> Self {
+    pub fn of(
+        grid: &Grid,
+        table: &ChartTable,
+        vertices: usize,
+        atlas: &ChartLayout,
+        m: usize,
+    ) -> Self {
         let n = atlas.cell_size() as u64;
         let inner = n.saturating_sub(2);
         let cells = table.len() as u64;
@@ -432,41 +429,14 @@ pub fn bake<'s>(
     report.chart_quads = m;
 
     // 1. Mesh.
-    progress.stage("mesh", 1);
-    let mut quads = dual_contour(shape, &grid, 1e-5 * scale);
-    progress.finish();
-    if quads.quads.is_empty() {
-        return Err(BakeError::Empty(grid.cell));
-    }
+    let mut quads = contour(shape, &grid, scale, progress)?;
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");
 
     // 2. Charts and layout.
-    let patches = match options.style {
-        Style::Flat => Patches::singles(quads.quads.len()),
-        Style::Packed => patches::grow(&mut quads, options.max_chart),
-    };
-    // (After growing: the quads are turned to their charts' directions.)
-    let table = ChartTable::new(&quads);
-    let (charts, size) = (patches.len(), options.size);
-    let atlas: Atlas = match options.style {
-        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(Atlas::Flat),
-        Style::Packed => PackedLayout::fit(&patches.dims, size).map(Atlas::Packed),
-    }
-    .ok_or_else(|| {
-        BakeError::Resource(format!(
-            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
-        ))
-    })?;
-    check_memory(&Footprint::of(
-        &grid,
-        &table,
-        quads.vertices.len(),
-        &atlas,
-        m,
-    ))?;
+    let (patches, table, atlas) = lay_out_charts(&mut quads, &grid, m, options)?;
     report.cells = table.len();
-    report.charts = charts;
+    report.charts = patches.len();
     report.chart_size = atlas.cell_size();
     report.levels = atlas.levels();
     lap(&mut report, "charts");
@@ -514,6 +484,58 @@ pub fn bake<'s>(
         textures,
         report,
     })
+}
+
+/// Stage 1: the mesh of `shape` by dual contouring over `grid`; an error when it has
+/// no quads.
+fn contour(
+    shape: crate::ir::Field,
+    grid: &Grid,
+    scale: f64,
+    progress: &dyn Progress,
+) -> Result<QuadMesh, BakeError> {
+    progress.stage("mesh", 1);
+    let quads = dual_contour(shape, grid, 1e-5 * scale);
+    progress.finish();
+    if quads.quads.is_empty() {
+        return Err(BakeError::Empty(grid.cell));
+    }
+    Ok(quads)
+}
+
+/// Stage 2: the charts (one a cell, or grown, which turns the quads to their charts'
+/// directions), the chart table and the atlas's layout; refused when the layout does
+/// not fit, or when the rest of the bake would take too much memory.
+fn lay_out_charts(
+    quads: &mut QuadMesh,
+    grid: &Grid,
+    m: usize,
+    options: &Options,
+) -> Result<(Patches, ChartTable, ChartLayout), BakeError> {
+    let patches = match options.style {
+        Style::Flat => Patches::singles(quads.quads.len()),
+        Style::Packed => patches::grow(quads, options.max_chart),
+    };
+    // (After growing: the quads are turned to their charts' directions.)
+    let table = ChartTable::new(quads);
+    let (charts, size) = (patches.len(), options.size);
+    let atlas: ChartLayout = match options.style {
+        Style::Flat => FlatLayout::fit_with(charts, size, options.gutter).map(ChartLayout::Flat),
+        Style::Packed => PackedLayout::fit(&patches.dims, size).map(ChartLayout::Packed),
+    }
+    .ok_or_else(|| {
+        BakeError::Resource(format!(
+            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
+        ))
+    })?;
+    check_memory(&Footprint::of(
+        grid,
+        &table,
+        quads.vertices.len(),
+        &atlas,
+        m,
+    ))?;
+    Ok((patches, table, atlas))
 }
 
 /// Stages 3 and 4: level 0's texel points (each shared one once), shaded on the GPU:

@@ -11,7 +11,7 @@
 //! level; side `s`'s texels are those of [`super::charts::side_texel_rect`].
 
 use super::charts::ChartTable;
-use super::{Atlas, Patches};
+use super::{ChartLayout, Patches};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -33,7 +33,7 @@ pub struct ChartEntry {
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChartsFile {
-    pub layout: Atlas,
+    pub layout: ChartLayout,
     /// The number of levels.
     pub levels: usize,
     pub charts: Vec<ChartEntry>,
@@ -44,13 +44,13 @@ impl ChartsFile {
     /// a flat atlas) over the cells of `table`. A packed chart's neighbours come from
     /// [`Patches::across`]; a side it cannot pair whole (never, for charts from
     /// [`super::patches::grow`]) is listed with no neighbour.
-    pub fn new(table: &ChartTable, atlas: &Atlas, patches: &Patches) -> ChartsFile {
+    pub fn new(table: &ChartTable, atlas: &ChartLayout, patches: &Patches) -> ChartsFile {
         let charts = (0..patches.len())
             .map(|p| ChartEntry {
                 corners: patches.corners(&table.corners, p),
                 rects: (0..atlas.levels()).map(|l| atlas.rect(p, l)).collect(),
                 neighbours: std::array::from_fn(|s| match atlas {
-                    Atlas::Flat(_) => table
+                    ChartLayout::Flat(_) => table
                         .neighbours(p, s)
                         .into_iter()
                         .map(|(chart, side, reversed)| Neighbour {
@@ -59,7 +59,7 @@ impl ChartsFile {
                             reversed,
                         })
                         .collect(),
-                    Atlas::Packed(_) => patches
+                    ChartLayout::Packed(_) => patches
                         .across(table, p, s)
                         .unwrap_or_default()
                         .into_iter()

@@ -164,7 +164,7 @@ fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Ve
         args.output.clone(),
         export::glb(&baked.mesh, &baked.textures, &baked.atlas, name)?,
     )];
-    if let (Some(path), sdfc::bake::Atlas::Flat(layout)) = (&args.ktx2, &baked.atlas) {
+    if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
             .levels
             .iter()
@@ -315,11 +315,11 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         r.chart_quads
     );
     match l {
-        sdfc::bake::Atlas::Flat(f) => eprintln!(
+        sdfc::bake::ChartLayout::Flat(f) => eprintln!(
             "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²)",
             f.width, f.height, r.charts, r.chart_size, r.levels
         ),
-        sdfc::bake::Atlas::Packed(p) => eprintln!(
+        sdfc::bake::ChartLayout::Packed(p) => eprintln!(
             "atlas:          {}×{} packed, {} charts of 1 to {} cells ({:.1} cells on average), {}² texels a cell, {} levels (down to 2² a cell)",
             p.width,
             p.height,
@@ -429,7 +429,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
                 "s": d.as_secs_f64(),
             })).collect::<Vec<_>>(),
         });
-        if let Err(code) = super::bench::write_json(path, &json) {
+        if let Err(code) = super::report::write_json(path, &json) {
             return code;
         }
     }

@@ -1,8 +1,11 @@
 //! `sdfc bench`: frame-time ratios measured in one run on one adapter.
 
 use super::{compile, BenchArgs};
-use sdfc::codegen::{Bounds, Options, SeedData, WalkForm};
-use sdfc::gpu::{self, ViewMode};
+use sdfc::codegen::{Bounds, Module, Options, SeedData, WalkForm};
+use sdfc::driver::Analysis;
+use sdfc::gpu::{self, Gpu, GpuError, Renderer, ViewMode};
+use sdfc::view::View;
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -21,18 +24,8 @@ fn median(mut v: Vec<Duration>) -> Duration {
 }
 
 pub fn run(args: BenchArgs) -> ExitCode {
-    let sweep = args.seed_sweep || args.scene.is_none();
-    if args.plot.is_some() && !args.scale && (!sweep || args.lsp_latency || args.bake) {
-        eprintln!("error: --plot draws the charts of --scale and --seed-sweep only");
-        return ExitCode::from(super::exit::USAGE);
-    }
-    // The chart's font, before minutes of measuring.
-    if let (Some(path), Err(e)) = (
-        &args.plot,
-        args.plot.as_ref().map_or(Ok(()), |_| super::plot::font()),
-    ) {
-        eprintln!("error: cannot draw the plot {}: {e}", path.display());
-        return ExitCode::from(super::exit::USAGE);
+    if let Err(code) = check_plot(&args) {
+        return code;
     }
     if args.scale {
         return super::scale::run(&args);
@@ -45,223 +38,473 @@ pub fn run(args: BenchArgs) -> ExitCode {
         Some(s) if !args.seed_sweep => s.clone(),
         _ => return super::sweep::run(&args),
     };
+    match frame_bench(&args, &scene) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+/// `--plot` only with the benchmarks that draw charts, and its font found before
+/// minutes of measuring.
+fn check_plot(args: &BenchArgs) -> Result<(), ExitCode> {
+    let sweep = args.seed_sweep || args.scene.is_none();
+    if args.plot.is_some() && !args.scale && (!sweep || args.lsp_latency || args.bake) {
+        eprintln!("error: --plot draws the charts of --scale and --seed-sweep only");
+        return Err(ExitCode::from(super::exit::USAGE));
+    }
+    // The chart's font, before minutes of measuring.
+    if let (Some(path), Err(e)) = (
+        &args.plot,
+        args.plot.as_ref().map_or(Ok(()), |_| super::plot::font()),
+    ) {
+        eprintln!("error: cannot draw the plot {}: {e}", path.display());
+        return Err(ExitCode::from(super::exit::USAGE));
+    }
+    Ok(())
+}
+
+/// The frame benchmark of one scene: every form of it measured on the GPU, the rows
+/// and their ratios printed (and written as JSON with `--json`).
+fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
     let t = Instant::now();
     let base = Options {
         ..Default::default()
     };
-    let (source, analysis, unrolled) = match compile::build(&scene, args.shape.as_deref(), &base) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
+    let (source, analysis, unrolled) = compile::build(scene, args.shape.as_deref(), &base)?;
     let compile_time = t.elapsed();
     let name = scene.display().to_string();
-    // The other forms from the same analysis: the geometry and lowering ran once.
-    let variant = |options: Options| {
-        sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &options)
-            .map(|c| c.module)
-            .map_err(|e| compile::report(&name, &source, e))
+    let from = Source {
+        analysis: &analysis,
+        shape: args.shape.as_deref(),
+        name: &name,
+        text: &source,
+        base: &base,
     };
-    let rolled = match variant(Options {
-        walk: WalkForm::Loop,
-        ..base.clone()
-    }) {
-        Ok(x) => x,
-        Err(code) => return code,
+    let forms = Forms::compile(&from, args, unrolled.module)?;
+    let mut view = super::view_for(&analysis, args.shape.as_deref())?;
+    (view.width, view.height) = args.size.unwrap_or((1920, 1080));
+    let gpu = super::open_gpu(args.backend)?;
+    let dir = super::base_dir(scene);
+    let rig = Rig {
+        gpu: &gpu,
+        view: &view,
+        dir: &dir,
+        frames: args.frames.max(1),
     };
-    let plain = match variant(Options {
-        plain: true,
-        ..base.clone()
-    }) {
-        Ok(x) => x,
-        Err(code) => return code,
+    let rows = Rows::new(&forms);
+    let (results, renderers) = rig.measure_rows(&rows.list).map_err(gpu_failed)?;
+    let (built, again) = rig.cached(&forms.rolled).map_err(gpu_failed)?;
+    let mut alternated = Vec::new();
+    for (label, with, without) in rows.pairs(forms.other_seed_data()) {
+        let r = rig
+            .paired(&renderers[with], &renderers[without])
+            .map_err(gpu_failed)?;
+        alternated.push((label, r, "frames alternated"));
+    }
+    let report = Report {
+        scene: name,
+        adapter: gpu.describe(),
+        size: [view.width, view.height],
+        frames: rig.frames,
+        compile_time,
+        results,
+        built,
+        again,
     };
-    // Every atlas a constant sample: the same shading, shadows and texture reads
-    // without the walks (what the atlases cost).
-    let constant = match variant(Options {
-        walk: WalkForm::Loop,
-        constant_uv: true,
-        ..base.clone()
-    }) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
-    // Without the warm start of Alg. 2's search, to measure what it saves.
-    let cold = match variant(Options {
-        walk: WalkForm::Loop,
-        cold: true,
-        ..base.clone()
-    }) {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
-    // The walks pruned per seed (uv::prune, opt-in), measured against the default loop.
-    let pruned = if analysis
-        .atlases
-        .iter()
-        .flatten()
-        .any(|a| a.pruning().is_some())
-    {
-        match variant(Options {
+    report.print_rows();
+    let ratios = report.ratios(rows.undisplaced, alternated, &analysis, args);
+    print_ratios(&ratios);
+    if let Some(path) = &args.json {
+        super::report::write_json(path, &report.json(&ratios))?;
+    }
+    Ok(())
+}
+
+/// A GPU failure printed, as its exit status.
+fn gpu_failed(e: GpuError) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::from(super::exit::gpu(&e))
+}
+
+/// What the forms of a scene are compiled from: its analysis, its name and text (for
+/// the error reports) and the options as given.
+struct Source<'a> {
+    analysis: &'a Analysis,
+    /// The `let` shape measured instead of the render item's target (`--shape`).
+    shape: Option<&'a str>,
+    name: &'a str,
+    text: &'a str,
+    base: &'a Options,
+}
+
+impl Source<'_> {
+    /// The scene with other options, from the same analysis: the geometry and the
+    /// lowering ran once.
+    fn variant(&self, options: Options) -> Result<Module, ExitCode> {
+        self.compile(self.analysis, options)
+    }
+
+    /// A loop walk with `edit` made to the options as given.
+    fn looped(&self, edit: impl FnOnce(&mut Options)) -> Result<Module, ExitCode> {
+        let mut options = Options {
             walk: WalkForm::Loop,
-            prune: true,
-            ..base.clone()
-        }) {
-            Ok(m) => Some(m),
-            Err(code) => return code,
-        }
-    } else {
-        None
-    };
-    // The seeds and merge graphs in the tables buffer against baked in, whichever the
-    // default picks for the scene's largest atlas, measured against the default loop.
-    let most_seeds = analysis
+            ..self.base.clone()
+        };
+        edit(&mut options);
+        self.variant(options)
+    }
+
+    /// `analysis` (this scene's, changed) compiled with `options`.
+    fn compile(&self, analysis: &Analysis, options: Options) -> Result<Module, ExitCode> {
+        sdfc::driver::compile_shape(analysis, self.shape, &options)
+            .map(|c| c.module)
+            .map_err(|e| compile::report(self.name, self.text, e))
+    }
+}
+
+/// The forms of the scene that the bench measures against each other.
+struct Forms {
+    plain: Module,
+    unrolled: Module,
+    rolled: Module,
+    cold: Module,
+    constant: Module,
+    pruned: Option<Module>,
+    /// The seeds where the default does not put them, and that form.
+    other_form: Option<(SeedData, Module)>,
+    /// Plain with the costly bounds, loop with the costly bounds, loop with all.
+    bounded: Vec<Module>,
+    undisplaced: Option<Module>,
+    /// Without normal maps: unrolled, loop.
+    unmapped: Vec<Module>,
+    /// `refine = 1`, `2`.
+    refined: Vec<Module>,
+}
+
+impl Forms {
+    fn compile(from: &Source, args: &BenchArgs, unrolled: Module) -> Result<Forms, ExitCode> {
+        let rolled = from.looped(|_| {})?;
+        let plain = from.variant(Options {
+            plain: true,
+            ..from.base.clone()
+        })?;
+        // Every atlas a constant sample: the same shading, shadows and texture reads
+        // without the walks (what the atlases cost).
+        let constant = from.looped(|o| o.constant_uv = true)?;
+        // Without the warm start of Alg. 2's search, to measure what it saves.
+        let cold = from.looped(|o| o.cold = true)?;
+        let pruned = pruned_form(from)?;
+        let other_form = other_seed_form(from)?;
+        let bounded = bounded_forms(from, &rolled)?;
+        let undisplaced = undisplaced_form(from, args)?;
+        let unmapped = unmapped_forms(from)?;
+        let refined = refined_forms(from)?;
+        Ok(Forms {
+            plain,
+            unrolled,
+            rolled,
+            cold,
+            constant,
+            pruned,
+            other_form,
+            bounded,
+            undisplaced,
+            unmapped,
+            refined,
+        })
+    }
+
+    fn other_seed_data(&self) -> Option<SeedData> {
+        self.other_form.as_ref().map(|(data, _)| *data)
+    }
+}
+
+/// The walks pruned per seed (uv::prune, opt-in), measured against the default loop;
+/// None when no atlas prunes.
+fn pruned_form(from: &Source) -> Result<Option<Module>, ExitCode> {
+    let atlases = || from.analysis.atlases.iter().flatten();
+    if !atlases().any(|a| a.pruning().is_some()) {
+        return Ok(None);
+    }
+    from.looped(|o| o.prune = true).map(Some)
+}
+
+/// The seeds and merge graphs in the tables buffer against baked in, whichever the
+/// default picks for the scene's largest atlas, measured against the default loop;
+/// None without atlases.
+fn other_seed_form(from: &Source) -> Result<Option<(SeedData, Module)>, ExitCode> {
+    let most_seeds = from
+        .analysis
         .atlases
         .iter()
         .flatten()
         .map(|a| a.seeds.len())
         .max();
-    let other_seed_data = most_seeds.map(|n| {
-        if SeedData::Auto.in_buffer(n) {
-            SeedData::Baked
-        } else {
-            SeedData::Buffer
-        }
-    });
-    let other_form = match other_seed_data {
-        Some(seed_data) => match variant(Options {
-            walk: WalkForm::Loop,
-            seed_data,
-            ..base.clone()
-        }) {
-            Ok(m) => Some(m),
-            Err(code) => return code,
-        },
-        None => None,
+    let Some(n) = most_seeds else {
+        return Ok(None);
     };
-    // Unions' operands skipped by their boxes (ir::guard, opt-in): the costly ones, and
-    // every one, against none (the default), where the forms differ.
+    let seed_data = if SeedData::Auto.in_buffer(n) {
+        SeedData::Baked
+    } else {
+        SeedData::Buffer
+    };
+    let module = from.looped(|o| o.seed_data = seed_data)?;
+    Ok(Some((seed_data, module)))
+}
+
+/// Unions' operands skipped by their boxes (ir::guard, opt-in): the costly ones, and
+/// every one, against none (the default), where the forms differ from `rolled`.
+fn bounded_forms(from: &Source, rolled: &Module) -> Result<Vec<Module>, ExitCode> {
     let mut bounded = Vec::new();
     for (plain, bounds) in [
         (true, Bounds::Costly),
         (false, Bounds::Costly),
         (false, Bounds::All),
     ] {
-        match variant(Options {
-            walk: WalkForm::Loop,
-            plain,
-            bounds,
-            ..base.clone()
-        }) {
-            Ok(m) => bounded.push(m),
-            Err(code) => return code,
-        }
+        bounded.push(from.looped(|o| {
+            o.plain = plain;
+            o.bounds = bounds;
+        })?);
     }
     if bounded[1].wgsl == rolled.wgsl && bounded[2].wgsl == rolled.wgsl {
         bounded.clear();
     }
-    // A displaced render target: the same scene with every displacement replaced by its
-    // base (the plain textured render), to measure what displacement costs.
+    Ok(bounded)
+}
+
+/// A displaced render target: the same scene with every displacement replaced by its
+/// base (the plain textured render), to measure what displacement costs.
+fn undisplaced_form(from: &Source, args: &BenchArgs) -> Result<Option<Module>, ExitCode> {
+    let analysis = from.analysis;
     let target = analysis.program.render.as_ref().map(|r| &r.target);
-    let undisplaced =
-        match target.filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some()) {
-            Some(t) => {
-                let mut scene = analysis.scene.clone().unwrap_or_default();
-                scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));
-                let options = Options {
-                    walk: WalkForm::Loop,
-                    ..base.clone()
-                };
-                let Some(shape) = scene.render.as_ref() else {
-                    eprintln!("error: the undisplaced scene has no render target");
-                    return ExitCode::from(super::exit::ICE);
-                };
-                let target = sdfc::codegen::Rendered { shape, name: None };
-                match sdfc::codegen::generate(
-                    &analysis.program,
-                    &scene,
-                    &analysis.atlases,
-                    target,
-                    &options,
-                ) {
-                    Ok(m) => Some(m),
-                    Err(d) => {
-                        eprintln!("error: cannot compile the undisplaced scene: {d:?}");
-                        return ExitCode::from(super::exit::ICE);
-                    }
-                }
-            }
-            None => None,
-        };
-    let unrolled = unrolled.module;
-    // The same scene with every material's `normal` back to the surface normal: the
-    // plain textured render that normal maps are measured against.
+    let Some(t) = target.filter(|t| args.shape.is_none() && sdfc::sema::displaced(t).is_some())
+    else {
+        return Ok(None);
+    };
+    let mut scene = analysis.scene.clone().unwrap_or_default();
+    scene.render = sdfc::ir::lower_shape(&sdfc::sema::undisplaced(t));
+    let options = Options {
+        walk: WalkForm::Loop,
+        ..from.base.clone()
+    };
+    let Some(shape) = scene.render.as_ref() else {
+        eprintln!("error: the undisplaced scene has no render target");
+        return Err(ExitCode::from(super::exit::ICE));
+    };
+    let target = sdfc::codegen::Rendered { shape, name: None };
+    match sdfc::codegen::generate(
+        &analysis.program,
+        &scene,
+        &analysis.atlases,
+        target,
+        &options,
+    ) {
+        Ok(m) => Ok(Some(m)),
+        Err(d) => {
+            eprintln!("error: cannot compile the undisplaced scene: {d:?}");
+            Err(ExitCode::from(super::exit::ICE))
+        }
+    }
+}
+
+/// The same scene with every material's `normal` back to the surface normal, unrolled
+/// and loop: the plain textured render that normal maps are measured against. Empty
+/// without normal maps.
+fn unmapped_forms(from: &Source) -> Result<Vec<Module>, ExitCode> {
     let flat = sdfc::sema::MaterialAttrs::default().normal;
-    let normal_maps = analysis
-        .program
-        .materials
-        .iter()
-        .any(|m| m.attrs.normal != flat);
+    let program = &from.analysis.program;
+    if !program.materials.iter().any(|m| m.attrs.normal != flat) {
+        return Ok(Vec::new());
+    }
+    let mut without = from.analysis.clone();
+    for m in &mut without.program.materials {
+        m.attrs.normal = flat.clone();
+    }
     let mut unmapped = Vec::new();
-    if normal_maps {
-        let mut without = analysis.clone();
-        for m in &mut without.program.materials {
-            m.attrs.normal = flat.clone();
-        }
-        for walk in [WalkForm::Unrolled, WalkForm::Loop] {
-            let options = Options {
-                walk,
-                ..base.clone()
-            };
-            match sdfc::driver::compile_shape(&without, args.shape.as_deref(), &options) {
-                Ok(c) => unmapped.push(c.module),
-                Err(e) => return compile::report(&name, &source, e),
-            }
-        }
+    for walk in [WalkForm::Unrolled, WalkForm::Loop] {
+        let options = Options {
+            walk,
+            ..from.base.clone()
+        };
+        unmapped.push(from.compile(&without, options)?);
     }
-    // Every atlas refined (`refine = 1`, `2`), loop walk: what the log map's Newton
-    // corrections cost against the scene as written.
+    Ok(unmapped)
+}
+
+/// Every atlas refined (`refine = 1`, `2`), loop walk: what the log map's Newton
+/// corrections cost against the scene as written. Empty when every atlas refines.
+fn refined_forms(from: &Source) -> Result<Vec<Module>, ExitCode> {
+    let atlases = || from.analysis.atlases.iter().flatten();
+    if !atlases().any(|a| a.params.refine == 0) {
+        return Ok(Vec::new());
+    }
     let mut refined = Vec::new();
-    if analysis
-        .atlases
-        .iter()
-        .flatten()
-        .any(|a| a.params.refine == 0)
-    {
-        for k in [1, 2] {
-            let mut with = analysis.clone();
-            for a in with.atlases.iter_mut().flatten() {
-                a.params.refine = k;
-            }
-            let options = Options {
-                walk: WalkForm::Loop,
-                ..base.clone()
+    for k in [1, 2] {
+        let mut with = from.analysis.clone();
+        for a in with.atlases.iter_mut().flatten() {
+            a.params.refine = k;
+        }
+        let options = Options {
+            walk: WalkForm::Loop,
+            ..from.base.clone()
+        };
+        refined.push(from.compile(&with, options)?);
+    }
+    Ok(refined)
+}
+
+/// The rows measured, in order (the first five always: plain, unrolled, loop, cold
+/// start, constant uv), and where the optional ones are.
+struct Rows<'a> {
+    list: Vec<(&'static str, &'a Module, ViewMode)>,
+    pruned: Option<usize>,
+    other_form: Option<usize>,
+    bounded: Option<(usize, usize, usize)>,
+    undisplaced: Option<usize>,
+    unmapped: Option<(usize, usize)>,
+    refined: Option<(usize, usize)>,
+}
+
+impl<'a> Rows<'a> {
+    fn new(forms: &'a Forms) -> Rows<'a> {
+        let mut list = vec![
+            (
+                "plain sphere trace (no materials)",
+                &forms.plain,
+                ViewMode::Color,
+            ),
+            ("shaded, unrolled walk", &forms.unrolled, ViewMode::Color),
+            ("shaded, loop walk", &forms.rolled, ViewMode::Color),
+            (
+                "shaded, loop walk, cold start",
+                &forms.cold,
+                ViewMode::Color,
+            ),
+            (
+                "shaded, constant uv (no walks)",
+                &forms.constant,
+                ViewMode::Color,
+            ),
+        ];
+        let mut push = |rows: &[(&'static str, &'a Module)]| {
+            let first = list.len();
+            list.extend(rows.iter().map(|&(name, m)| (name, m, ViewMode::Color)));
+            first
+        };
+        let pruned = forms
+            .pruned
+            .as_ref()
+            .map(|m| push(&[("shaded, loop walk, pruned", m)]));
+        let other_form = forms.other_form.as_ref().map(|(data, m)| {
+            let name = if *data == SeedData::Buffer {
+                "shaded, loop walk, seeds in buffer"
+            } else {
+                "shaded, loop walk, seeds baked in"
             };
-            match sdfc::driver::compile_shape(&with, args.shape.as_deref(), &options) {
-                Ok(c) => refined.push(c.module),
-                Err(e) => return compile::report(&name, &source, e),
+            push(&[(name, m)])
+        });
+        let bounded = match &forms.bounded[..] {
+            [plain_costly, costly, all] => {
+                let k = push(&[
+                    ("plain, node bounds (costly)", plain_costly),
+                    ("shaded, loop walk, node bounds", costly),
+                    ("shaded, loop walk, all bounded", all),
+                ]);
+                Some((k, k + 1, k + 2))
             }
+            _ => None,
+        };
+        let undisplaced = forms
+            .undisplaced
+            .as_ref()
+            .map(|m| push(&[("textured, undisplaced, loop walk", m)]));
+        let unmapped = match &forms.unmapped[..] {
+            [unrolled, rolled] => {
+                let k = push(&[
+                    ("shaded, no normal maps, unrolled", unrolled),
+                    ("shaded, no normal maps, loop", rolled),
+                ]);
+                Some((k, k + 1))
+            }
+            _ => None,
+        };
+        let refined = match &forms.refined[..] {
+            [one, two] => {
+                let k = push(&[
+                    ("shaded, loop walk, refine = 1", one),
+                    ("shaded, loop walk, refine = 2", two),
+                ]);
+                Some((k, k + 1))
+            }
+            _ => None,
+        };
+        Rows {
+            list,
+            pruned,
+            other_form,
+            bounded,
+            undisplaced,
+            unmapped,
+            refined,
         }
     }
-    let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
-        Ok(v) => v,
-        Err(code) => return code,
-    };
-    (view.width, view.height) = args.size.unwrap_or((1920, 1080));
-    let gpu = match super::open_gpu(args.backend) {
-        Ok(g) => g,
-        Err(code) => return code,
-    };
-    let dir = super::base_dir(&scene);
-    let measure = |module: &sdfc::codegen::Module,
-                   mode: ViewMode|
-     -> Result<(Row, gpu::Renderer), gpu::GpuError> {
-        // One pipeline per module, built (not found in the device's cache); a warm-up
-        // frame, then the measured ones; then one frame of the evals view for the
-        // evaluations per pixel.
+
+    /// The comparisons whose frames are alternated one by one (label, with, without):
+    /// the warm start against none; the scene against its constant-uv twin (row 4),
+    /// unrolled and loop, which is what the atlases cost with everything else equal;
+    /// refined against the scene's own; normal maps against none.
+    fn pairs(&self, other_seed_data: Option<SeedData>) -> Vec<(&'static str, usize, usize)> {
+        let mut pairs = vec![
+            ("warm ÷ cold start, loop", 2, 3),
+            ("textured ÷ constant uv, unrolled", 1, 4),
+            ("textured ÷ constant uv, loop", 2, 4),
+        ];
+        if let Some(k) = self.other_form {
+            pairs.push(if other_seed_data == Some(SeedData::Buffer) {
+                ("seeds in buffer ÷ baked, loop", k, 2)
+            } else {
+                ("seeds baked ÷ in buffer, loop", k, 2)
+            });
+        }
+        if let Some(k) = self.pruned {
+            pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
+        }
+        if let Some((plain_costly, costly, all)) = self.bounded {
+            pairs.push(("node bounds ÷ none, plain", plain_costly, 0));
+            pairs.push(("node bounds ÷ none, loop", costly, 2));
+            pairs.push(("all bounded ÷ none, loop", all, 2));
+        }
+        if let Some((one, two)) = self.refined {
+            pairs.push(("refine = 1 ÷ 0, loop", one, 2));
+            pairs.push(("refine = 2 ÷ 0, loop", two, 2));
+        }
+        if let Some((no_unrolled, no_loop)) = self.unmapped {
+            pairs.push(("normal maps ÷ none, unrolled", 1, no_unrolled));
+            pairs.push(("normal maps ÷ none, loop", 2, no_loop));
+        }
+        pairs
+    }
+}
+
+/// Where the frames are measured: the adapter, the view, the scene's folder (for its
+/// textures) and the frames per measurement.
+struct Rig<'a> {
+    gpu: &'a Gpu,
+    view: &'a View,
+    dir: &'a Path,
+    frames: u32,
+}
+
+impl Rig<'_> {
+    /// One pipeline per module, built (not found in the device's cache); a warm-up
+    /// frame, then the measured ones; then one frame of the evals view for the
+    /// evaluations per pixel.
+    fn measure(&self, module: &Module, mode: ViewMode) -> Result<(Row, Renderer), GpuError> {
+        let (gpu, view) = (self.gpu, self.view);
         gpu.pipelines.clear();
-        let renderer = gpu::Renderer::new(&gpu, module, &dir)?;
-        let (_, frames) = renderer.frames(&gpu, &view, mode, 1, args.frames.max(1))?;
-        let (evals, _) = renderer.frames(&gpu, &view, ViewMode::Evals, 0, 1)?;
+        let renderer = Renderer::new(gpu, module, self.dir)?;
+        let (_, frames) = renderer.frames(gpu, view, mode, 1, self.frames)?;
+        let (evals, _) = renderer.frames(gpu, view, ViewMode::Evals, 0, 1)?;
         let (evals_mean, evals_p95, _) = gpu::eval_stats(&evals);
         let row = Row {
             pipeline: renderer.pipeline_time,
@@ -270,226 +513,164 @@ pub fn run(args: BenchArgs) -> ExitCode {
             evals_p95,
         };
         Ok((row, renderer))
-    };
-    // Two pipelines' frames alternated one by one, so that a load that drifts during
-    // the run (a shared machine, a software adapter) weighs on both alike: the
-    // ratio of their medians.
-    let paired = |a: &gpu::Renderer, b: &gpu::Renderer| -> Result<f64, gpu::GpuError> {
+    }
+
+    /// Every row measured, in order, with the renderers for the alternated pairs.
+    fn measure_rows(
+        &self,
+        rows: &[(&'static str, &Module, ViewMode)],
+    ) -> Result<Measured, GpuError> {
+        let mut results = Vec::new();
+        let mut renderers = Vec::new();
+        for &(name, module, mode) in rows {
+            let (r, renderer) = self.measure(module, mode)?;
+            results.push((name, r));
+            renderers.push(renderer);
+        }
+        Ok((results, renderers))
+    }
+
+    /// The loop walk's pipeline built, then asked for again: the in-process cache
+    /// (gpu::cache) that a viewer reload with unchanged WGSL hits. (built, again).
+    fn cached(&self, rolled: &Module) -> Result<(Duration, Duration), GpuError> {
+        let gpu = self.gpu;
+        gpu.pipelines.clear();
+        let built = Renderer::new(gpu, rolled, self.dir)?;
+        let again = Renderer::new(gpu, rolled, self.dir)?;
+        Ok((built.pipeline_time, again.pipeline_time))
+    }
+
+    /// Two pipelines' frames alternated one by one, so that a load that drifts during
+    /// the run (a shared machine, a software adapter) weighs on both alike: the ratio
+    /// of their medians.
+    fn paired(&self, a: &Renderer, b: &Renderer) -> Result<f64, GpuError> {
+        let (gpu, view) = (self.gpu, self.view);
         let (mut ta, mut tb) = (Vec::new(), Vec::new());
-        for _ in 0..args.frames.max(1) {
-            ta.extend(a.frames(&gpu, &view, ViewMode::Color, 0, 1)?.1);
-            tb.extend(b.frames(&gpu, &view, ViewMode::Color, 0, 1)?.1);
+        for _ in 0..self.frames {
+            ta.extend(a.frames(gpu, view, ViewMode::Color, 0, 1)?.1);
+            tb.extend(b.frames(gpu, view, ViewMode::Color, 0, 1)?.1);
         }
         Ok(median(ta).as_secs_f64() / median(tb).as_secs_f64())
-    };
-    let mut rows = vec![
-        ("plain sphere trace (no materials)", &plain, ViewMode::Color),
-        ("shaded, unrolled walk", &unrolled, ViewMode::Color),
-        ("shaded, loop walk", &rolled, ViewMode::Color),
-        ("shaded, loop walk, cold start", &cold, ViewMode::Color),
-        ("shaded, constant uv (no walks)", &constant, ViewMode::Color),
-    ];
-    let mut pruned_row = None;
-    if let Some(m) = &pruned {
-        pruned_row = Some(rows.len());
-        rows.push(("shaded, loop walk, pruned", m, ViewMode::Color));
     }
-    let mut other_form_row = None;
-    if let Some(m) = &other_form {
-        other_form_row = Some(rows.len());
-        rows.push((
-            if other_seed_data == Some(SeedData::Buffer) {
-                "shaded, loop walk, seeds in buffer"
-            } else {
-                "shaded, loop walk, seeds baked in"
-            },
-            m,
-            ViewMode::Color,
-        ));
-    }
-    let mut bounded_rows = None;
-    if let [plain_costly, costly, all] = &bounded[..] {
-        bounded_rows = Some((rows.len(), rows.len() + 1, rows.len() + 2));
-        rows.push(("plain, node bounds (costly)", plain_costly, ViewMode::Color));
-        rows.push(("shaded, loop walk, node bounds", costly, ViewMode::Color));
-        rows.push(("shaded, loop walk, all bounded", all, ViewMode::Color));
-    }
-    let mut undisplaced_row = None;
-    if let Some(m) = &undisplaced {
-        undisplaced_row = Some(rows.len());
-        rows.push(("textured, undisplaced, loop walk", m, ViewMode::Color));
-    }
-    let mut unmapped_rows = None;
-    if let [unrolled, rolled] = &unmapped[..] {
-        unmapped_rows = Some((rows.len(), rows.len() + 1));
-        rows.push((
-            "shaded, no normal maps, unrolled",
-            unrolled,
-            ViewMode::Color,
-        ));
-        rows.push(("shaded, no normal maps, loop", rolled, ViewMode::Color));
-    }
-    let mut refined_rows = None;
-    if let [one, two] = &refined[..] {
-        refined_rows = Some((rows.len(), rows.len() + 1));
-        rows.push(("shaded, loop walk, refine = 1", one, ViewMode::Color));
-        rows.push(("shaded, loop walk, refine = 2", two, ViewMode::Color));
-    }
-    let mut results = Vec::new();
-    let mut renderers = Vec::new();
-    for (name, module, mode) in rows {
-        match measure(module, mode) {
-            Ok((r, renderer)) => {
-                results.push((name, r));
-                renderers.push(renderer);
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(super::exit::gpu(&e));
-            }
-        }
-    }
-    // The loop walk's pipeline built, then asked for again: the in-process cache
-    // (gpu::cache) that a viewer reload with unchanged WGSL hits.
-    gpu.pipelines.clear();
-    let again = gpu::Renderer::new(&gpu, &rolled, &dir)
-        .and_then(|built| Ok((built, gpu::Renderer::new(&gpu, &rolled, &dir)?)));
-    let (built, again) = match again {
-        Ok((a, b)) => (a.pipeline_time, b.pipeline_time),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(super::exit::gpu(&e));
-        }
-    };
-    // The comparisons whose frames are alternated one by one (with, without): the warm
-    // start against none; the scene against its constant-uv twin (row 4), unrolled and
-    // loop, which is what the atlases cost with everything else equal; refined against
-    // the scene's own; normal maps against none.
-    let mut pairs = vec![
-        ("warm ÷ cold start, loop", 2, 3),
-        ("textured ÷ constant uv, unrolled", 1, 4),
-        ("textured ÷ constant uv, loop", 2, 4),
-    ];
-    if let Some(k) = other_form_row {
-        pairs.push(if other_seed_data == Some(SeedData::Buffer) {
-            ("seeds in buffer ÷ baked, loop", k, 2)
-        } else {
-            ("seeds baked ÷ in buffer, loop", k, 2)
-        });
-    }
-    if let Some(k) = pruned_row {
-        pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
-    }
-    if let Some((plain_costly, costly, all)) = bounded_rows {
-        pairs.push(("node bounds ÷ none, plain", plain_costly, 0));
-        pairs.push(("node bounds ÷ none, loop", costly, 2));
-        pairs.push(("all bounded ÷ none, loop", all, 2));
-    }
-    if let Some((one, two)) = refined_rows {
-        pairs.push(("refine = 1 ÷ 0, loop", one, 2));
-        pairs.push(("refine = 2 ÷ 0, loop", two, 2));
-    }
-    if let Some((no_unrolled, no_loop)) = unmapped_rows {
-        pairs.push(("normal maps ÷ none, unrolled", 1, no_unrolled));
-        pairs.push(("normal maps ÷ none, loop", 2, no_loop));
-    }
-    let mut alternated = Vec::new();
-    for (label, with, without) in pairs {
-        match paired(&renderers[with], &renderers[without]) {
-            Ok(r) => alternated.push((label, r, "frames alternated")),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(super::exit::gpu(&e));
-            }
-        }
-    }
-    let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    println!("scene:     {}", scene.display());
-    println!("adapter:   {}", gpu.describe());
-    println!(
-        "size:      {}x{}, median of {} frames",
-        view.width,
-        view.height,
-        args.frames.max(1)
-    );
-    println!(
-        "compile:   {:.2} ms (parse → validated WGSL)",
-        ms(compile_time)
-    );
-    for (name, r) in &results {
+}
+
+/// The rows' results by name, and their renderers.
+type Measured = (Vec<(&'static str, Row)>, Vec<Renderer>);
+
+/// A ratio: label, value, how it was measured ("" for one after the other).
+type Ratio = (&'static str, f64, &'static str);
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// What the frame benchmark measured.
+struct Report {
+    scene: String,
+    adapter: String,
+    size: [u32; 2],
+    frames: u32,
+    compile_time: Duration,
+    results: Vec<(&'static str, Row)>,
+    /// The loop walk's pipeline built, and found in the cache.
+    built: Duration,
+    again: Duration,
+}
+
+impl Report {
+    fn print_rows(&self) {
+        println!("scene:     {}", self.scene);
+        println!("adapter:   {}", self.adapter);
         println!(
-            "{name:34} pipeline {:9.2} ms   frame {:9.2} ms   evals/px {:7.1} (p95 {:.0})",
-            ms(r.pipeline),
-            ms(r.frame),
-            r.evals_mean,
-            r.evals_p95
+            "size:      {}x{}, median of {} frames",
+            self.size[0], self.size[1], self.frames
+        );
+        println!(
+            "compile:   {:.2} ms (parse → validated WGSL)",
+            ms(self.compile_time)
+        );
+        for (name, r) in &self.results {
+            println!(
+                "{name:34} pipeline {:9.2} ms   frame {:9.2} ms   evals/px {:7.1} (p95 {:.0})",
+                ms(r.pipeline),
+                ms(r.frame),
+                r.evals_mean,
+                r.evals_p95
+            );
+        }
+        println!(
+            "{:34} pipeline {:9.2} ms   (built again: {:.2} ms)",
+            "loop walk, same WGSL again (cache)",
+            ms(self.again),
+            ms(self.built)
         );
     }
-    println!(
-        "{:34} pipeline {:9.2} ms   (built again: {:.2} ms)",
-        "loop walk, same WGSL again (cache)",
-        ms(again),
-        ms(built)
-    );
-    let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
-    // (label, value, how it was measured)
-    let mut ratios: Vec<(&str, f64, &str)> = vec![
-        (
-            "shaded ÷ plain, unrolled",
-            ms(unrolled_r.frame) / ms(plain.frame),
-            "",
-        ),
-        (
-            "shaded ÷ plain, loop",
-            ms(loop_r.frame) / ms(plain.frame),
-            "",
-        ),
-        (
-            "unrolled ÷ loop, frame",
-            ms(unrolled_r.frame) / ms(loop_r.frame),
-            "",
-        ),
-        (
-            "unrolled ÷ loop, pipeline",
-            ms(unrolled_r.pipeline) / ms(loop_r.pipeline),
-            "",
-        ),
-    ];
-    if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
-        // Displacements and shell maps alike are replaced by their base.
-        ratios.push((
-            "displaced ÷ undisplaced, loop",
-            ms(loop_r.frame) / ms(undisplaced.frame),
-            "",
-        ));
+
+    /// The ratios: shaded against plain and unrolled against loop from the rows, the
+    /// displaced against the undisplaced row, the alternated pairs, and the CPU
+    /// reference's bounds.
+    fn ratios(
+        &self,
+        undisplaced_row: Option<usize>,
+        alternated: Vec<Ratio>,
+        analysis: &Analysis,
+        args: &BenchArgs,
+    ) -> Vec<Ratio> {
+        let results = &self.results;
+        let (plain, unrolled_r, loop_r) = (results[0].1, results[1].1, results[2].1);
+        let mut ratios: Vec<Ratio> = vec![
+            (
+                "shaded ÷ plain, unrolled",
+                ms(unrolled_r.frame) / ms(plain.frame),
+                "",
+            ),
+            (
+                "shaded ÷ plain, loop",
+                ms(loop_r.frame) / ms(plain.frame),
+                "",
+            ),
+            (
+                "unrolled ÷ loop, frame",
+                ms(unrolled_r.frame) / ms(loop_r.frame),
+                "",
+            ),
+            (
+                "unrolled ÷ loop, pipeline",
+                ms(unrolled_r.pipeline) / ms(loop_r.pipeline),
+                "",
+            ),
+        ];
+        if let Some((_, undisplaced)) = undisplaced_row.map(|k| results[k]) {
+            // Displacements and shell maps alike are replaced by their base.
+            ratios.push((
+                "displaced ÷ undisplaced, loop",
+                ms(loop_r.frame) / ms(undisplaced.frame),
+                "",
+            ));
+        }
+        ratios.extend(alternated);
+        if let Some(r) = analysis
+            .scene
+            .as_ref()
+            .and_then(|scene| sdfc::driver::pick_shape(scene, args.shape.as_deref()).ok())
+            .and_then(cpu_bounds_ratio)
+        {
+            ratios.push(("CPU reference, node bounds ÷ none", r, "f64, alternated"));
+        }
+        ratios
     }
-    ratios.extend(alternated);
-    if let Some(r) = analysis
-        .scene
-        .as_ref()
-        .and_then(|scene| sdfc::driver::pick_shape(scene, args.shape.as_deref()).ok())
-        .and_then(cpu_bounds_ratio)
-    {
-        ratios.push(("CPU reference, node bounds ÷ none", r, "f64, alternated"));
-    }
-    for (label, value, how) in &ratios {
-        let how = if how.is_empty() {
-            String::new()
-        } else {
-            format!(" ({how})")
-        };
-        println!("ratio {:34} {value:.2}{how}", format!("{label}:"));
-    }
-    if let Some(path) = &args.json {
-        let json = serde_json::json!({
-            "scene": scene.display().to_string(),
-            "adapter": gpu.describe(),
-            "size": [view.width, view.height],
-            "frames": args.frames.max(1),
-            "compile_ms": ms(compile_time),
-            "pipeline_cached_ms": ms(again),
-            "pipeline_rebuilt_ms": ms(built),
-            "rows": results.iter().map(|(name, r)| serde_json::json!({
+
+    /// The `--json` report.
+    fn json(&self, ratios: &[Ratio]) -> serde_json::Value {
+        serde_json::json!({
+            "scene": self.scene,
+            "adapter": self.adapter,
+            "size": self.size,
+            "frames": self.frames,
+            "compile_ms": ms(self.compile_time),
+            "pipeline_cached_ms": ms(self.again),
+            "pipeline_rebuilt_ms": ms(self.built),
+            "rows": self.results.iter().map(|(name, r)| serde_json::json!({
                 "name": name,
                 "pipeline_ms": ms(r.pipeline),
                 "frame_ms": ms(r.frame),
@@ -501,23 +682,19 @@ pub fn run(args: BenchArgs) -> ExitCode {
                 "value": value,
                 "measured": if how.is_empty() { "one after the other" } else { how },
             })).collect::<Vec<_>>(),
-        });
-        if let Err(code) = write_json(path, &json) {
-            return code;
-        }
+        })
     }
-    ExitCode::SUCCESS
 }
 
-/// Writes a bench's `--json` report atomically.
-pub fn write_json(path: &std::path::Path, json: &serde_json::Value) -> Result<(), ExitCode> {
-    let text = serde_json::to_string_pretty(json).unwrap_or_default() + "\n";
-    if let Err(e) = sdfc::fsutil::write_output(path, text.as_bytes()) {
-        eprintln!("error: cannot write {}: {e}", path.display());
-        return Err(ExitCode::from(super::exit::USAGE));
+fn print_ratios(ratios: &[Ratio]) {
+    for (label, value, how) in ratios {
+        let how = if how.is_empty() {
+            String::new()
+        } else {
+            format!(" ({how})")
+        };
+        println!("ratio {:34} {value:.2}{how}", format!("{label}:"));
     }
-    eprintln!("wrote {}", path.display());
-    Ok(())
 }
 
 /// The CPU reference with its unions' guards (`ir::guard`, always on) against every

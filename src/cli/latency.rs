@@ -219,7 +219,7 @@ pub fn run(path: &Path, edits: u32, json: Option<&Path>) -> ExitCode {
         }
     }
     if let Some(out) = json {
-        if let Err(code) = super::bench::write_json(out, &report) {
+        if let Err(code) = super::report::write_json(out, &report) {
             return code;
         }
     }

@@ -3,7 +3,7 @@
 //! camera frames the mesh's bounds and the light is the `render` item's default, or
 //! both come from a scene's `render` item with `--camera-from SCENE`.
 
-use super::render::write_frame;
+use super::frame::write_frame;
 use super::RenderArgs;
 use sdfc::bake::export::ReadError;
 use sdfc::gpu::{MeshError, MeshRenderer};

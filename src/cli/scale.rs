@@ -159,7 +159,7 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
                 })),
             })).collect::<Vec<_>>(),
         });
-        super::bench::write_json(path, &json)?;
+        super::report::write_json(path, &json)?;
     }
     plotted
 }

@@ -191,7 +191,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
                 "ms": ms(*t),
             })).collect::<Vec<_>>(),
         });
-        super::bench::write_json(path, &json)?;
+        super::report::write_json(path, &json)?;
     }
     plotted
 }

@@ -92,72 +92,12 @@ pub fn emit(
     let pruning = (options.prune && !options.constant_uv)
         .then(|| atlas.pruning())
         .flatten();
-    let field_fn = match &pruning {
-        None => {
-            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
-            format!(
-                "fn atlas_{k}_f(p: vec3<f32>) -> f32 {{\n    sdf_evals = sdf_evals + 1u;\n{}    return {field}.x;\n}}\n",
-                w.out
-            )
-        }
-        Some(pr) => {
-            // The whole field, for points outside the guard or the window.
-            let mut whole = Writer::new(&format!("atlas_{k}_whole"));
-            whole.unions_as_code = options.unions_as_code;
-            whole.guard_cost = options.bounds.min_cost();
-            let whole_result = whole.shape(&atlas.shape, atlas.shape.root(), "p");
-            w.prune = Some((format!("atlas_{k}_mask"), std::sync::Arc::new(pr.clone())));
-            w.indent(1);
-            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
-            w.helpers.push_str(&whole.helpers);
-            groups.append(&mut whole.groups);
-            let whole_fn = format!(
-                "fn atlas_{k}_whole(p: vec3<f32>) -> f32 {{\n{}    return {whole_result}.x;\n}}\n\n",
-                whole.out
-            );
-            whole_fn + &pruned_field(k, pr, &w.out, &field, words)
-        }
-    };
+    let field_fn = field_fn(k, atlas, options, &mut w, pruning.as_ref(), words, groups);
     groups.append(&mut w.groups);
-    let (walk_begin, walk_end) = if pruning.is_some() {
-        (
-            format!("            atlas_{k}_centre = atlas_{k}_p(j);\n            atlas_{k}_reach = min(dmax, {} * length(x - atlas_{k}_centre));\n            atlas_{k}_mask = atlas_{k}_walk_mask(j, atlas_{k}_reach);\n", lit(prune::CHORD_REACH)),
-            format!("            atlas_{k}_mask = 0xffffffffu;\n"),
-        )
-    } else {
-        (String::new(), String::new())
-    };
+    let (walk_begin, walk_end) = walk_mask(k, pruning.is_some());
     let n = p.steps.max(1);
-    let walk_steps = match form {
-        WalkForm::Unrolled => (0..n)
-            .map(|i| {
-                let remaining = lit((n - i) as f64);
-                format!("    st = atlas_{k}_step(st, p, dmax, {remaining}, hmin);\n")
-            })
-            .collect::<String>(),
-        WalkForm::Loop => format!(
-            "    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, f32({n}u - i), hmin);\n    }}\n"
-        ),
-    };
-    // The refinement's functions and call, only where the atlas asks for it.
-    let (refine_fns, refine_call) = if p.refine == 0 {
-        (String::new(), String::new())
-    } else {
-        let fns = template::fill(
-            template::REFINE,
-            &[
-                ("k", k.to_string()),
-                ("shots", (2 * n).to_string()),
-                ("refine", p.refine.to_string()),
-                ("fd_gradient", lit(p.fd_gradient)),
-                ("fd_curvature", lit(p.fd_curvature)),
-            ],
-        )?;
-        let call = format!(
-            "    let refined = atlas_{k}_refine(x, p, np, tv, rot, hmin);\n    tv = refined.t;\n    rot = refined.rot;\n    dist = length(tv);\n"
-        );
-        (fns, call)
-    };
+    let walk_steps = walk_steps(k, n, form);
+    let (refine_fns, refine_call) = refinement(k, n, p)?;
     let cells = grid.cells();
     // Outside the grid (or without one) the list is the full one; the grid's constants
     // are then unused, but must still be finite.
@@ -228,6 +168,98 @@ pub fn emit(
         ("max_distance", lit(p.max_distance)),
     ];
     template::fill(template::ATLAS, &values)
+}
+
+/// The atlas's field function `atlas_K_f`, written with `w` (whose helpers go with it);
+/// with the walks' pruning, also the whole field `atlas_K_whole` and the walk's mask.
+fn field_fn(
+    k: usize,
+    atlas: &Atlas,
+    options: &super::Options,
+    w: &mut Writer,
+    pruning: Option<&prune::Pruning>,
+    words: &mut Vec<u32>,
+    groups: &mut Vec<std::sync::Arc<crate::ir::group::Group>>,
+) -> String {
+    match pruning {
+        None => {
+            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+            format!(
+                "fn atlas_{k}_f(p: vec3<f32>) -> f32 {{\n    sdf_evals = sdf_evals + 1u;\n{}    return {field}.x;\n}}\n",
+                w.out
+            )
+        }
+        Some(pr) => {
+            // The whole field, for points outside the guard or the window.
+            let mut whole = Writer::new(&format!("atlas_{k}_whole"));
+            whole.unions_as_code = options.unions_as_code;
+            whole.guard_cost = options.bounds.min_cost();
+            let whole_result = whole.shape(&atlas.shape, atlas.shape.root(), "p");
+            w.prune = Some((format!("atlas_{k}_mask"), std::sync::Arc::new(pr.clone())));
+            w.indent(1);
+            let field = w.shape(&atlas.shape, atlas.shape.root(), "p");
+            w.helpers.push_str(&whole.helpers);
+            groups.append(&mut whole.groups);
+            let whole_fn = format!(
+                "fn atlas_{k}_whole(p: vec3<f32>) -> f32 {{\n{}    return {whole_result}.x;\n}}\n\n",
+                whole.out
+            );
+            whole_fn + &pruned_field(k, pr, &w.out, &field, words)
+        }
+    }
+}
+
+/// The lines that set and reset a pruned walk's mask around it (none unpruned).
+fn walk_mask(k: usize, pruned: bool) -> (String, String) {
+    if pruned {
+        (
+            format!("            atlas_{k}_centre = atlas_{k}_p(j);\n            atlas_{k}_reach = min(dmax, {} * length(x - atlas_{k}_centre));\n            atlas_{k}_mask = atlas_{k}_walk_mask(j, atlas_{k}_reach);\n", lit(prune::CHORD_REACH)),
+            format!("            atlas_{k}_mask = 0xffffffffu;\n"),
+        )
+    } else {
+        (String::new(), String::new())
+    }
+}
+
+/// The walk's `n` steps: `n` calls, each with its constant N − i, or a loop.
+fn walk_steps(k: usize, n: u32, form: WalkForm) -> String {
+    match form {
+        WalkForm::Unrolled => (0..n)
+            .map(|i| {
+                let remaining = lit((n - i) as f64);
+                format!("    st = atlas_{k}_step(st, p, dmax, {remaining}, hmin);\n")
+            })
+            .collect::<String>(),
+        WalkForm::Loop => format!(
+            "    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, f32({n}u - i), hmin);\n    }}\n"
+        ),
+    }
+}
+
+/// The refinement's functions and call, only where the atlas asks for it.
+fn refinement(
+    k: usize,
+    n: u32,
+    p: &crate::uv::Params,
+) -> Result<(String, String), template::Mismatch> {
+    Ok(if p.refine == 0 {
+        (String::new(), String::new())
+    } else {
+        let fns = template::fill(
+            template::REFINE,
+            &[
+                ("k", k.to_string()),
+                ("shots", (2 * n).to_string()),
+                ("refine", p.refine.to_string()),
+                ("fd_gradient", lit(p.fd_gradient)),
+                ("fd_curvature", lit(p.fd_curvature)),
+            ],
+        )?;
+        let call = format!(
+            "    let refined = atlas_{k}_refine(x, p, np, tv, rot, hmin);\n    tv = refined.t;\n    rot = refined.rot;\n    dist = length(tv);\n"
+        );
+        (fns, call)
+    })
 }
 
 /// The atlas's field with its walks' pruning (`uv::prune`, mirrored by

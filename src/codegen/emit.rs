@@ -218,66 +218,12 @@ impl Writer {
         }
         match &shape[id].op {
             Op::Prim(pr) => {
-                let call = match pr {
-                    Prim::Sphere { r } => format!("sd_sphere({p}, {})", lit(*r)),
-                    Prim::Box { half } => format!("sd_box({p}, {})", vec3(*half)),
-                    Prim::RoundBox { half, r } => {
-                        format!("sd_round_box({p}, {}, {})", vec3(*half), lit(*r))
-                    }
-                    Prim::BoxFrame { half, e } => {
-                        format!("sd_box_frame({p}, {}, {})", vec3(*half), lit(*e))
-                    }
-                    Prim::Torus { major, minor } => {
-                        format!("sd_torus({p}, {}, {})", lit(*major), lit(*minor))
-                    }
-                    Prim::Capsule { a, b, r } => {
-                        format!("sd_capsule({p}, {}, {}, {})", vec3(*a), vec3(*b), lit(*r))
-                    }
-                    Prim::Cylinder { r, half_h } => {
-                        format!("sd_cylinder({p}, {}, {})", lit(*r), lit(*half_h))
-                    }
-                    Prim::CappedCone { half_h, r1, r2 } => format!(
-                        "sd_capped_cone({p}, {}, {}, {})",
-                        lit(*half_h),
-                        lit(*r1),
-                        lit(*r2)
-                    ),
-                    Prim::Plane { n, offset } => {
-                        format!("sd_plane({p}, {}, {})", vec3(*n), lit(*offset))
-                    }
-                    Prim::Ellipsoid { radii } => format!("sd_ellipsoid({p}, {})", vec3(*radii)),
-                    Prim::Octahedron { s } => format!("sd_octahedron({p}, {})", lit(*s)),
-                    Prim::HexPrism { r, half_h } => {
-                        format!("sd_hex_prism({p}, {}, {})", lit(*r), lit(*half_h))
-                    }
-                    Prim::TriPrism { r, half_h } => {
-                        format!("sd_tri_prism({p}, {}, {})", lit(*r), lit(*half_h))
-                    }
-                    Prim::Pyramid { h } => format!("sd_pyramid({p}, {})", lit(*h)),
-                    Prim::Link { le, r1, r2 } => {
-                        format!("sd_link({p}, {}, {}, {})", lit(*le), lit(*r1), lit(*r2))
-                    }
-                };
+                let call = prim_call(pr, p);
                 let v = self.leaf(&call, "0.0");
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Csg { op, k, a, b } => {
-                let guard = shape
-                    .guard(id)
-                    .filter(|g| self.guard_cost.is_some_and(|c| g.cost >= c));
-                let (da, db) = if self.on_chain(id) {
-                    (self.operand(shape, *a, p), self.operand(shape, *b, p))
-                } else if let Some(g) = guard {
-                    let first = self.shape(shape, g.first, p);
-                    let other = self.guarded(shape, g, &first, p);
-                    if g.first == *a {
-                        (first, other)
-                    } else {
-                        (other, first)
-                    }
-                } else {
-                    (self.shape(shape, *a, p), self.shape(shape, *b, p))
-                };
+                let (da, db) = self.csg_operands(shape, id, *a, *b, p);
                 let f = match op {
                     Csg::Union => "op_union",
                     Csg::Intersection => "op_intersection",
@@ -299,25 +245,7 @@ impl Writer {
             Op::Twist { radius, child, .. } | Op::Bend { radius, child, .. } => {
                 let inner = point_expr(&shape[id].op, p).unwrap_or_default();
                 if radius.is_finite() {
-                    let l = self.fresh("l");
-                    self.line(&format!("let {l} = length({p});"));
-                    self.line(&format!("var {d}: {};", self.ty()));
-                    self.line(&format!(
-                        "if ({l} > {}) {{",
-                        lit(crate::ir::warp_outer(*radius))
-                    ));
-                    self.indent += 1;
-                    let v = self.leaf(&format!("{l} - {}", lit(*radius)), "0.0");
-                    self.line(&format!("{d} = {v};"));
-                    self.indent -= 1;
-                    self.line("} else {");
-                    self.indent += 1;
-                    // The child goes into a helper function, so chains of warps do not
-                    // nest blocks (naga limits brace nesting).
-                    let helper = self.helper_fn(shape, *child, "w");
-                    self.line(&format!("{d} = {helper}({inner});"));
-                    self.indent -= 1;
-                    self.line("}");
+                    self.bounded_warp(shape, *child, *radius, &inner, p, &d);
                 } else {
                     return self.point(shape, *child, &inner);
                 }
@@ -337,79 +265,10 @@ impl Writer {
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Displace { height, child } => {
-                // Eq. 58: the child in a helper (evaluated 7 times inside the band for Π_f).
-                let helper = self.helper_fn(shape, *child, "h");
-                if !self.heights.iter().any(|h| h.id == height.id) {
-                    self.heights.push(height.clone());
-                }
-                let b = self.fresh("b");
-                self.line(&format!("let {b} = {helper}({p});"));
-                let v = self.with_d(&b, &format!("{b}.x - {}", lit(height.hi)));
-                self.line(&format!("var {d} = {v};"));
-                self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
-                self.indent += 1;
-                self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
-                self.indent -= 1;
-                self.line(&format!(
-                    "}} else if ({b}.x <= {}) {{",
-                    lit(height.band_width())
-                ));
-                self.indent += 1;
-                let (q, g) = self.projection(&helper, p, &b, height.grad_step);
-                self.line(&format!(
-                    "{d}.x = {b}.x - height_{}({q}, normalize({g}));",
-                    height.id
-                ));
-                self.indent -= 1;
-                self.line("}");
+                self.displace(shape, height, *child, p, &d);
             }
             Op::ShellMap { map, base, tile } => {
-                // §5.4: the base in a helper (7 evaluations inside the shell), the tile in
-                // another, evaluated at the shell coordinates.
-                let helper = self.helper_fn(shape, *base, "s");
-                let tile_fn = self.helper_fn(shape, *tile, "t");
-                if !self.heights.iter().any(|h| h.id == map.uv.id) {
-                    self.heights.push(std::sync::Arc::new(map.uv.clone()));
-                }
-                let eps = lit(map.thickness);
-                let b = self.fresh("b");
-                self.line(&format!("let {b} = {helper}({p});"));
-                let (lo, hi) = (map.thickness * map.lo, map.thickness * map.hi);
-                let lower = format!("max({b}.x - {}, {} - {b}.x)", lit(hi), lit(lo));
-                let outside = if map.keep_base {
-                    format!("min({b}.x, {lower})")
-                } else {
-                    lower.clone()
-                };
-                let v = self.with_d(&b, &outside);
-                self.line(&format!("var {d} = {v};"));
-                let band = crate::ir::shell::BAND * map.thickness;
-                self.line(&format!(
-                    "if ({b}.x < {} && {b}.x > {}) {{",
-                    lit(hi + band),
-                    lit(lo - band)
-                ));
-                self.indent += 1;
-                let (q, g) = self.projection(&helper, p, &b, map.uv.grad_step);
-                let uv = self.fresh("uv");
-                self.line(&format!(
-                    "let {uv} = height_{}({q}, normalize({g}));",
-                    map.uv.id
-                ));
-                let t = self.fresh("t");
-                self.line(&format!(
-                    "let {t} = {tile_fn}(vec3<f32>(fract({uv}.x) - 0.5, {b}.x / {eps}, fract({uv}.y) - 0.5));"
-                ));
-                let v = self.with_d(&t, &format!("max({} * {t}.x, {lower})", lit(map.scale)));
-                if map.keep_base {
-                    let tv = self.fresh("tv");
-                    self.line(&format!("let {tv} = {v};"));
-                    self.line(&format!("{d} = select({b}, {tv}, {tv}.x < {b}.x);"));
-                } else {
-                    self.line(&format!("{d} = {v};"));
-                }
-                self.indent -= 1;
-                self.line("}");
+                self.shell_map(shape, map, *base, *tile, p, &d);
             }
             Op::Paint { material, child } => {
                 let dc = self.shape(shape, *child, p);
@@ -420,8 +279,161 @@ impl Writer {
         d
     }
 
-    /// Writes node `child` as a helper function `PREFIX_TAGn(p)` (for nodes evaluated
-    /// at several points, or behind a branch: naga limits brace nesting); its name.
+    /// The operands of CSG node `id`: along a chain of unions each as a chain operand,
+    /// a guarded union's first operand and the other under its guard, else each
+    /// evaluated.
+    fn csg_operands(
+        &mut self,
+        shape: &Shape,
+        id: NodeId,
+        a: NodeId,
+        b: NodeId,
+        p: &str,
+    ) -> (String, String) {
+        let guard = shape
+            .guard(id)
+            .filter(|g| self.guard_cost.is_some_and(|c| g.cost >= c));
+        if self.on_chain(id) {
+            (self.operand(shape, a, p), self.operand(shape, b, p))
+        } else if let Some(g) = guard {
+            let first = self.shape(shape, g.first, p);
+            let other = self.guarded(shape, g, &first, p);
+            if g.first == a {
+                (first, other)
+            } else {
+                (other, first)
+            }
+        } else {
+            (self.shape(shape, a, p), self.shape(shape, b, p))
+        }
+    }
+
+    /// A twist or bend with a finite bound into `d`: outside the bounding sphere of
+    /// `radius`, its distance; inside, the child at the warped point `inner`.
+    fn bounded_warp(
+        &mut self,
+        shape: &Shape,
+        child: NodeId,
+        radius: f64,
+        inner: &str,
+        p: &str,
+        d: &str,
+    ) {
+        let l = self.fresh("l");
+        self.line(&format!("let {l} = length({p});"));
+        self.line(&format!("var {d}: {};", self.ty()));
+        self.line(&format!(
+            "if ({l} > {}) {{",
+            lit(crate::ir::warp_outer(radius))
+        ));
+        self.indent += 1;
+        let v = self.leaf(&format!("{l} - {}", lit(radius)), "0.0");
+        self.line(&format!("{d} = {v};"));
+        self.indent -= 1;
+        self.line("} else {");
+        self.indent += 1;
+        // The child goes into a helper function, so chains of warps do not
+        // nest blocks (naga limits brace nesting).
+        let helper = self.helper_fn(shape, child, "w");
+        self.line(&format!("{d} = {helper}({inner});"));
+        self.indent -= 1;
+        self.line("}");
+    }
+
+    /// A displacement into `d` (Eq. 58).
+    fn displace(
+        &mut self,
+        shape: &Shape,
+        height: &std::sync::Arc<crate::ir::Height>,
+        child: NodeId,
+        p: &str,
+        d: &str,
+    ) {
+        // Eq. 58: the child in a helper (evaluated 7 times inside the band for Π_f).
+        let helper = self.helper_fn(shape, child, "h");
+        if !self.heights.iter().any(|h| h.id == height.id) {
+            self.heights.push(height.clone());
+        }
+        let b = self.fresh("b");
+        self.line(&format!("let {b} = {helper}({p});"));
+        let v = self.with_d(&b, &format!("{b}.x - {}", lit(height.hi)));
+        self.line(&format!("var {d} = {v};"));
+        self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
+        self.indent += 1;
+        self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
+        self.indent -= 1;
+        self.line(&format!(
+            "}} else if ({b}.x <= {}) {{",
+            lit(height.band_width())
+        ));
+        self.indent += 1;
+        let (q, g) = self.projection(&helper, p, &b, height.grad_step);
+        self.line(&format!(
+            "{d}.x = {b}.x - height_{}({q}, normalize({g}));",
+            height.id
+        ));
+        self.indent -= 1;
+        self.line("}");
+    }
+
+    /// A shell map into `d` (§5.4).
+    fn shell_map(
+        &mut self,
+        shape: &Shape,
+        map: &crate::ir::shell::ShellMap,
+        base: NodeId,
+        tile: NodeId,
+        p: &str,
+        d: &str,
+    ) {
+        // §5.4: the base in a helper (7 evaluations inside the shell), the tile in
+        // another, evaluated at the shell coordinates.
+        let helper = self.helper_fn(shape, base, "s");
+        let tile_fn = self.helper_fn(shape, tile, "t");
+        if !self.heights.iter().any(|h| h.id == map.uv.id) {
+            self.heights.push(std::sync::Arc::new(map.uv.clone()));
+        }
+        let eps = lit(map.thickness);
+        let b = self.fresh("b");
+        self.line(&format!("let {b} = {helper}({p});"));
+        let (lo, hi) = (map.thickness * map.lo, map.thickness * map.hi);
+        let lower = format!("max({b}.x - {}, {} - {b}.x)", lit(hi), lit(lo));
+        let outside = if map.keep_base {
+            format!("min({b}.x, {lower})")
+        } else {
+            lower.clone()
+        };
+        let v = self.with_d(&b, &outside);
+        self.line(&format!("var {d} = {v};"));
+        let band = crate::ir::shell::BAND * map.thickness;
+        self.line(&format!(
+            "if ({b}.x < {} && {b}.x > {}) {{",
+            lit(hi + band),
+            lit(lo - band)
+        ));
+        self.indent += 1;
+        let (q, g) = self.projection(&helper, p, &b, map.uv.grad_step);
+        let uv = self.fresh("uv");
+        self.line(&format!(
+            "let {uv} = height_{}({q}, normalize({g}));",
+            map.uv.id
+        ));
+        let t = self.fresh("t");
+        self.line(&format!(
+            "let {t} = {tile_fn}(vec3<f32>(fract({uv}.x) - 0.5, {b}.x / {eps}, fract({uv}.y) - 0.5));"
+        ));
+        let v = self.with_d(&t, &format!("max({} * {t}.x, {lower})", lit(map.scale)));
+        if map.keep_base {
+            let tv = self.fresh("tv");
+            self.line(&format!("let {tv} = {v};"));
+            self.line(&format!("{d} = select({b}, {tv}, {tv}.x < {b}.x);"));
+        } else {
+            self.line(&format!("{d} = {v};"));
+        }
+        self.indent -= 1;
+        self.line("}");
+    }
+
     /// Whether `id` is on the pruned union chain of this writer's atlas field.
     fn on_chain(&self, id: NodeId) -> bool {
         self.prune
@@ -486,6 +498,8 @@ impl Writer {
         d
     }
 
+    /// Writes node `child` as a helper function `PREFIX_TAGn(p)` (for nodes evaluated
+    /// at several points, or behind a branch: naga limits brace nesting); its name.
     fn helper_fn(&mut self, shape: &Shape, child: NodeId, tag: &str) -> String {
         let helper = self.fresh(&format!("{}_{tag}", self.prefix));
         let mut inner_w = self.sub(&helper);
@@ -537,8 +551,52 @@ impl Writer {
     }
 }
 
+/// The WGSL call of a primitive's distance at point `p`.
+fn prim_call(pr: &Prim, p: &str) -> String {
+    match pr {
+        Prim::Sphere { r } => format!("sd_sphere({p}, {})", lit(*r)),
+        Prim::Box { half } => format!("sd_box({p}, {})", vec3(*half)),
+        Prim::RoundBox { half, r } => {
+            format!("sd_round_box({p}, {}, {})", vec3(*half), lit(*r))
+        }
+        Prim::BoxFrame { half, e } => {
+            format!("sd_box_frame({p}, {}, {})", vec3(*half), lit(*e))
+        }
+        Prim::Torus { major, minor } => {
+            format!("sd_torus({p}, {}, {})", lit(*major), lit(*minor))
+        }
+        Prim::Capsule { a, b, r } => {
+            format!("sd_capsule({p}, {}, {}, {})", vec3(*a), vec3(*b), lit(*r))
+        }
+        Prim::Cylinder { r, half_h } => {
+            format!("sd_cylinder({p}, {}, {})", lit(*r), lit(*half_h))
+        }
+        Prim::CappedCone { half_h, r1, r2 } => format!(
+            "sd_capped_cone({p}, {}, {}, {})",
+            lit(*half_h),
+            lit(*r1),
+            lit(*r2)
+        ),
+        Prim::Plane { n, offset } => {
+            format!("sd_plane({p}, {}, {})", vec3(*n), lit(*offset))
+        }
+        Prim::Ellipsoid { radii } => format!("sd_ellipsoid({p}, {})", vec3(*radii)),
+        Prim::Octahedron { s } => format!("sd_octahedron({p}, {})", lit(*s)),
+        Prim::HexPrism { r, half_h } => {
+            format!("sd_hex_prism({p}, {}, {})", lit(*r), lit(*half_h))
+        }
+        Prim::TriPrism { r, half_h } => {
+            format!("sd_tri_prism({p}, {}, {})", lit(*r), lit(*half_h))
+        }
+        Prim::Pyramid { h } => format!("sd_pyramid({p}, {})", lit(*h)),
+        Prim::Link { le, r1, r2 } => {
+            format!("sd_link({p}, {}, {}, {})", lit(*le), lit(*r1), lit(*r2))
+        }
+    }
+}
+
 /// The WGSL of the point at which a point-mapping op evaluates its child (the
-/// `ir::rest::child_point` of the CPU), for the point expression `p`; `None` for ops
+/// `ir::Op::child_point` of the CPU), for the point expression `p`; `None` for ops
 /// that are not point maps.
 pub fn point_expr(op: &Op, p: &str) -> Option<String> {
     Some(match op {

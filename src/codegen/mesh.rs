@@ -7,16 +7,16 @@
 use super::emit::lit;
 use super::targets::{validate, NagaError, Validated};
 use super::{template, RENDER_LIBRARY};
-use crate::asset::{Atlas, FlatLayout};
+use crate::asset::{ChartLayout, FlatLayout};
 
 /// The WGSL of the mesh module for `layout` (not yet validated).
-pub fn mesh_wgsl(atlas: &Atlas) -> Result<String, template::Mismatch> {
+pub fn mesh_wgsl(atlas: &ChartLayout) -> Result<String, template::Mismatch> {
     let f = |x: u32| lit(x as f64);
     // A packed atlas fills the flat layout's constants with a one-cell grid (unused).
     let packed_as_flat;
     let (layout, packed) = match atlas {
-        Atlas::Flat(l) => (l, false),
-        Atlas::Packed(p) => {
+        ChartLayout::Flat(l) => (l, false),
+        ChartLayout::Packed(p) => {
             packed_as_flat = FlatLayout {
                 width: p.width,
                 height: p.height,
@@ -72,7 +72,7 @@ impl std::fmt::Display for MeshIce {
 
 /// The mesh module for `layout`, validated by naga. The layout must be well formed
 /// (`crate::gpu::MeshRenderer::new` checks it): at least one level.
-pub fn mesh_module(layout: &Atlas) -> Result<(String, Validated), MeshIce> {
+pub fn mesh_module(layout: &ChartLayout) -> Result<(String, Validated), MeshIce> {
     let wgsl = mesh_wgsl(layout).map_err(|e| MeshIce {
         message: e.to_string(),
         wgsl: String::new(),

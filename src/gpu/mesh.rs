@@ -14,9 +14,9 @@
 //! the distance from the eye, -1 where nothing was drawn), the normal-mapped normal,
 //! and in `atlas` the chart-local (u, v), the level i and the chart's index.
 
-use super::render::{self, Frame, Timings, ViewMode};
+use super::render::{self, Frame, Targets, Timings, ViewMode};
 use super::{Gpu, GpuError};
-use crate::asset::{Atlas, FlatLayout, MeshData, PackedLayout, Textures};
+use crate::asset::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::mesh::{mesh_module, MeshIce};
 use crate::ir::Aabb;
 use crate::view::View;
@@ -227,10 +227,10 @@ fn packed_charts(mesh: &MeshData, layout: &PackedLayout) -> Result<Vec<[f32; 4]>
 
 /// Checks that the attributes, indices and images of a mesh agree with each other and
 /// with the layout.
-fn check_input(mesh: &MeshData, textures: &Textures, atlas: &Atlas) -> Result<(), String> {
+fn check_input(mesh: &MeshData, textures: &Textures, atlas: &ChartLayout) -> Result<(), String> {
     match atlas {
-        Atlas::Flat(layout) => check_layout(layout)?,
-        Atlas::Packed(layout) => layout.check()?,
+        ChartLayout::Flat(layout) => check_layout(layout)?,
+        ChartLayout::Packed(layout) => layout.check()?,
     }
     let layout = atlas;
     let n = mesh.positions.len();
@@ -281,7 +281,7 @@ impl MeshRenderer {
         gpu: &Gpu,
         mesh: &MeshData,
         textures: &Textures,
-        layout: &Atlas,
+        layout: &ChartLayout,
     ) -> Result<MeshRenderer, MeshError> {
         check_input(mesh, textures, layout).map_err(MeshError::Input)?;
         let side = gpu.device.limits().max_texture_dimension_2d;
@@ -293,8 +293,8 @@ impl MeshRenderer {
             ))));
         }
         let charts = match layout {
-            Atlas::Flat(_) => Vec::new(),
-            Atlas::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
+            ChartLayout::Flat(_) => Vec::new(),
+            ChartLayout::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
         };
         let (wgsl, _) = mesh_module(layout).map_err(MeshError::Internal)?;
         let formats = render::formats(gpu);
@@ -433,73 +433,18 @@ impl MeshRenderer {
         let background = tonemap(view.background);
         let light = light_uniform(&self.bounds, view.sun.direction);
         let (targets, depth, bind_group, shadow_group, _globals) = gpu.scoped(|| {
-            let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("globals"),
-                contents: bytemuck::cast_slice(&uniforms),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let light = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("light"),
-                contents: bytemuck::cast_slice(&light),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let shadow_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("shadow group"),
-                layout: &self.shadow_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: light.as_entire_binding(),
-                }],
-            });
-            let mut entries = vec![wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            }];
-            for (k, t) in self.textures.iter().enumerate() {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: k as u32 + 1,
-                    resource: wgpu::BindingResource::TextureView(t),
-                });
-            }
-            entries.push(wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::Sampler(&self.sampler),
-            });
-            entries.push(wgpu::BindGroupEntry {
-                binding: 6,
-                resource: wgpu::BindingResource::TextureView(&self.shadow_view),
-            });
-            entries.push(wgpu::BindGroupEntry {
-                binding: 7,
-                resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
-            });
-            entries.push(wgpu::BindGroupEntry {
-                binding: 8,
-                resource: light.as_entire_binding(),
-            });
-            let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("mesh group"),
-                layout: &self.bind_group_layout,
-                entries: &entries,
-            });
-            let depth = d
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("depth"),
-                    size: render::extent(w, h),
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: DEPTH_FORMAT,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default());
+            let (bind_group, shadow_group, globals) = self.bind_groups(
+                d,
+                bytemuck::cast_slice(&uniforms),
+                bytemuck::cast_slice(&light),
+            );
+            let depth = depth_view(d, w, h);
             (
                 render::targets(gpu, &self.formats, w, h),
                 depth,
                 bind_group,
                 shadow_group,
-                buffer,
+                globals,
             )
         })?;
         let submitted = Instant::now();
@@ -507,87 +452,8 @@ impl MeshRenderer {
             let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("mesh frame"),
             });
-            {
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("shadow map"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &self.shadow_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.shadow_pipeline);
-                pass.set_bind_group(0, &shadow_group, &[]);
-                pass.set_vertex_buffer(0, self.vertices.slice(..));
-                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..self.index_count, 0, 0..1);
-            }
-            {
-                let clears = [
-                    wgpu::Color {
-                        r: background[0],
-                        g: background[1],
-                        b: background[2],
-                        a: 1.0,
-                    },
-                    wgpu::Color {
-                        r: 0.0,
-                        g: 0.0,
-                        b: 0.0,
-                        a: -1.0,
-                    },
-                    wgpu::Color::TRANSPARENT,
-                    wgpu::Color {
-                        r: 0.0,
-                        g: 0.0,
-                        b: -1.0,
-                        a: -1.0,
-                    },
-                ];
-                let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
-                    .views
-                    .iter()
-                    .zip(clears)
-                    .map(|(v, clear)| {
-                        Some(wgpu::RenderPassColorAttachment {
-                            view: v,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(clear),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })
-                    })
-                    .collect();
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("mesh"),
-                    color_attachments: &attachments,
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.set_vertex_buffer(0, self.vertices.slice(..));
-                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..self.index_count, 0, 0..1);
-            }
+            self.shadow_pass(&mut enc, &shadow_group);
+            self.color_pass(&mut enc, &targets, &depth, &bind_group, background);
             render::copy_out(&mut enc, &targets);
             gpu.queue.submit([enc.finish()]);
         })?;
@@ -602,6 +468,175 @@ impl MeshRenderer {
         };
         Ok(frame)
     }
+
+    /// The frame's bind groups: the mesh's (globals, the atlas's textures and sampler,
+    /// the shadow map, the light) and the shadow pass's (the light); and the globals'
+    /// buffer, which the frame keeps.
+    fn bind_groups(
+        &self,
+        d: &wgpu::Device,
+        uniforms: &[u8],
+        light: &[u8],
+    ) -> (wgpu::BindGroup, wgpu::BindGroup, wgpu::Buffer) {
+        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: uniforms,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let light = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("light"),
+            contents: light,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let shadow_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow group"),
+            layout: &self.shadow_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 8,
+                resource: light.as_entire_binding(),
+            }],
+        });
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }];
+        for (k, t) in self.textures.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: k as u32 + 1,
+                resource: wgpu::BindingResource::TextureView(t),
+            });
+        }
+        entries.push(wgpu::BindGroupEntry {
+            binding: 5,
+            resource: wgpu::BindingResource::Sampler(&self.sampler),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: wgpu::BindingResource::TextureView(&self.shadow_view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 8,
+            resource: light.as_entire_binding(),
+        });
+        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mesh group"),
+            layout: &self.bind_group_layout,
+            entries: &entries,
+        });
+        (bind_group, shadow_group, buffer)
+    }
+
+    /// The shadow map's pass: the mesh's depth seen from the sun.
+    fn shadow_pass(&self, enc: &mut wgpu::CommandEncoder, shadow_group: &wgpu::BindGroup) {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow map"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.shadow_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.shadow_pipeline);
+        pass.set_bind_group(0, shadow_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+
+    /// The mesh's pass into the frame's targets, each cleared first (the colour to
+    /// `background`, the others to their "no surface" values).
+    fn color_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        depth: &wgpu::TextureView,
+        bind_group: &wgpu::BindGroup,
+        background: [f64; 3],
+    ) {
+        let clears = [
+            wgpu::Color {
+                r: background[0],
+                g: background[1],
+                b: background[2],
+                a: 1.0,
+            },
+            wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: 0.0,
+                a: -1.0,
+            },
+            wgpu::Color::TRANSPARENT,
+            wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: -1.0,
+                a: -1.0,
+            },
+        ];
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
+            .views
+            .iter()
+            .zip(clears)
+            .map(|(v, clear)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("mesh"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+}
+
+/// A frame's depth buffer, `w` × `h`.
+fn depth_view(d: &wgpu::Device, w: u32, h: u32) -> wgpu::TextureView {
+    d.create_texture(&wgpu::TextureDescriptor {
+        label: Some("depth"),
+        size: render::extent(w, h),
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: DEPTH_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    })
+    .create_view(&Default::default())
 }
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;

@@ -7,7 +7,7 @@
 //! `let` after the items before the cursor's, so it sees the same names the
 //! receiver does, even when the text around the cursor does not parse.
 
-use super::complete::{function, Completion, CompletionKind};
+use super::completion::{function, Completion, CompletionKind};
 use super::Document;
 use crate::sema::builtins::{Builtin, PTy, Ret, BUILTINS};
 use crate::sema::{AtlasAttr, DefKind, Ty};
@@ -95,7 +95,7 @@ fn is_method_of(b: &Builtin, receiver: &Ty) -> bool {
         && !matches!(first.ty, PTy::Shape | PTy::Texture);
     !constructor
         && (!receiver.is_field() || b.kind.lifts_fields())
-        && PTy::accepts(first.ty, receiver.base())
+        && receiver.base().fits(first.ty)
 }
 
 /// Swizzles of a vector with `n` components: single components and the leading runs

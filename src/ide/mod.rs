@@ -6,6 +6,7 @@
 
 pub mod actions;
 pub mod complete;
+mod completion;
 pub mod format;
 mod member;
 pub mod rename;

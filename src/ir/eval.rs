@@ -322,7 +322,7 @@ fn eval_node_inner(f: &Field, id: NodeId, p: DVec3, g: bool) -> (f64, Blend) {
         | Op::Mirror { child, .. }
         | Op::Elongate { child, .. } => {
             let op = &shape[id].op;
-            eval_node(f, *child, super::rest::child_point(op, p), g)
+            eval_node(f, *child, op.child_point(p), g)
         }
         Op::Round { r, child } => {
             let (d, m) = eval_node(f, *child, p, g);

@@ -3,6 +3,7 @@
 
 use super::texture::Textures;
 use super::*;
+use crate::sema::builtins::BuiltinId as B;
 use crate::sema::{DefKind, Program, Ty, Value};
 use crate::span::Span;
 
@@ -162,9 +163,82 @@ impl Lowerer<'_> {
 
     fn node_inner(&mut self, value: &Value) -> Option<NodeId> {
         let Value::Shape(n) = value else { return None };
-        let a = &n.args;
-        use crate::sema::builtins::BuiltinId as B;
         match n.builtin {
+            B::Sphere
+            | B::Box
+            | B::RoundBox
+            | B::BoxFrame
+            | B::Torus
+            | B::Capsule
+            | B::Cylinder
+            | B::Cone
+            | B::CappedCone
+            | B::Plane
+            | B::Ellipsoid
+            | B::Octahedron
+            | B::HexPrism
+            | B::TriPrism
+            | B::Pyramid
+            | B::Link => self.primitive(n.builtin, &n.args),
+            B::Union
+            | B::Intersection
+            | B::Difference
+            | B::SmoothUnion
+            | B::SmoothIntersection
+            | B::SmoothDifference => self.csg(n.builtin, &n.args),
+            B::Translate | B::Rotate | B::RotateX | B::RotateY | B::RotateZ | B::Scale => {
+                self.transform(n.builtin, &n.args)
+            }
+            B::Twist | B::Bend => self.warp(n.builtin, &n.args),
+            B::Repeat | B::Mirror | B::Elongate => self.domain(n.builtin, &n.args),
+            B::Round | B::Shell | B::Paint => self.surface(n.builtin, &n.args),
+            B::Displace => self.displace(n),
+            B::ShellMap => self.shell_map(n),
+            // Not shapes: they never appear as a shape node.
+            B::Image
+            | B::Sample
+            | B::SampleNormal
+            | B::Checker
+            | B::Grid
+            | B::Orbit
+            | B::LookAt
+            | B::Sun
+            | B::Sin
+            | B::Cos
+            | B::Tan
+            | B::Asin
+            | B::Acos
+            | B::Atan
+            | B::Atan2
+            | B::Sqrt
+            | B::Abs
+            | B::Floor
+            | B::Ceil
+            | B::Fract
+            | B::Sign
+            | B::Exp
+            | B::Log
+            | B::Pow
+            | B::Min
+            | B::Max
+            | B::Clamp
+            | B::Mix
+            | B::Smoothstep
+            | B::Step
+            | B::Length
+            | B::Distance
+            | B::Dot
+            | B::Cross
+            | B::Normalize
+            | B::Radians
+            | B::Degrees => None,
+        }
+    }
+
+    /// A primitive (a cone is a capped cone moved up by half its height).
+    /// ([`Self::node_inner`] sends no other builtin here: those are `None`.)
+    fn primitive(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        match builtin {
             B::Sphere => self.prim(Prim::Sphere { r: f(&a[0])? }),
             B::Box => self.prim(Prim::Box {
                 half: fv3(&a[0])? * 0.5,
@@ -232,39 +306,44 @@ impl Lowerer<'_> {
                 r1: f(&a[1])?,
                 r2: f(&a[2])?,
             }),
-            B::Union
-            | B::Intersection
-            | B::Difference
-            | B::SmoothUnion
-            | B::SmoothIntersection
-            | B::SmoothDifference => {
-                let x = self.node(&a[0])?;
-                let y = self.node(&a[1])?;
-                let smooth = matches!(
-                    n.builtin,
-                    B::SmoothUnion | B::SmoothIntersection | B::SmoothDifference
-                );
-                let k = if smooth { f(&a[2])? } else { 0.0 };
-                let op = match n.builtin {
-                    B::Union | B::SmoothUnion => Csg::Union,
-                    B::Intersection | B::SmoothIntersection => Csg::Intersection,
-                    _ => Csg::Difference,
-                };
-                let ((ba, la), (bb, lb)) = (self.info(x), self.info(y));
-                let bounds = match op {
-                    Csg::Union => ba.union(bb).expand(k * 0.25),
-                    Csg::Intersection => ba.intersect(bb),
-                    Csg::Difference => ba,
-                };
-                self.push(Op::Csg { op, k, a: x, b: y }, bounds, la.max(lb))
-            }
+            _ => None,
+        }
+    }
+
+    /// A union, intersection or difference, smooth or not.
+    fn csg(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        let x = self.node(&a[0])?;
+        let y = self.node(&a[1])?;
+        let smooth = matches!(
+            builtin,
+            B::SmoothUnion | B::SmoothIntersection | B::SmoothDifference
+        );
+        let k = if smooth { f(&a[2])? } else { 0.0 };
+        let op = match builtin {
+            B::Union | B::SmoothUnion => Csg::Union,
+            B::Intersection | B::SmoothIntersection => Csg::Intersection,
+            _ => Csg::Difference,
+        };
+        let ((ba, la), (bb, lb)) = (self.info(x), self.info(y));
+        let bounds = match op {
+            Csg::Union => ba.union(bb).expand(k * 0.25),
+            Csg::Intersection => ba.intersect(bb),
+            Csg::Difference => ba,
+        };
+        self.push(Op::Csg { op, k, a: x, b: y }, bounds, la.max(lb))
+    }
+
+    /// A translation, rotation or scale.
+    /// ([`Self::node_inner`] sends no other builtin here: those are `None`.)
+    fn transform(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        match builtin {
             B::Translate => {
                 let child = self.node(&a[0])?;
                 self.translate(v3(&a[1])?, child)
             }
             B::Rotate | B::RotateX | B::RotateY | B::RotateZ => {
                 let child = self.node(&a[0])?;
-                let (axis, angle) = match n.builtin {
+                let (axis, angle) = match builtin {
                     B::Rotate => (v3(&a[1])?.normalize(), f(&a[2])?),
                     B::RotateX => (DVec3::X, f(&a[1])?),
                     B::RotateY => (DVec3::Y, f(&a[1])?),
@@ -292,55 +371,65 @@ impl Lowerer<'_> {
                     l * stretch,
                 )
             }
-            B::Twist | B::Bend => {
-                let child = self.node(&a[0])?;
-                let axis = v3(&a[1])?.normalize();
-                let rate = f(&a[2])?;
-                let (b, l) = self.info(child);
-                // A point at distance R from the axis moves sideways by up to |rate|·R per unit
-                // along it; the field's gradient grows to at most √(1 + (rate·R)²).
-                // Twists and bends rotate points about the origin, so a warped shape lies
-                // in the same ball as its child: through a chain of warps the ball's
-                // radius stays the innermost one (the box bound's corner would grow it by
-                // √3 per warp).
-                let bounded = match self.out[child].op {
-                    Op::Twist { radius, .. } | Op::Bend { radius, .. } if radius.is_finite() => {
-                        radius.min(b.radius_from_origin())
-                    }
-                    _ => b.radius_from_origin(),
-                };
-                let r = if bounded.is_finite() {
-                    warp_outer(bounded)
-                } else {
-                    10.0
-                };
-                let radius = bounded;
-                let stretch = (1.0 + (rate * r).powi(2)).sqrt();
-                let bounds = Aabb::centered(DVec3::splat(r));
-                if n.builtin == B::Twist {
-                    self.push(
-                        Op::Twist {
-                            frame: align(axis, DVec3::Y),
-                            rate,
-                            radius,
-                            child,
-                        },
-                        bounds,
-                        l * stretch,
-                    )
-                } else {
-                    self.push(
-                        Op::Bend {
-                            frame: align(axis, DVec3::X),
-                            rate,
-                            radius,
-                            child,
-                        },
-                        bounds,
-                        l * stretch,
-                    )
-                }
+            _ => None,
+        }
+    }
+
+    /// A twist or a bend, bounded by the ball of its child.
+    fn warp(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        let child = self.node(&a[0])?;
+        let axis = v3(&a[1])?.normalize();
+        let rate = f(&a[2])?;
+        let (b, l) = self.info(child);
+        // A point at distance R from the axis moves sideways by up to |rate|·R per unit
+        // along it; the field's gradient grows to at most √(1 + (rate·R)²).
+        // Twists and bends rotate points about the origin, so a warped shape lies
+        // in the same ball as its child: through a chain of warps the ball's
+        // radius stays the innermost one (the box bound's corner would grow it by
+        // √3 per warp).
+        let bounded = match self.out[child].op {
+            Op::Twist { radius, .. } | Op::Bend { radius, .. } if radius.is_finite() => {
+                radius.min(b.radius_from_origin())
             }
+            _ => b.radius_from_origin(),
+        };
+        let r = if bounded.is_finite() {
+            warp_outer(bounded)
+        } else {
+            10.0
+        };
+        let radius = bounded;
+        let stretch = (1.0 + (rate * r).powi(2)).sqrt();
+        let bounds = Aabb::centered(DVec3::splat(r));
+        if builtin == B::Twist {
+            self.push(
+                Op::Twist {
+                    frame: align(axis, DVec3::Y),
+                    rate,
+                    radius,
+                    child,
+                },
+                bounds,
+                l * stretch,
+            )
+        } else {
+            self.push(
+                Op::Bend {
+                    frame: align(axis, DVec3::X),
+                    rate,
+                    radius,
+                    child,
+                },
+                bounds,
+                l * stretch,
+            )
+        }
+    }
+
+    /// A repetition, mirror or elongation of its child's domain.
+    /// ([`Self::node_inner`] sends no other builtin here: those are `None`.)
+    fn domain(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        match builtin {
             B::Repeat => {
                 let child = self.node(&a[0])?;
                 let (_, l) = self.info(child);
@@ -379,6 +468,14 @@ impl Lowerer<'_> {
                     l,
                 )
             }
+            _ => None,
+        }
+    }
+
+    /// A rounded, shelled or painted child.
+    /// ([`Self::node_inner`] sends no other builtin here: those are `None`.)
+    fn surface(&mut self, builtin: B, a: &[Value]) -> Option<NodeId> {
+        match builtin {
             B::Round => {
                 let child = self.node(&a[0])?;
                 let r = f(&a[1])?;
@@ -413,105 +510,76 @@ impl Lowerer<'_> {
                     l,
                 )
             }
-            B::Displace => {
-                let child = self.node(&a[0])?;
-                let (scale, band) = (f(&a[2])?, f(&a[3])?);
-                let bound = match displace::analyze(&a[1], self.textures) {
-                    Ok(b) => b,
-                    Err(why) => {
-                        self.errors.push((n.span, why));
-                        return None;
-                    }
-                };
-                let (b, l) = self.info(child);
-                let size = if b.is_finite() {
-                    (b.max - b.min).max_element().max(1e-3)
-                } else {
-                    4.0
-                };
-                let height = Height::new(a[1].clone(), scale, band, bound, n.span.end, 1e-3 * size);
-                let bounds = b.expand(height.epsilon());
-                let lipschitz = height.lipschitz(l);
-                self.push(
-                    Op::Displace {
-                        height: std::sync::Arc::new(height),
-                        child,
-                    },
-                    bounds,
-                    lipschitz,
-                )
-            }
-            B::ShellMap => {
-                let base = self.node(&a[0])?;
-                let tile = self.node(&a[1])?;
-                let thickness = f(&a[3])?;
-                let keep = !matches!(a[4], Value::Bool(false));
-                let slope = match displace::analyze_uv(&a[2], self.textures) {
-                    Ok(s) => s,
-                    Err(why) => {
-                        self.errors.push((n.span, why));
-                        return None;
-                    }
-                };
-                let (b, l) = self.info(base);
-                let (tb, lt) = self.info(tile);
-                let size = if b.is_finite() {
-                    (b.max - b.min).max_element().max(1e-3)
-                } else {
-                    4.0
-                };
-                let uv = Height::uv_field(a[2].clone(), slope, n.span.end, 1e-3 * size);
-                let map = super::shell::ShellMap::new(uv, thickness, keep, (tb.min.y, tb.max.y));
-                let lipschitz = map.lipschitz(l, lt);
-                self.push(
-                    Op::ShellMap {
-                        map: std::sync::Arc::new(map),
-                        base,
-                        tile,
-                    },
-                    b.expand(thickness),
-                    lipschitz,
-                )
-            }
-            // Not shapes: they never appear as a shape node.
-            B::Image
-            | B::Sample
-            | B::SampleNormal
-            | B::Checker
-            | B::Grid
-            | B::Orbit
-            | B::LookAt
-            | B::Sun
-            | B::Sin
-            | B::Cos
-            | B::Tan
-            | B::Asin
-            | B::Acos
-            | B::Atan
-            | B::Atan2
-            | B::Sqrt
-            | B::Abs
-            | B::Floor
-            | B::Ceil
-            | B::Fract
-            | B::Sign
-            | B::Exp
-            | B::Log
-            | B::Pow
-            | B::Min
-            | B::Max
-            | B::Clamp
-            | B::Mix
-            | B::Smoothstep
-            | B::Step
-            | B::Length
-            | B::Distance
-            | B::Dot
-            | B::Cross
-            | B::Normalize
-            | B::Radians
-            | B::Degrees => None,
+            _ => None,
         }
+    }
+
+    /// A displacement of its child by a height field (Eq. 58); `None`, with the call's
+    /// error recorded, when the height has no bound.
+    fn displace(&mut self, n: &crate::sema::Node) -> Option<NodeId> {
+        let a = &n.args;
+        let child = self.node(&a[0])?;
+        let (scale, band) = (f(&a[2])?, f(&a[3])?);
+        let bound = match displace::analyze(&a[1], self.textures) {
+            Ok(b) => b,
+            Err(why) => {
+                self.errors.push((n.span, why));
+                return None;
+            }
+        };
+        let (b, l) = self.info(child);
+        let size = if b.is_finite() {
+            (b.max - b.min).max_element().max(1e-3)
+        } else {
+            4.0
+        };
+        let height = Height::new(a[1].clone(), scale, band, bound, n.span.end, 1e-3 * size);
+        let bounds = b.expand(height.epsilon());
+        let lipschitz = height.lipschitz(l);
+        self.push(
+            Op::Displace {
+                height: std::sync::Arc::new(height),
+                child,
+            },
+            bounds,
+            lipschitz,
+        )
+    }
+
+    /// A tile copied into the shell of its base (§5.4); `None`, with the call's error
+    /// recorded, when the uv field has no slope bound.
+    fn shell_map(&mut self, n: &crate::sema::Node) -> Option<NodeId> {
+        let a = &n.args;
+        let base = self.node(&a[0])?;
+        let tile = self.node(&a[1])?;
+        let thickness = f(&a[3])?;
+        let keep = !matches!(a[4], Value::Bool(false));
+        let slope = match displace::analyze_uv(&a[2], self.textures) {
+            Ok(s) => s,
+            Err(why) => {
+                self.errors.push((n.span, why));
+                return None;
+            }
+        };
+        let (b, l) = self.info(base);
+        let (tb, lt) = self.info(tile);
+        let size = if b.is_finite() {
+            (b.max - b.min).max_element().max(1e-3)
+        } else {
+            4.0
+        };
+        let uv = Height::uv_field(a[2].clone(), slope, n.span.end, 1e-3 * size);
+        let map = super::shell::ShellMap::new(uv, thickness, keep, (tb.min.y, tb.max.y));
+        let lipschitz = map.lipschitz(l, lt);
+        self.push(
+            Op::ShellMap {
+                map: std::sync::Arc::new(map),
+                base,
+                tile,
+            },
+            b.expand(thickness),
+            lipschitz,
+        )
     }
 
     fn translate(&mut self, offset: DVec3, child: NodeId) -> Option<NodeId> {

@@ -217,6 +217,47 @@ impl Op {
             | Op::Displace { child, .. } => vec![child],
         }
     }
+
+    /// Whether an op evaluates its child at a moved point.
+    pub fn is_point_map(&self) -> bool {
+        matches!(
+            self,
+            Op::Translate { .. }
+                | Op::Rotate { .. }
+                | Op::Scale { .. }
+                | Op::Twist { .. }
+                | Op::Bend { .. }
+                | Op::Repeat { .. }
+                | Op::Mirror { .. }
+                | Op::Elongate { .. }
+        )
+    }
+
+    /// The point at which this op evaluates its child, for the ops of
+    /// [`Op::is_point_map`] (p itself for the others). Twists and bends outside their
+    /// bound use the bounding sphere instead of the child ([`eval`]); that region holds
+    /// no surface. The rest-pose queries ([`rest`]) compose these maps.
+    pub fn child_point(&self, p: DVec3) -> DVec3 {
+        match self {
+            Op::Translate { offset, .. } => p - *offset,
+            Op::Rotate { inverse, .. } => *inverse * p,
+            Op::Scale { factor, .. } => p / *factor,
+            Op::Twist { frame, rate, .. } => {
+                let q = *frame * p;
+                let (s, c) = (rate * q.y).sin_cos();
+                frame.transpose() * DVec3::new(c * q.x - s * q.z, q.y, s * q.x + c * q.z)
+            }
+            Op::Bend { frame, rate, .. } => {
+                let q = *frame * p;
+                let (s, c) = (rate * q.x).sin_cos();
+                frame.transpose() * DVec3::new(c * q.x - s * q.y, s * q.x + c * q.y, q.z)
+            }
+            Op::Repeat { period, .. } => p - *period * (p / *period).round(),
+            Op::Mirror { normal, .. } => p - 2.0 * p.dot(*normal).min(0.0) * *normal,
+            Op::Elongate { h, .. } => p - p.clamp(-*h, *h),
+            _ => p,
+        }
+    }
 }
 
 impl Shape {

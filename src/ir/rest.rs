@@ -27,7 +27,7 @@ use glam::{DMat3, DVec3};
 pub const MAX_OCCURRENCES: usize = 16;
 
 /// One place the atlas's shape occurs in the target: the point maps from the target's
-/// root down to it (each op's own child point, see [`child_point`]).
+/// root down to it (each op's own child point, see [`Op::child_point`]).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Occurrence {
     pub steps: Vec<Op>,
@@ -36,7 +36,7 @@ pub struct Occurrence {
 impl Occurrence {
     /// ω⁻¹(p).
     pub fn apply(&self, p: DVec3) -> DVec3 {
-        self.steps.iter().fold(p, |q, op| child_point(op, q))
+        self.steps.iter().fold(p, |q, op| op.child_point(q))
     }
 
     /// Whether tangent vectors change on the way (anything but translations).
@@ -118,7 +118,7 @@ impl RestQuery {
             return;
         }
         let op = &target[id].op;
-        let maps = is_point_map(op);
+        let maps = op.is_point_map();
         let was = *stretched;
         if maps {
             steps.push(op.clone());
@@ -166,46 +166,6 @@ impl RestQuery {
             }
         }
         best.map(|(i, q, _)| (i, q))
-    }
-}
-
-/// Whether an op evaluates its child at a moved point.
-pub fn is_point_map(op: &Op) -> bool {
-    matches!(
-        op,
-        Op::Translate { .. }
-            | Op::Rotate { .. }
-            | Op::Scale { .. }
-            | Op::Twist { .. }
-            | Op::Bend { .. }
-            | Op::Repeat { .. }
-            | Op::Mirror { .. }
-            | Op::Elongate { .. }
-    )
-}
-
-/// The point at which `op` evaluates its child, for the ops of [`is_point_map`] (p
-/// itself for the others). Twists and bends outside their bound use the bounding
-/// sphere instead of the child ([`eval`]); that region holds no surface.
-pub fn child_point(op: &Op, p: DVec3) -> DVec3 {
-    match op {
-        Op::Translate { offset, .. } => p - *offset,
-        Op::Rotate { inverse, .. } => *inverse * p,
-        Op::Scale { factor, .. } => p / *factor,
-        Op::Twist { frame, rate, .. } => {
-            let q = *frame * p;
-            let (s, c) = (rate * q.y).sin_cos();
-            frame.transpose() * DVec3::new(c * q.x - s * q.z, q.y, s * q.x + c * q.z)
-        }
-        Op::Bend { frame, rate, .. } => {
-            let q = *frame * p;
-            let (s, c) = (rate * q.x).sin_cos();
-            frame.transpose() * DVec3::new(c * q.x - s * q.y, s * q.x + c * q.y, q.z)
-        }
-        Op::Repeat { period, .. } => p - *period * (p / *period).round(),
-        Op::Mirror { normal, .. } => p - 2.0 * p.dot(*normal).min(0.0) * *normal,
-        Op::Elongate { h, .. } => p - p.clamp(-*h, *h),
-        _ => p,
     }
 }
 

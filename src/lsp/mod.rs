@@ -11,6 +11,7 @@ mod actions;
 mod dispatch;
 mod features;
 mod server;
+mod threads;
 pub mod transport;
 mod worker;
 

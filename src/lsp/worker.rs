@@ -12,6 +12,7 @@
 //! last full analysis's is carried over ([`crate::incremental`]). A panic inside an
 //! analysis comes back as its message.
 
+use super::threads::{discard, panic_message};
 use super::{open, Open, Stage};
 use crate::diagnostic::Diagnostic;
 use crate::incremental::BackEnd;
@@ -67,7 +68,7 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 for f in finished.try_iter() {
                     if let Some(kept) = docs.get_mut(&f.key).filter(|k| k.roots == f.roots) {
                         if let Some(old) = std::mem::replace(&mut kept.back_end, f.back_end) {
-                            super::server::discard(old);
+                            discard(old);
                         }
                     }
                 }
@@ -81,7 +82,7 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                 } = batch.remove(0);
                 if closed || forget {
                     if let Some(old) = docs.remove(uri.as_str()) {
-                        super::server::discard(old);
+                        discard(old);
                     }
                     let forget = BackJob {
                         uri: uri.clone(),
@@ -120,7 +121,7 @@ pub(super) fn start() -> (Sender<Job>, Receiver<Done>) {
                     let items = Some(&mut kept.items);
                     open(&uri, text.clone(), version, &roots, Stage::Front, items)
                 }))
-                .map_err(|panic| super::server::panic_message(&panic));
+                .map_err(|panic| panic_message(&panic));
                 let front = match (front, &kept.back_end) {
                     // An edit of comments and whitespace only: the last full analysis's
                     // back end, carried over, makes this the whole analysis.
@@ -220,7 +221,7 @@ fn start_back_end(results: Sender<Done>) -> (Sender<BackJob>, Receiver<Finished>
                     let key = job.uri.as_str().to_string();
                     if job.forget {
                         if let Some(old) = items.remove(&key) {
-                            super::server::discard(old);
+                            discard(old);
                         }
                         continue;
                     }
@@ -239,7 +240,7 @@ fn start_back_end(results: Sender<Done>) -> (Sender<BackJob>, Receiver<Finished>
                             cache,
                         )
                     }))
-                    .map_err(|panic| super::server::panic_message(&panic));
+                    .map_err(|panic| panic_message(&panic));
                     let back_end = match &full {
                         Ok(o) => Some(BackEnd::of(&o.doc.text, &job.front_diags, &o.doc.analysis)),
                         Err(_) => {

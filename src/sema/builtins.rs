@@ -2,7 +2,7 @@
 //! defaults and documentation. The checker, hover, completion and signature
 //! help all read this one table.
 
-use super::types::{Ty, Value};
+use super::show::{fmt_num, fmt_vec};
 
 /// The type a parameter accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,26 +26,6 @@ pub enum PTy {
 }
 
 impl PTy {
-    /// Whether a parameter of this type takes a value of type `t` (for a surface field,
-    /// of its values' type): the checker's rule for arguments.
-    pub fn accepts(self, t: &Ty) -> bool {
-        match self {
-            PTy::Float => *t == Ty::Float,
-            PTy::Vec2 => *t == Ty::Vec(2),
-            PTy::Vec3 => *t == Ty::Vec(3),
-            PTy::Bool => *t == Ty::Bool,
-            PTy::Str => *t == Ty::Str,
-            PTy::Shape => *t == Ty::Shape,
-            PTy::Texture => *t == Ty::Texture,
-            PTy::Material => *t == Ty::Material,
-            PTy::FloatOrVec3 => matches!(t, Ty::Float | Ty::Vec(3)),
-            PTy::Color => matches!(t, Ty::Float | Ty::Vec(3) | Ty::Vec(4)),
-            PTy::Camera => *t == Ty::Camera,
-            PTy::Light => *t == Ty::Light,
-            PTy::T => t.is_numeric(),
-        }
-    }
-
     pub fn describe(self) -> &'static str {
         match self {
             PTy::Float => "float",
@@ -75,20 +55,15 @@ pub enum Dflt {
 }
 
 impl Dflt {
-    /// The default as a folded value: the one conversion, used by the checker for
-    /// missing arguments and unset settings.
-    pub fn value(self) -> Value {
-        match self {
-            Dflt::F(x) => Value::Float(x),
-            Dflt::V(v) => Value::Vec(v.to_vec()),
-            Dflt::B(b) => Value::Bool(b),
-            Dflt::S(s) => Value::Str(s.to_string()),
-        }
-    }
-
-    /// The default as hover, completion and signatures show it.
+    /// The default as hover, completion and signatures show it: as its folded value
+    /// shows (`Value::from(d).display()`, a test keeps the two the same).
     pub fn display(self) -> String {
-        self.value().display()
+        match self {
+            Dflt::F(x) => fmt_num(x),
+            Dflt::V(v) => fmt_vec(v),
+            Dflt::B(b) => b.to_string(),
+            Dflt::S(s) => format!("{s:?}"),
+        }
     }
 }
 
@@ -229,14 +204,6 @@ pub struct Builtin {
 impl Builtin {
     pub fn param(&self, name: &str) -> Option<(usize, &Param)> {
         self.params.iter().enumerate().find(|(_, p)| p.name == name)
-    }
-
-    /// Every parameter's default, in order; `None` when some parameter has none.
-    pub fn default_args(&self) -> Option<Vec<Value>> {
-        self.params
-            .iter()
-            .map(|p| p.default.map(Dflt::value))
-            .collect()
     }
 
     /// `name(param: type = default, …) -> ret`, for hover and signature help.
@@ -548,11 +515,4 @@ impl SettingSpec {
     pub fn describe(&self) -> String {
         describe_slot(self.name, self.ty, self.default)
     }
-}
-
-/// The default of a block's setting as a value; `None` for a setting without one (or
-/// no such setting).
-pub fn setting_default(specs: &[SettingSpec], name: &str) -> Option<Value> {
-    let spec = specs.iter().find(|s| s.name == name)?;
-    spec.default.map(Dflt::value)
 }

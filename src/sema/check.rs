@@ -2,7 +2,8 @@
 
 use super::builtins::{Check, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS};
 use super::settings::Settings;
-use super::types::{fmt_num, Value};
+use super::show::fmt_num;
+use super::types::Value;
 use super::*;
 use crate::access::Access;
 use crate::codes;
@@ -304,7 +305,7 @@ impl Checker<'_> {
             );
             return Value::Error;
         }
-        if !spec.ty.accepts(ty.base()) {
+        if !ty.base().fits(spec.ty) {
             let want = spec.ty.describe();
             self.error(Diagnostic::error(
                 codes::E_TYPE_MISMATCH,

@@ -507,7 +507,7 @@ impl Checker<'_> {
         for (p, slot) in b.params.iter().zip(slots) {
             match (slot, p.default) {
                 (Some(v), _) => bound.push(v),
-                (None, Some(d)) => bound.push((d.value(), span)),
+                (None, Some(d)) => bound.push((Value::from(d), span)),
                 (None, None) => {
                     self.error(
                         Diagnostic::error(
@@ -556,7 +556,7 @@ impl Checker<'_> {
                 continue;
             }
             let base = ty.base();
-            let accepted = p.ty.accepts(base);
+            let accepted = base.fits(p.ty);
             if !accepted {
                 let mut d = Diagnostic::error(
                     codes::E_TYPE_MISMATCH,

@@ -14,6 +14,7 @@ mod expr;
 pub mod fold;
 pub mod math;
 pub mod settings;
+mod show;
 pub mod size;
 pub mod types;
 
@@ -22,8 +23,10 @@ pub use check::suggest as closest;
 pub use check::{check, MAX_SEEDS};
 /// The span of the `displace` call inside a shape value, if any.
 pub use displace::{displaced, undisplaced};
-pub use settings::{AtlasParams, Camera, Light, MaterialAttrs, RenderSettings};
-pub use types::{AtlasAttr, AtlasId, FieldExpr, MaterialId, Node, SurfaceInput, Ty, Value};
+pub use settings::{AtlasParams, MaterialAttrs, RenderSettings};
+pub use types::{
+    AtlasAttr, AtlasId, Camera, FieldExpr, Light, MaterialId, Node, SurfaceInput, Ty, Value,
+};
 
 use crate::span::Span;
 use std::path::PathBuf;

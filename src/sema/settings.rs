@@ -2,10 +2,8 @@
 //! the tables in [`super::builtins`], into these types; later stages read the types and
 //! never re-interpret builtin arguments or repeat a default.
 
-use super::builtins::{
-    self, BuiltinId, SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS,
-};
-use super::types::{FieldExpr, SurfaceInput, Ty, Value};
+use super::builtins::{SettingSpec, ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS};
+use super::types::{Camera, FieldExpr, Light, SurfaceInput, Ty, Value};
 use crate::span::Span;
 use std::collections::HashMap;
 
@@ -28,7 +26,7 @@ impl<'a> Settings<'a> {
     pub fn get(&self, name: &str) -> Option<Value> {
         match self.given.get(name) {
             Some((v, _)) if !v.is_error() => Some(v.clone()),
-            _ => builtins::setting_default(self.specs, name),
+            _ => setting_default(self.specs, name),
         }
     }
 
@@ -41,6 +39,13 @@ impl<'a> Settings<'a> {
     fn vec3(&self, name: &str) -> [f64; 3] {
         self.get(name).and_then(|v| v.as_vec3()).unwrap_or_default()
     }
+}
+
+/// The default of a block's setting as a value; `None` for a setting without one (or
+/// no such setting).
+pub fn setting_default(specs: &[SettingSpec], name: &str) -> Option<Value> {
+    let spec = specs.iter().find(|s| s.name == name)?;
+    spec.default.map(Value::from)
 }
 
 /// The parameters of Alg. 1 and Alg. 2 for one atlas, with defaults filled in.
@@ -119,120 +124,6 @@ impl Default for MaterialAttrs {
     }
 }
 
-/// A camera as the scene gives it; [`crate::view::Camera`] resolves it into a frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Camera {
-    /// `orbit(target, distance, yaw, pitch, fov)`.
-    Orbit {
-        target: [f64; 3],
-        distance: f64,
-        yaw: f64,
-        pitch: f64,
-        fov: f64,
-    },
-    /// `look_at(eye, target, fov)`.
-    LookAt {
-        eye: [f64; 3],
-        target: [f64; 3],
-        fov: f64,
-    },
-}
-
-/// A light as the scene gives it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Light {
-    /// `sun(direction, color, intensity)`; `direction` points towards the sun, as written.
-    Sun {
-        direction: [f64; 3],
-        color: [f64; 3],
-        intensity: f64,
-    },
-}
-
-/// The bound arguments of a call (in parameter order, checked), read by parameter name.
-struct Args<'a> {
-    builtin: BuiltinId,
-    args: &'a [Value],
-}
-
-impl Args<'_> {
-    fn get(&self, name: &str) -> Option<&Value> {
-        let (i, _) = self.builtin.builtin().param(name)?;
-        self.args.get(i)
-    }
-
-    fn float(&self, name: &str) -> Option<f64> {
-        self.get(name)?.as_float()
-    }
-
-    fn vec3(&self, name: &str) -> Option<[f64; 3]> {
-        self.get(name)?.as_vec3()
-    }
-}
-
-impl Camera {
-    /// The camera of a checked call of a camera builtin; `None` for any other builtin.
-    pub fn from_call(builtin: BuiltinId, args: &[Value]) -> Option<Camera> {
-        let a = Args { builtin, args };
-        match builtin {
-            BuiltinId::Orbit => Some(Camera::Orbit {
-                target: a.vec3("target")?,
-                distance: a.float("distance")?,
-                yaw: a.float("yaw")?,
-                pitch: a.float("pitch")?,
-                fov: a.float("fov")?,
-            }),
-            BuiltinId::LookAt => Some(Camera::LookAt {
-                eye: a.vec3("eye")?,
-                target: a.vec3("target")?,
-                fov: a.float("fov")?,
-            }),
-            _ => None,
-        }
-    }
-
-    /// The builtin that makes this camera.
-    pub fn builtin(&self) -> BuiltinId {
-        match self {
-            Camera::Orbit { .. } => BuiltinId::Orbit,
-            Camera::LookAt { .. } => BuiltinId::LookAt,
-        }
-    }
-}
-
-impl Light {
-    /// The light of a checked call of a light builtin; `None` for any other builtin.
-    pub fn from_call(builtin: BuiltinId, args: &[Value]) -> Option<Light> {
-        let a = Args { builtin, args };
-        match builtin {
-            BuiltinId::Sun => Some(Light::Sun {
-                direction: a.vec3("direction")?,
-                color: a.vec3("color")?,
-                intensity: a.float("intensity")?,
-            }),
-            _ => None,
-        }
-    }
-
-    /// The builtin that makes this light.
-    pub fn builtin(&self) -> BuiltinId {
-        match self {
-            Light::Sun { .. } => BuiltinId::Sun,
-        }
-    }
-}
-
-impl Default for Light {
-    /// `sun()`: the sun with the defaults of its parameters in the builtins table.
-    fn default() -> Self {
-        BuiltinId::Sun
-            .builtin()
-            .default_args()
-            .and_then(|args| Light::from_call(BuiltinId::Sun, &args))
-            .expect("every parameter of `sun` has a default")
-    }
-}
-
 /// The settings of the `render` item, with defaults filled in.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderSettings {
@@ -279,7 +170,7 @@ impl Default for RenderSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sema::builtins::Dflt;
+    use crate::sema::builtins::{BuiltinId, Dflt};
 
     fn table_float(specs: &[SettingSpec], name: &str) -> f64 {
         match specs
@@ -332,16 +223,13 @@ mod tests {
         assert_eq!(r.camera, None);
         assert_eq!(r.light, Light::default());
         assert_eq!(r.ambient, table_float(RENDER_SETTINGS, "ambient"));
-        let table = |n| builtins::setting_default(RENDER_SETTINGS, n);
+        let table = |n| setting_default(RENDER_SETTINGS, n);
         assert_eq!(table("size"), Some(Value::Vec(vec![960.0, 540.0])));
         assert_eq!(r.size, [960, 540]);
         assert_eq!(Some(Value::Vec(r.background.to_vec())), table("background"));
         // Material settings have defaults for every attribute.
         let m = MaterialAttrs::default();
-        assert_eq!(
-            Some(m.color),
-            builtins::setting_default(MATERIAL_SETTINGS, "color")
-        );
+        assert_eq!(Some(m.color), setting_default(MATERIAL_SETTINGS, "color"));
         assert_eq!(m.roughness, Value::Float(0.5));
         assert!(![m.metallic, m.emission].iter().any(Value::is_error));
     }

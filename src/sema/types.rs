@@ -1,5 +1,7 @@
 //! Types and folded values of the scene language.
 
+use super::builtins::{Builtin, BuiltinId, Dflt, PTy};
+use super::show::{fmt_num, fmt_vec};
 use crate::span::Span;
 use crate::syntax::ast::{BinaryOp, UnaryOp};
 use std::fmt;
@@ -53,6 +55,26 @@ impl Ty {
             self
         }
     }
+
+    /// Whether a value of this type (for a surface field, of its values' type) fits a
+    /// parameter of type `p`: the checker's rule for arguments.
+    pub fn fits(&self, p: PTy) -> bool {
+        match p {
+            PTy::Float => *self == Ty::Float,
+            PTy::Vec2 => *self == Ty::Vec(2),
+            PTy::Vec3 => *self == Ty::Vec(3),
+            PTy::Bool => *self == Ty::Bool,
+            PTy::Str => *self == Ty::Str,
+            PTy::Shape => *self == Ty::Shape,
+            PTy::Texture => *self == Ty::Texture,
+            PTy::Material => *self == Ty::Material,
+            PTy::FloatOrVec3 => matches!(self, Ty::Float | Ty::Vec(3)),
+            PTy::Color => matches!(self, Ty::Float | Ty::Vec(3) | Ty::Vec(4)),
+            PTy::Camera => *self == Ty::Camera,
+            PTy::Light => *self == Ty::Light,
+            PTy::T => self.is_numeric(),
+        }
+    }
 }
 
 impl fmt::Display for Ty {
@@ -85,10 +107,10 @@ crate::id::define_id!(
 
 /// A call of a builtin with its arguments bound, in parameter order, defaults filled in.
 /// Shapes and textures are trees of these; the IR lowers them. (Cameras and lights
-/// are read into [`super::Camera`] and [`super::Light`] when they are built.)
+/// are read into [`Camera`] and [`Light`] when they are built.)
 #[derive(Debug, Clone, PartialEq)]
 pub struct Node {
-    pub builtin: super::builtins::BuiltinId,
+    pub builtin: BuiltinId,
     pub args: Vec<Value>,
     /// The source that produced this node (the call or the operator).
     pub span: Span,
@@ -157,7 +179,7 @@ pub enum FieldExpr {
     },
     /// A builtin applied to arguments, some of them fields (`sin`, `mix`, `sample`, …).
     Call {
-        builtin: super::builtins::BuiltinId,
+        builtin: BuiltinId,
         args: Vec<Value>,
     },
     /// A vector built from its components (`[x, y, z]` with a field among them).
@@ -188,8 +210,8 @@ pub enum Value {
     Str(String),
     Shape(Arc<Node>),
     Texture(Arc<Node>),
-    Camera(Arc<super::Camera>),
-    Light(Arc<super::Light>),
+    Camera(Arc<Camera>),
+    Light(Arc<Light>),
     Atlas(AtlasId),
     Material(MaterialId),
     /// A surface field with the type of its per-point values.
@@ -276,10 +298,7 @@ impl Value {
     pub fn display(&self) -> String {
         match self {
             Value::Float(x) => fmt_num(*x),
-            Value::Vec(v) => format!(
-                "[{}]",
-                v.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", ")
-            ),
+            Value::Vec(v) => fmt_vec(v),
             Value::Bool(b) => b.to_string(),
             Value::Str(s) => format!("{s:?}"),
             Value::Shape(n) | Value::Texture(n) => format!("{}(…)", n.builtin.name()),
@@ -290,16 +309,158 @@ impl Value {
     }
 }
 
-/// Formats a number compactly: integers without a fraction, others with up to 6 significant decimals.
-pub fn fmt_num(x: f64) -> String {
-    if x.is_finite() && x == x.trunc() && x.abs() < 1e15 {
-        format!("{}", x as i64)
-    } else if x.is_finite() && (x.abs() >= 1e15 || x.abs() < 1e-6) {
-        // Huge and tiny numbers in scientific notation, not 40 digits or "0".
-        format!("{x:e}")
-    } else {
-        let s = format!("{x:.6}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        s.to_string()
+impl From<Dflt> for Value {
+    /// A table's default as a folded value: the one conversion, used by the checker for
+    /// missing arguments and unset settings.
+    fn from(d: Dflt) -> Value {
+        match d {
+            Dflt::F(x) => Value::Float(x),
+            Dflt::V(v) => Value::Vec(v.to_vec()),
+            Dflt::B(b) => Value::Bool(b),
+            Dflt::S(s) => Value::Str(s.to_string()),
+        }
+    }
+}
+
+/// Every parameter's default of a builtin, in order; `None` when some parameter has none.
+pub fn default_args(b: &Builtin) -> Option<Vec<Value>> {
+    b.params
+        .iter()
+        .map(|p| p.default.map(Value::from))
+        .collect()
+}
+
+/// A camera as the scene gives it; [`crate::view::Camera`] resolves it into a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Camera {
+    /// `orbit(target, distance, yaw, pitch, fov)`.
+    Orbit {
+        target: [f64; 3],
+        distance: f64,
+        yaw: f64,
+        pitch: f64,
+        fov: f64,
+    },
+    /// `look_at(eye, target, fov)`.
+    LookAt {
+        eye: [f64; 3],
+        target: [f64; 3],
+        fov: f64,
+    },
+}
+
+/// A light as the scene gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    /// `sun(direction, color, intensity)`; `direction` points towards the sun, as written.
+    Sun {
+        direction: [f64; 3],
+        color: [f64; 3],
+        intensity: f64,
+    },
+}
+
+/// The bound arguments of a call (in parameter order, checked), read by parameter name.
+struct Args<'a> {
+    builtin: BuiltinId,
+    args: &'a [Value],
+}
+
+impl Args<'_> {
+    fn get(&self, name: &str) -> Option<&Value> {
+        let (i, _) = self.builtin.builtin().param(name)?;
+        self.args.get(i)
+    }
+
+    fn float(&self, name: &str) -> Option<f64> {
+        self.get(name)?.as_float()
+    }
+
+    fn vec3(&self, name: &str) -> Option<[f64; 3]> {
+        self.get(name)?.as_vec3()
+    }
+}
+
+impl Camera {
+    /// The camera of a checked call of a camera builtin; `None` for any other builtin.
+    pub fn from_call(builtin: BuiltinId, args: &[Value]) -> Option<Camera> {
+        let a = Args { builtin, args };
+        match builtin {
+            BuiltinId::Orbit => Some(Camera::Orbit {
+                target: a.vec3("target")?,
+                distance: a.float("distance")?,
+                yaw: a.float("yaw")?,
+                pitch: a.float("pitch")?,
+                fov: a.float("fov")?,
+            }),
+            BuiltinId::LookAt => Some(Camera::LookAt {
+                eye: a.vec3("eye")?,
+                target: a.vec3("target")?,
+                fov: a.float("fov")?,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The builtin that makes this camera.
+    pub fn builtin(&self) -> BuiltinId {
+        match self {
+            Camera::Orbit { .. } => BuiltinId::Orbit,
+            Camera::LookAt { .. } => BuiltinId::LookAt,
+        }
+    }
+}
+
+impl Light {
+    /// The light of a checked call of a light builtin; `None` for any other builtin.
+    pub fn from_call(builtin: BuiltinId, args: &[Value]) -> Option<Light> {
+        let a = Args { builtin, args };
+        match builtin {
+            BuiltinId::Sun => Some(Light::Sun {
+                direction: a.vec3("direction")?,
+                color: a.vec3("color")?,
+                intensity: a.float("intensity")?,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The builtin that makes this light.
+    pub fn builtin(&self) -> BuiltinId {
+        match self {
+            Light::Sun { .. } => BuiltinId::Sun,
+        }
+    }
+}
+
+impl Default for Light {
+    /// `sun()`: the sun with the defaults of its parameters in the builtins table.
+    fn default() -> Self {
+        default_args(BuiltinId::Sun.builtin())
+            .and_then(|args| Light::from_call(BuiltinId::Sun, &args))
+            .expect("every parameter of `sun` has a default")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sema::builtins::{ATLAS_SETTINGS, BUILTINS, MATERIAL_SETTINGS, RENDER_SETTINGS};
+
+    /// One format for constants: a table's default shows as its folded value does.
+    #[test]
+    fn a_default_shows_as_its_value_shows() {
+        let params = BUILTINS.iter().flat_map(|b| b.params.iter());
+        let settings = [ATLAS_SETTINGS, MATERIAL_SETTINGS, RENDER_SETTINGS]
+            .into_iter()
+            .flatten();
+        let defaults: Vec<Dflt> = params
+            .filter_map(|p| p.default)
+            .chain(settings.filter_map(|s| s.default))
+            .collect();
+        assert!(defaults.len() > 20);
+        for d in defaults {
+            assert_eq!(d.display(), Value::from(d).display(), "{d:?}");
+        }
     }
 }

@@ -433,65 +433,7 @@ where
             .delimited_by(just(Token::LParen), just(Token::RParen))
             .labelled("arguments");
 
-        let literal = select! {
-            Token::Number(t) => number(t),
-            Token::BadNumber(_) => ExprKind::Error,
-            Token::True => ExprKind::Bool(true),
-            Token::False => ExprKind::Bool(false),
-            Token::Str(s) => ExprKind::Str(unescape(s)),
-            Token::UnterminatedStr(s) => ExprKind::Str(unescape(s)),
-        }
-        .map_with(|k, e| Expr::new(k, to_span(e.span())));
-
-        let call_or_name = ident()
-            .then(args.clone().or_not())
-            .map_with(|(name, args), e| {
-                let span = to_span(e.span());
-                match args {
-                    Some(args) => Expr::new(ExprKind::Call { callee: name, args }, span),
-                    None => Expr::new(ExprKind::Name(name.name), span),
-                }
-            });
-
-        let vector = expr
-            .clone()
-            .separated_by(just(Token::Comma))
-            .allow_trailing()
-            .collect::<Vec<_>>()
-            .delimited_by(just(Token::LBracket), just(Token::RBracket))
-            .map_with(|items, e| Expr::new(ExprKind::Vector(items), to_span(e.span())))
-            .labelled("vector");
-
-        let paren = expr
-            .clone()
-            .delimited_by(just(Token::LParen), just(Token::RParen))
-            .map_with(|inner, e| Expr::new(ExprKind::Paren(Box::new(inner)), to_span(e.span())));
-
-        let atom = literal
-            .or(call_or_name)
-            .or(vector)
-            .or(paren)
-            .recover_with(via_parser(nested_delimiters(
-                Token::LParen,
-                Token::RParen,
-                [
-                    (Token::LBracket, Token::RBracket),
-                    (Token::LBrace, Token::RBrace),
-                ],
-                |s| Expr::new(ExprKind::Error, to_span(s)),
-            )))
-            .recover_with(via_parser(nested_delimiters(
-                Token::LBracket,
-                Token::RBracket,
-                [
-                    (Token::LParen, Token::RParen),
-                    (Token::LBrace, Token::RBrace),
-                ],
-                |s| Expr::new(ExprKind::Error, to_span(s)),
-            )))
-            .labelled("expression")
-            .boxed();
-
+        let atom = atom(expr, args.clone());
         let postfix = atom.foldl_with(
             just(Token::Dot)
                 .ignore_then(member())
@@ -518,88 +460,162 @@ where
                 }
             },
         );
-
-        let bin = |l: Expr, op: BinaryOp, r: Expr| {
-            let span = l.span.to(r.span);
-            Expr::new(
-                ExprKind::Binary {
-                    op,
-                    lhs: Box::new(l),
-                    rhs: Box::new(r),
-                },
-                span,
-            )
-        };
-        let un = |op: (UnaryOp, Span), r: Expr| {
-            let span = op.1.to(r.span);
-            Expr::new(
-                ExprKind::Unary {
-                    op: op.0,
-                    expr: Box::new(r),
-                },
-                span,
-            )
-        };
-        let unop =
-            |t: Token<'a>, op: UnaryOp| just(t).map_with(move |_, e| (op, to_span(e.span())));
-        postfix
-            .pratt((
-                prefix(7, unop(Token::Minus, UnaryOp::Neg), move |op, r, _| {
-                    un(op, r)
-                }),
-                prefix(7, unop(Token::Bang, UnaryOp::Not), move |op, r, _| {
-                    un(op, r)
-                }),
-                infix(
-                    left(6),
-                    just(Token::Star).to(BinaryOp::Mul),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(6),
-                    just(Token::Slash).to(BinaryOp::Div),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(6),
-                    just(Token::Percent).to(BinaryOp::Rem),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(5),
-                    just(Token::Plus).to(BinaryOp::Add),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(5),
-                    just(Token::Minus).to(BinaryOp::Sub),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(4),
-                    select! {
-                        Token::EqEq => BinaryOp::Eq,
-                        Token::NotEq => BinaryOp::Ne,
-                        Token::Lt => BinaryOp::Lt,
-                        Token::Le => BinaryOp::Le,
-                        Token::Gt => BinaryOp::Gt,
-                        Token::Ge => BinaryOp::Ge,
-                    },
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(3),
-                    just(Token::Amp).to(BinaryOp::And),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-                infix(
-                    left(2),
-                    just(Token::Pipe).to(BinaryOp::Or),
-                    move |l, op, r, _| bin(l, op, r),
-                ),
-            ))
-            .labelled("expression")
+        operators(postfix).labelled("expression")
     })
+}
+
+/// An operand: a literal, a call or a name, a vector or a parenthesised expression
+/// (`expr`), recovering from broken brackets as an error expression.
+fn atom<'t, 'a: 't, I, E, A>(expr: E, args: A) -> impl Parser<'t, I, Expr, Extra<'t, 'a>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
+    E: Parser<'t, I, Expr, Extra<'t, 'a>> + Clone + 't,
+    A: Parser<'t, I, Vec<Arg>, Extra<'t, 'a>> + Clone + 't,
+{
+    let literal = select! {
+        Token::Number(t) => number(t),
+        Token::BadNumber(_) => ExprKind::Error,
+        Token::True => ExprKind::Bool(true),
+        Token::False => ExprKind::Bool(false),
+        Token::Str(s) => ExprKind::Str(unescape(s)),
+        Token::UnterminatedStr(s) => ExprKind::Str(unescape(s)),
+    }
+    .map_with(|k, e| Expr::new(k, to_span(e.span())));
+
+    let call_or_name = ident()
+        .then(args.clone().or_not())
+        .map_with(|(name, args), e| {
+            let span = to_span(e.span());
+            match args {
+                Some(args) => Expr::new(ExprKind::Call { callee: name, args }, span),
+                None => Expr::new(ExprKind::Name(name.name), span),
+            }
+        });
+
+    let vector = expr
+        .clone()
+        .separated_by(just(Token::Comma))
+        .allow_trailing()
+        .collect::<Vec<_>>()
+        .delimited_by(just(Token::LBracket), just(Token::RBracket))
+        .map_with(|items, e| Expr::new(ExprKind::Vector(items), to_span(e.span())))
+        .labelled("vector");
+
+    let paren = expr
+        .clone()
+        .delimited_by(just(Token::LParen), just(Token::RParen))
+        .map_with(|inner, e| Expr::new(ExprKind::Paren(Box::new(inner)), to_span(e.span())));
+
+    literal
+        .or(call_or_name)
+        .or(vector)
+        .or(paren)
+        .recover_with(via_parser(nested_delimiters(
+            Token::LParen,
+            Token::RParen,
+            [
+                (Token::LBracket, Token::RBracket),
+                (Token::LBrace, Token::RBrace),
+            ],
+            |s| Expr::new(ExprKind::Error, to_span(s)),
+        )))
+        .recover_with(via_parser(nested_delimiters(
+            Token::LBracket,
+            Token::RBracket,
+            [
+                (Token::LParen, Token::RParen),
+                (Token::LBrace, Token::RBrace),
+            ],
+            |s| Expr::new(ExprKind::Error, to_span(s)),
+        )))
+        .labelled("expression")
+        .boxed()
+}
+
+/// The operators over `operand`, by precedence from the highest: unary `-` and `!`;
+/// `*`, `/`, `%`; `+`, `-`; the comparisons; `&`; `|` (binary ones associate left).
+fn operators<'t, 'a: 't, I, O>(operand: O) -> impl Parser<'t, I, Expr, Extra<'t, 'a>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'a>, Span = SimpleSpan>,
+    O: Parser<'t, I, Expr, Extra<'t, 'a>> + Clone,
+{
+    let bin = |l: Expr, op: BinaryOp, r: Expr| {
+        let span = l.span.to(r.span);
+        Expr::new(
+            ExprKind::Binary {
+                op,
+                lhs: Box::new(l),
+                rhs: Box::new(r),
+            },
+            span,
+        )
+    };
+    let un = |op: (UnaryOp, Span), r: Expr| {
+        let span = op.1.to(r.span);
+        Expr::new(
+            ExprKind::Unary {
+                op: op.0,
+                expr: Box::new(r),
+            },
+            span,
+        )
+    };
+    let unop = |t: Token<'a>, op: UnaryOp| just(t).map_with(move |_, e| (op, to_span(e.span())));
+    operand.pratt((
+        prefix(7, unop(Token::Minus, UnaryOp::Neg), move |op, r, _| {
+            un(op, r)
+        }),
+        prefix(7, unop(Token::Bang, UnaryOp::Not), move |op, r, _| {
+            un(op, r)
+        }),
+        infix(
+            left(6),
+            just(Token::Star).to(BinaryOp::Mul),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(6),
+            just(Token::Slash).to(BinaryOp::Div),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(6),
+            just(Token::Percent).to(BinaryOp::Rem),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(5),
+            just(Token::Plus).to(BinaryOp::Add),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(5),
+            just(Token::Minus).to(BinaryOp::Sub),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(4),
+            select! {
+                Token::EqEq => BinaryOp::Eq,
+                Token::NotEq => BinaryOp::Ne,
+                Token::Lt => BinaryOp::Lt,
+                Token::Le => BinaryOp::Le,
+                Token::Gt => BinaryOp::Gt,
+                Token::Ge => BinaryOp::Ge,
+            },
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(3),
+            just(Token::Amp).to(BinaryOp::And),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+        infix(
+            left(2),
+            just(Token::Pipe).to(BinaryOp::Or),
+            move |l, op, r, _| bin(l, op, r),
+        ),
+    ))
 }
 
 fn item_parser<'t, 'a: 't, I>() -> impl Parser<'t, I, Item, Extra<'t, 'a>> + Clone

@@ -9,7 +9,7 @@
 //! 1 − sin(ρ)/ρ of the Jacobi fields, ρ the distance in curvature radii).
 //! `shaders/atlas.wgsl.in` (`atlas_K_shoot`, `atlas_K_refine`) mirrors this file.
 
-use super::logmap::{gradient, normal_curvature, rotation_between, FdSteps, LogMap, Seed};
+use super::geodesic::{gradient, normal_curvature, rotation_between, FdSteps, LogMap, Seed};
 use glam::{DMat3, DVec2, DVec3};
 
 /// Where a geodesic shot from a seed lands.

@@ -17,7 +17,7 @@ pub mod ktx2;
 pub use self::gltf::{glb, read_glb, ReadError};
 pub use self::ktx2::ktx2;
 
-use super::{Atlas, FlatLayout, MeshData, Textures};
+use super::{ChartLayout, FlatLayout, MeshData, Textures};
 
 /// Checks that `mesh` is a non-empty triangle mesh: the four attributes have one value
 /// per vertex, every value is finite, and the indices are whole triangles of existing
@@ -107,15 +107,15 @@ pub fn check_layout(layout: &FlatLayout) -> Result<(), String> {
 }
 
 /// Checks that an atlas layout is usable ([`check_layout`], [`super::PackedLayout::check`]).
-pub fn check_atlas(atlas: &Atlas) -> Result<(), String> {
+pub fn check_atlas(atlas: &ChartLayout) -> Result<(), String> {
     match atlas {
-        Atlas::Flat(l) => check_layout(l),
-        Atlas::Packed(l) => l.check(),
+        ChartLayout::Flat(l) => check_layout(l),
+        ChartLayout::Packed(l) => l.check(),
     }
 }
 
 /// Checks that every texture is the atlas's size.
-pub fn check_textures(textures: &Textures, layout: &Atlas) -> Result<(), String> {
+pub fn check_textures(textures: &Textures, layout: &ChartLayout) -> Result<(), String> {
     let images = [
         ("base colour", Some(&textures.base_color)),
         ("metallic-roughness", Some(&textures.metallic_roughness)),

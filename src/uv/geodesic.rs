@@ -1,0 +1,199 @@
+//! What the geodesic walk of Alg. 1 ([`super::logmap`]) and its Newton corrections
+//! ([`super::refine`]) share: the seed's frame, the walk's parameters and answer, and
+//! the geometry of f by finite differences (gradient, normal curvature, the smallest
+//! rotation between two normals). [`super::logmap`] re-exports all of it.
+
+use glam::{DMat3, DQuat, DVec2, DVec3};
+
+/// Why a walk failed; kept distinct all the way to the user.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Status {
+    Ok,
+    /// d > D, or r + d > D.
+    TooFar,
+    /// |v_i| < ε1 · |p − x_i|: the Euclidean heuristic has no tangent direction.
+    HeuristicFailed,
+    /// n_i · n_{i+1} < 1 − ε2.
+    SharpFeature,
+    /// d(x_N, p) ≥ r_min after N steps.
+    NotReached,
+}
+
+impl Status {
+    /// The number the shaders and `ATLAS.status` use.
+    pub fn code(self) -> u32 {
+        match self {
+            Status::Ok => 0,
+            Status::TooFar => 1,
+            Status::HeuristicFailed => 2,
+            Status::SharpFeature => 3,
+            Status::NotReached => 4,
+        }
+    }
+
+    pub fn from_code(c: u32) -> Status {
+        match c {
+            0 => Status::Ok,
+            1 => Status::TooFar,
+            2 => Status::HeuristicFailed,
+            3 => Status::SharpFeature,
+            _ => Status::NotReached,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::TooFar => "too_far",
+            Status::HeuristicFailed => "heuristic_failed",
+            Status::SharpFeature => "sharp_feature",
+            Status::NotReached => "not_reached",
+        }
+    }
+}
+
+/// A seed with its projected position, unit normal and frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Seed {
+    pub p: DVec3,
+    pub n: DVec3,
+    pub e1: DVec3,
+    pub e2: DVec3,
+}
+
+/// The parameters of Alg. 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Params {
+    /// N
+    pub steps: u32,
+    /// K: Newton corrections towards the exact log map ([`super::refine`]).
+    pub refine: u32,
+    /// D
+    pub max_distance: f64,
+    /// ε1
+    pub heuristic_tolerance: f64,
+    /// ε2
+    pub sharp_tolerance: f64,
+    /// r_min
+    pub min_reach: f64,
+    pub reproject: bool,
+    /// Finite-difference step for gradients off the walk (normals, projection onto the
+    /// surface): about 1e-3 · scale in f32.
+    pub h_gradient: f64,
+    /// The walk's gradient step, as a fraction of the step length.
+    pub fd_gradient: f64,
+    /// The walk's step for the second directional difference (Eq. 17), as a fraction of
+    /// the step length.
+    pub fd_curvature: f64,
+    /// The floor of both, as a fraction of |p|∞ + |x − p| (the coordinates' magnitude,
+    /// which sets the rounding error).
+    pub fd_floor: f64,
+}
+
+impl Params {
+    /// The same walk with the f64 reference's fine difference steps (far below what f32
+    /// allows): the errors left are then the algorithm's own.
+    pub fn reference(self) -> Params {
+        Params {
+            fd_gradient: 1e-4,
+            fd_curvature: 1e-2,
+            fd_floor: 1e-10,
+            ..self
+        }
+    }
+}
+
+/// The result of one walk.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogMap {
+    pub status: Status,
+    pub uv: DVec2,
+    /// Geodesic distance r.
+    pub distance: f64,
+    /// Parallel transport T_pM → T_xM.
+    pub transport: DMat3,
+    /// Where the walk stopped: the seed on success, else the point where it failed
+    /// (for diagnostics such as "sharp feature at (x, y, z)").
+    pub at: DVec3,
+}
+
+impl LogMap {
+    pub(super) fn fail(status: Status, at: DVec3) -> LogMap {
+        LogMap {
+            status,
+            uv: DVec2::ZERO,
+            distance: f64::INFINITY,
+            transport: DMat3::IDENTITY,
+            at,
+        }
+    }
+
+    /// The log map as a tangent vector at the seed: u·e1 + v·e2.
+    pub fn tangent(&self, seed: &Seed) -> DVec3 {
+        seed.e1 * self.uv.x + seed.e2 * self.uv.y
+    }
+
+    /// The transport as a unit quaternion (x, y, z, w), as `ATLAS.transport` gives it.
+    pub fn transport_quat(&self) -> DQuat {
+        DQuat::from_mat3(&self.transport).normalize()
+    }
+}
+
+/// The gradient of f by central differences.
+pub fn gradient(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DVec3 {
+    let d = |e: DVec3| f(x + e * h) - f(x - e * h);
+    DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
+}
+
+/// Eq. 31: the smallest rotation taking unit `a` to unit `b`: I + J + J²/(1 + a·b),
+/// J the cross-product matrix of a × b. Near a·b = −1 (which the sharp-feature test
+/// normally rejects first) it falls back to the identity.
+pub fn rotation_between(a: DVec3, b: DVec3) -> DMat3 {
+    let c = a.dot(b);
+    if c <= -1.0 + 1e-9 {
+        return DMat3::IDENTITY;
+    }
+    let k = a.cross(b);
+    let j = DMat3::from_cols(
+        DVec3::new(0.0, k.z, -k.y),
+        DVec3::new(-k.z, 0.0, k.x),
+        DVec3::new(k.y, -k.x, 0.0),
+    );
+    DMat3::IDENTITY + j + j * j * (1.0 / (1.0 + c))
+}
+
+/// The finite-difference steps of a walk: fractions of the step length, so that they
+/// follow the geometry the walk crosses and not the size of the scene, floored at
+/// `fd_floor` of the magnitude of the coordinates (where rounding sets the limit).
+#[derive(Debug, Clone, Copy)]
+pub struct FdSteps {
+    gradient: f64,
+    curvature: f64,
+    floor: f64,
+}
+
+impl FdSteps {
+    /// The steps of a walk from `x` to seed `p` under `params`.
+    pub fn new(params: &Params, p: DVec3, x: DVec3) -> FdSteps {
+        FdSteps {
+            gradient: params.fd_gradient,
+            curvature: params.fd_curvature,
+            floor: params.fd_floor * (p.abs().max_element() + (x - p).length()),
+        }
+    }
+    /// The gradient's step for a step of length `s`.
+    pub fn gradient(&self, s: f64) -> f64 {
+        (self.gradient * s).max(self.floor)
+    }
+    /// The second difference's step for a step of length `s`.
+    pub fn curvature(&self, s: f64) -> f64 {
+        (self.curvature * s).max(self.floor)
+    }
+}
+
+/// The normal curvature along unit tangent `vh` at `x` by the three-point second
+/// difference (Eq. 17).
+pub fn normal_curvature(f: &dyn Fn(DVec3) -> f64, x: DVec3, vh: DVec3, g: DVec3, h: f64) -> f64 {
+    let second = (f(x - vh * h) - 2.0 * f(x) + f(x + vh * h)) / (h * h);
+    -second / g.length().max(1e-12)
+}

@@ -445,3 +445,66 @@ fn cpu_and_gpu_agree_on_every_primitive_and_its_bounds_hold() {
         }
     }
 }
+
+#[test]
+fn every_primitive_kind_matches_its_wgsl_function_and_builtin() {
+    use sdfc::ir::prim::{Slot, KINDS};
+    // The shader library's signatures: `fn NAME(p: vec3<f32>, a: f32, b: vec3<f32>, …)`.
+    let library = std::fs::read_to_string("shaders/sdf.wgsl").unwrap();
+    for (code, kind) in KINDS.iter().enumerate() {
+        assert_eq!(kind.code as usize, code, "KINDS is in code order");
+        let head = format!("fn {}(", kind.wgsl);
+        let at = library
+            .find(&head)
+            .unwrap_or_else(|| panic!("shaders/sdf.wgsl has no `{}`", kind.wgsl));
+        let params = &library[at + head.len()..];
+        let params = &params[..params.find(')').unwrap()];
+        let types: Vec<&str> = params
+            .split(',')
+            .skip(1)
+            .map(|p| p.split(':').nth(1).unwrap().trim())
+            .collect();
+        let slots: Vec<&str> = kind
+            .slots
+            .iter()
+            .map(|s| match s {
+                Slot::Float => "f32",
+                Slot::Vec3 => "vec3<f32>",
+            })
+            .collect();
+        assert_eq!(
+            types, slots,
+            "{}: the WGSL parameters and the slots differ",
+            kind.wgsl
+        );
+    }
+    // Every primitive builtin lowers to the kind its WGSL function is named after, with
+    // as many parameters as its slots hold.
+    for b in BUILTINS.iter().filter(|b| b.kind == Kind::Primitive) {
+        let a = sdfc::driver::check(&format!("render {}();", b.name), None);
+        let shape = a.scene.as_ref().unwrap().render.clone().unwrap();
+        // A cone is a capped cone moved up to stand on y = 0: its one primitive node.
+        let p = shape
+            .nodes
+            .iter()
+            .find_map(|n| match &n.op {
+                sdfc::ir::Op::Prim(p) => Some(p),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("{} does not lower to a primitive", b.name));
+        let words: usize = p
+            .kind()
+            .slots
+            .iter()
+            .map(|s| if *s == Slot::Vec3 { 3 } else { 1 })
+            .sum();
+        assert_eq!(p.params().len(), words, "{}", b.name);
+        let wgsl = p.kind().wgsl.trim_start_matches("sd_");
+        let name = if b.name == "cone" {
+            "capped_cone"
+        } else {
+            b.name
+        };
+        assert_eq!(wgsl, name, "{} lowers to {}", b.name, p.kind().wgsl);
+    }
+}

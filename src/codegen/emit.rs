@@ -551,48 +551,9 @@ impl Writer {
     }
 }
 
-/// The WGSL call of a primitive's distance at point `p`.
+/// The WGSL call of a primitive's distance at point `p` ([`Prim::wgsl_call`]).
 fn prim_call(pr: &Prim, p: &str) -> String {
-    match pr {
-        Prim::Sphere { r } => format!("sd_sphere({p}, {})", lit(*r)),
-        Prim::Box { half } => format!("sd_box({p}, {})", vec3(*half)),
-        Prim::RoundBox { half, r } => {
-            format!("sd_round_box({p}, {}, {})", vec3(*half), lit(*r))
-        }
-        Prim::BoxFrame { half, e } => {
-            format!("sd_box_frame({p}, {}, {})", vec3(*half), lit(*e))
-        }
-        Prim::Torus { major, minor } => {
-            format!("sd_torus({p}, {}, {})", lit(*major), lit(*minor))
-        }
-        Prim::Capsule { a, b, r } => {
-            format!("sd_capsule({p}, {}, {}, {})", vec3(*a), vec3(*b), lit(*r))
-        }
-        Prim::Cylinder { r, half_h } => {
-            format!("sd_cylinder({p}, {}, {})", lit(*r), lit(*half_h))
-        }
-        Prim::CappedCone { half_h, r1, r2 } => format!(
-            "sd_capped_cone({p}, {}, {}, {})",
-            lit(*half_h),
-            lit(*r1),
-            lit(*r2)
-        ),
-        Prim::Plane { n, offset } => {
-            format!("sd_plane({p}, {}, {})", vec3(*n), lit(*offset))
-        }
-        Prim::Ellipsoid { radii } => format!("sd_ellipsoid({p}, {})", vec3(*radii)),
-        Prim::Octahedron { s } => format!("sd_octahedron({p}, {})", lit(*s)),
-        Prim::HexPrism { r, half_h } => {
-            format!("sd_hex_prism({p}, {}, {})", lit(*r), lit(*half_h))
-        }
-        Prim::TriPrism { r, half_h } => {
-            format!("sd_tri_prism({p}, {}, {})", lit(*r), lit(*half_h))
-        }
-        Prim::Pyramid { h } => format!("sd_pyramid({p}, {})", lit(*h)),
-        Prim::Link { le, r1, r2 } => {
-            format!("sd_link({p}, {}, {}, {})", lit(*le), lit(*r1), lit(*r2))
-        }
-    }
+    pr.wgsl_call(p, lit, vec3)
 }
 
 /// The WGSL of the point at which a point-mapping op evaluates its child (the

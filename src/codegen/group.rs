@@ -25,27 +25,31 @@ fn group_box(at: u32, p: vec3<f32>) -> f32 {
 
 ";
 
-/// The distance call of a primitive kind at local point `q`, its parameters from `k`.
-fn call_of(code: u32) -> Option<&'static str> {
-    // The order of each kind's parameters is `ir::group::params`'s.
-    Some(match code {
-        0 => "sd_sphere(q, tables_f32(k))",
-        1 => "sd_box(q, tables_vec3(k))",
-        2 => "sd_round_box(q, tables_vec3(k), tables_f32(k + 3u))",
-        3 => "sd_box_frame(q, tables_vec3(k), tables_f32(k + 3u))",
-        4 => "sd_torus(q, tables_f32(k), tables_f32(k + 1u))",
-        5 => "sd_capsule(q, tables_vec3(k), tables_vec3(k + 3u), tables_f32(k + 6u))",
-        6 => "sd_cylinder(q, tables_f32(k), tables_f32(k + 1u))",
-        7 => "sd_capped_cone(q, tables_f32(k), tables_f32(k + 1u), tables_f32(k + 2u))",
-        8 => "sd_plane(q, tables_vec3(k), tables_f32(k + 3u))",
-        9 => "sd_ellipsoid(q, tables_vec3(k))",
-        10 => "sd_octahedron(q, tables_f32(k))",
-        11 => "sd_hex_prism(q, tables_f32(k), tables_f32(k + 1u))",
-        12 => "sd_tri_prism(q, tables_f32(k), tables_f32(k + 1u))",
-        13 => "sd_pyramid(q, tables_f32(k))",
-        14 => "sd_link(q, tables_f32(k), tables_f32(k + 1u), tables_f32(k + 2u))",
-        _ => return None,
-    })
+/// The distance call of a primitive kind at local point `q`, its parameters read from
+/// the record at word `k` in the kind's slot order ([`crate::ir::prim::KINDS`]).
+fn call_of(code: u32) -> Option<String> {
+    use crate::ir::prim::{Slot, KINDS};
+    let kind = KINDS.get(code as usize)?;
+    let mut args = vec![String::from("q")];
+    let mut at = 0u32;
+    for slot in kind.slots {
+        let k = if at == 0 {
+            String::from("k")
+        } else {
+            format!("k + {at}u")
+        };
+        match slot {
+            Slot::Float => {
+                args.push(format!("tables_f32({k})"));
+                at += 1;
+            }
+            Slot::Vec3 => {
+                args.push(format!("tables_vec3({k})"));
+                at += 3;
+            }
+        }
+    }
+    Some(format!("{}({})", kind.wgsl, args.join(", ")))
 }
 
 /// The kinds of a group as a bit mask: one walker function per mask.

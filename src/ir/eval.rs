@@ -5,133 +5,14 @@
 //! `shaders/sdf.wgsl`.
 
 use super::*;
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
-/// The signed distance to a centred box of half size `half` (`sd_box` in the shaders).
-pub fn box_dist(p: DVec3, half: DVec3) -> f64 {
-    let q = p.abs() - half;
-    q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
-}
+pub use super::prim::box_dist;
 
-/// A primitive's distance at a local point.
+/// A primitive's distance at a local point ([`Prim::distance`]).
 pub fn prim(p: DVec3, prim: &Prim) -> f64 {
-    match *prim {
-        Prim::Sphere { r } => p.length() - r,
-        Prim::Box { half } => box_dist(p, half),
-        Prim::RoundBox { half, r } => box_dist(p, half) - r,
-        Prim::BoxFrame { half, e } => {
-            let p = p.abs() - half;
-            let q = (p + DVec3::splat(e)).abs() - DVec3::splat(e);
-            let a = DVec3::new(p.x, q.y, q.z);
-            let b = DVec3::new(q.x, p.y, q.z);
-            let c = DVec3::new(q.x, q.y, p.z);
-            let part = |v: DVec3| v.max(DVec3::ZERO).length() + v.max_element().min(0.0);
-            part(a).min(part(b)).min(part(c))
-        }
-        Prim::Torus { major, minor } => {
-            DVec2::new(DVec2::new(p.x, p.z).length() - major, p.y).length() - minor
-        }
-        Prim::Capsule { a, b, r } => {
-            let (pa, ba) = (p - a, b - a);
-            let bb = ba.dot(ba);
-            let h = if bb > 0.0 {
-                (pa.dot(ba) / bb).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            (pa - ba * h).length() - r
-        }
-        Prim::Cylinder { r, half_h } => {
-            let d = DVec2::new(DVec2::new(p.x, p.z).length(), p.y).abs() - DVec2::new(r, half_h);
-            d.x.max(d.y).min(0.0) + d.max(DVec2::ZERO).length()
-        }
-        Prim::CappedCone { half_h: h, r1, r2 } => {
-            let q = DVec2::new(DVec2::new(p.x, p.z).length(), p.y);
-            let k1 = DVec2::new(r2, h);
-            let k2 = DVec2::new(r2 - r1, 2.0 * h);
-            let ca = DVec2::new(
-                q.x - q.x.min(if q.y < 0.0 { r1 } else { r2 }),
-                q.y.abs() - h,
-            );
-            let cb = q - k1 + k2 * ((k1 - q).dot(k2) / k2.dot(k2)).clamp(0.0, 1.0);
-            let s = if cb.x < 0.0 && ca.y < 0.0 { -1.0 } else { 1.0 };
-            s * ca.dot(ca).min(cb.dot(cb)).sqrt()
-        }
-        Prim::Plane { n, offset } => p.dot(n) - offset,
-        Prim::Ellipsoid { radii } => {
-            let k0 = (p / radii).length();
-            let k1 = (p / (radii * radii)).length();
-            if k1 == 0.0 {
-                -radii.min_element()
-            } else {
-                k0 * (k0 - 1.0) / k1
-            }
-        }
-        Prim::Octahedron { s } => {
-            let p = p.abs();
-            let m = p.x + p.y + p.z - s;
-            let q = if 3.0 * p.x < m {
-                p
-            } else if 3.0 * p.y < m {
-                DVec3::new(p.y, p.z, p.x)
-            } else if 3.0 * p.z < m {
-                DVec3::new(p.z, p.x, p.y)
-            } else {
-                return m * 0.577_350_269_189_625_8;
-            };
-            let k = (0.5 * (q.z - q.y + s)).clamp(0.0, s);
-            DVec3::new(q.x, q.y - s + k, q.z - k).length()
-        }
-        Prim::HexPrism { r, half_h } => {
-            let k = DVec3::new(-0.866_025_403_784_438_6, 0.5, 0.577_350_269_189_625_8);
-            let mut p = p.abs();
-            let kxy = DVec2::new(k.x, k.y);
-            let pxy = DVec2::new(p.x, p.y) - 2.0 * kxy.dot(DVec2::new(p.x, p.y)).min(0.0) * kxy;
-            p.x = pxy.x;
-            p.y = pxy.y;
-            let d = DVec2::new(
-                (DVec2::new(p.x, p.y) - DVec2::new(p.x.clamp(-k.z * r, k.z * r), r)).length()
-                    * (p.y - r).signum(),
-                p.z - half_h,
-            );
-            d.x.max(d.y).min(0.0) + d.max(DVec2::ZERO).length()
-        }
-        Prim::TriPrism { r, half_h } => {
-            let q = p.abs();
-            (q.z - half_h).max((q.x * 0.866_025_403_784_438_6 + p.y * 0.5).max(-p.y) - r * 0.5)
-        }
-        Prim::Pyramid { h } => {
-            // Below the base the nearest point is on the base square; IQ's formula
-            // overestimates there.
-            if p.y < 0.0 {
-                return DVec3::new((p.x.abs() - 0.5).max(0.0), p.y, (p.z.abs() - 0.5).max(0.0))
-                    .length();
-            }
-            let m2 = h * h + 0.25;
-            let (mut px, py, mut pz) = (p.x.abs(), p.y, p.z.abs());
-            if pz > px {
-                std::mem::swap(&mut px, &mut pz);
-            }
-            px -= 0.5;
-            pz -= 0.5;
-            let q = DVec3::new(pz, h * py - 0.5 * px, h * px + 0.5 * py);
-            let s = (-q.x).max(0.0);
-            let t = ((q.y - 0.5 * pz) / (m2 + 0.25)).clamp(0.0, 1.0);
-            let a = m2 * (q.x + s) * (q.x + s) + q.y * q.y;
-            let b = m2 * (q.x + 0.5 * t) * (q.x + 0.5 * t) + (q.y - m2 * t) * (q.y - m2 * t);
-            let d2 = if q.y.min(-q.x * m2 - q.y * 0.5) > 0.0 {
-                0.0
-            } else {
-                a.min(b)
-            };
-            ((d2 + q.z * q.z) / m2).sqrt() * q.z.max(-py).signum()
-        }
-        Prim::Link { le, r1, r2 } => {
-            let q = DVec3::new(p.x, (p.y.abs() - le).max(0.0), p.z);
-            DVec2::new(DVec2::new(q.x, q.y).length() - r1, q.z).length() - r2
-        }
-    }
+    prim.distance(p)
 }
 
 /// Quadratic polynomial smooth minimum (IQ), with the blend factor for materials.

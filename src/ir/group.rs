@@ -70,47 +70,15 @@ pub struct Group {
     pub key: String,
 }
 
-/// The primitive kinds' codes in leaf records (`codegen::group` switches on them).
+/// The primitive kinds' codes in leaf records (`codegen::group` switches on them):
+/// [`Prim::code`].
 pub fn kind(p: &Prim) -> u32 {
-    match p {
-        Prim::Sphere { .. } => 0,
-        Prim::Box { .. } => 1,
-        Prim::RoundBox { .. } => 2,
-        Prim::BoxFrame { .. } => 3,
-        Prim::Torus { .. } => 4,
-        Prim::Capsule { .. } => 5,
-        Prim::Cylinder { .. } => 6,
-        Prim::CappedCone { .. } => 7,
-        Prim::Plane { .. } => 8,
-        Prim::Ellipsoid { .. } => 9,
-        Prim::Octahedron { .. } => 10,
-        Prim::HexPrism { .. } => 11,
-        Prim::TriPrism { .. } => 12,
-        Prim::Pyramid { .. } => 13,
-        Prim::Link { .. } => 14,
-    }
+    p.code()
 }
 
-/// A primitive's parameters as a leaf record stores them.
+/// A primitive's parameters as a leaf record stores them: [`Prim::params`].
 pub fn params(p: &Prim) -> Vec<f64> {
-    match *p {
-        Prim::Sphere { r } => vec![r],
-        Prim::Box { half } => half.to_array().to_vec(),
-        Prim::RoundBox { half, r } | Prim::BoxFrame { half, e: r } => {
-            vec![half.x, half.y, half.z, r]
-        }
-        Prim::Torus { major, minor } => vec![major, minor],
-        Prim::Capsule { a, b, r } => vec![a.x, a.y, a.z, b.x, b.y, b.z, r],
-        Prim::Cylinder { r, half_h }
-        | Prim::HexPrism { r, half_h }
-        | Prim::TriPrism { r, half_h } => vec![r, half_h],
-        Prim::CappedCone { half_h, r1, r2 } => vec![half_h, r1, r2],
-        Prim::Plane { n, offset } => vec![n.x, n.y, n.z, offset],
-        Prim::Ellipsoid { radii } => radii.to_array().to_vec(),
-        Prim::Octahedron { s } => vec![s],
-        Prim::Pyramid { h } => vec![h],
-        Prim::Link { le, r1, r2 } => vec![le, r1, r2],
-    }
+    p.params()
 }
 
 /// Node `id` as a leaf: a chain of translations, rotations and paints down to a

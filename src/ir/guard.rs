@@ -60,18 +60,7 @@ pub fn costs(shape: &Shape) -> Vec<f64> {
     for (i, n) in shape.nodes.iter().enumerate() {
         let c = |id: &NodeId| cost[id.index()];
         cost[i] = match &n.op {
-            Op::Prim(p) => match p {
-                Prim::Sphere { .. } | Prim::Plane { .. } => 1.0,
-                Prim::Box { .. }
-                | Prim::RoundBox { .. }
-                | Prim::Capsule { .. }
-                | Prim::Cylinder { .. }
-                | Prim::Torus { .. }
-                | Prim::Ellipsoid { .. }
-                | Prim::TriPrism { .. }
-                | Prim::Link { .. } => 1.5,
-                _ => 2.5,
-            },
+            Op::Prim(p) => p.kind().cost,
             Op::Csg { a, b, .. } => c(a) + c(b) + 0.5,
             Op::Translate { child, .. } | Op::Round { child, .. } | Op::Paint { child, .. } => {
                 c(child) + 0.25

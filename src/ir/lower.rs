@@ -109,44 +109,8 @@ impl Lowerer<'_> {
     }
 
     fn prim(&mut self, p: Prim) -> Option<NodeId> {
-        let b = match &p {
-            Prim::Sphere { r } => Aabb::centered(DVec3::splat(*r)),
-            Prim::Box { half } | Prim::RoundBox { half, .. } | Prim::BoxFrame { half, .. } => {
-                Aabb::centered(*half)
-            }
-            Prim::Torus { major, minor } => {
-                Aabb::centered(DVec3::new(major + minor, *minor, major + minor))
-            }
-            Prim::Capsule { a, b, r } => Aabb {
-                min: a.min(*b),
-                max: a.max(*b),
-            }
-            .expand(*r),
-            Prim::Cylinder { r, half_h } => Aabb::centered(DVec3::new(*r, *half_h, *r)),
-            Prim::CappedCone { half_h, r1, r2 } => {
-                Aabb::centered(DVec3::new(r1.max(*r2), *half_h, r1.max(*r2)))
-            }
-            Prim::Plane { .. } => Aabb::INFINITE,
-            Prim::Ellipsoid { radii } => Aabb::centered(*radii),
-            Prim::Octahedron { s } => Aabb::centered(DVec3::splat(*s)),
-            Prim::HexPrism { r, half_h } => Aabb::centered(DVec3::new(
-                r * 1.154_700_538_379_251_5,
-                r * 1.154_700_538_379_251_5,
-                *half_h,
-            )),
-            Prim::TriPrism { r, half_h } => Aabb::centered(DVec3::new(r * 2.0, r * 2.0, *half_h)),
-            Prim::Pyramid { h } => Aabb {
-                min: DVec3::new(-0.5, 0.0, -0.5),
-                max: DVec3::new(0.5, *h, 0.5),
-            },
-            Prim::Link { le, r1, r2 } => Aabb::centered(DVec3::new(r1 + r2, le + r1 + r2, *r2)),
-        };
-        // IQ's ellipsoid is a bound whose gradient can exceed 1 by the axis ratio.
-        let l = match &p {
-            Prim::Ellipsoid { radii } => radii.max_element() / radii.min_element(),
-            _ => 1.0,
-        };
-        self.push(Op::Prim(p), b, l)
+        let (bounds, lipschitz) = (p.bounds(), p.lipschitz());
+        self.push(Op::Prim(p), bounds, lipschitz)
     }
 
     /// Lowers a shape value (recursive: on a fresh stack segment when this one runs low).

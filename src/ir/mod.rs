@@ -13,6 +13,7 @@ pub mod eval;
 pub mod group;
 pub mod guard;
 mod lower;
+pub mod prim;
 pub mod rest;
 pub mod shell;
 pub mod texture;
@@ -20,6 +21,7 @@ pub mod texture;
 pub use displace::{Height, Heights, NoHeights};
 pub use eval::Field;
 pub use lower::{lower, lower_shape, lower_shape_textured, lower_with};
+pub use prim::Prim;
 
 use glam::{DMat3, DVec3};
 
@@ -27,70 +29,6 @@ crate::id::define_id!(
     /// Index of a node in [`Shape::nodes`].
     NodeId
 );
-
-/// A primitive's distance function, in its local frame.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Prim {
-    Sphere {
-        r: f64,
-    },
-    Box {
-        half: DVec3,
-    },
-    RoundBox {
-        half: DVec3,
-        r: f64,
-    },
-    BoxFrame {
-        half: DVec3,
-        e: f64,
-    },
-    Torus {
-        major: f64,
-        minor: f64,
-    },
-    Capsule {
-        a: DVec3,
-        b: DVec3,
-        r: f64,
-    },
-    Cylinder {
-        r: f64,
-        half_h: f64,
-    },
-    /// A capped cone centred on the origin (IQ's sdCappedCone): half height, bottom and top radii.
-    CappedCone {
-        half_h: f64,
-        r1: f64,
-        r2: f64,
-    },
-    Plane {
-        n: DVec3,
-        offset: f64,
-    },
-    Ellipsoid {
-        radii: DVec3,
-    },
-    Octahedron {
-        s: f64,
-    },
-    HexPrism {
-        r: f64,
-        half_h: f64,
-    },
-    TriPrism {
-        r: f64,
-        half_h: f64,
-    },
-    Pyramid {
-        h: f64,
-    },
-    Link {
-        le: f64,
-        r1: f64,
-        r2: f64,
-    },
-}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Csg {

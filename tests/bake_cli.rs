@@ -411,9 +411,9 @@ fn the_bake_memory_check_accepts_just_under_its_limit() {
 #[test]
 fn the_footprint_counts_the_samples_the_bake_shades() {
     use sdfc::bake::charts::ChartTable;
-    use sdfc::bake::mesh::{dual_contour, Grid};
     use sdfc::bake::pipeline::{sample_points, Footprint};
     use sdfc::bake::{ChartLayout, FlatLayout, PackedLayout, Patches};
+    use sdfc::reference::mesh::{dual_contour, Grid};
     let dir = tempfile::tempdir().unwrap();
     let source = "material m { color = [1, 0, 0]; }\nrender box([1, 0.5, 0.7]).paint(m);";
     let analysis = sdfc::driver::check(source, Some(dir.path()));

@@ -213,7 +213,7 @@ fn the_ring_around_the_hole_is_found_and_closed() {
 
 /// Surface samples as `sdfc seeds` makes them: quad centres of a dual-contouring mesh.
 fn sdfc_samples(shape: &sdfc::ir::Shape) -> Vec<sdfc::uv::seeds::SurfaceSample> {
-    sdfc::bake::mesh::surface_samples(shape, 40).unwrap()
+    sdfc::reference::mesh::surface_samples(shape, 40).unwrap()
 }
 
 /// `--keep` ("add seeds to cover the gaps"): the robot with its legs' seeds removed
@@ -275,7 +275,7 @@ fn stretch_is_one_on_a_plane_and_grows_on_a_sphere() {
         let a = sdfc::driver::check(src, None);
         assert!(!a.has_errors(), "{:?}", a.diagnostics);
         let atlas = a.atlases[0].as_ref().unwrap();
-        let samples = sdfc::bake::mesh::surface_samples(&atlas.shape, 24).unwrap();
+        let samples = sdfc::reference::mesh::surface_samples(&atlas.shape, 24).unwrap();
         sdfc::uv::seeds::stretch(atlas, &samples)
     };
     let (mean, p95, n) = measure(

@@ -15,7 +15,8 @@ pub mod charts;
 pub mod export;
 pub mod gpu;
 pub mod images;
-pub mod mesh;
+/// The mesher lives with the CPU geometry (dual contouring, surface samples).
+pub use crate::reference::mesh;
 pub mod mips;
 pub mod patches;
 pub mod pipeline;

@@ -48,7 +48,7 @@ fn distortion(
         .iter()
         .find(|a| a.name == name)?;
     let shape = sdfc::ir::lower_shape(&def.shape)?;
-    let samples = sdfc::bake::mesh::surface_samples(&shape, grid).ok()?;
+    let samples = sdfc::reference::mesh::surface_samples(&shape, grid).ok()?;
     let measure = |d: &sdfc::sema::AtlasDef| {
         let atlas = sdfc::uv::Atlas::prepare(d, &shape).ok()?;
         let (mean, p95, n) = sdfc::uv::seeds::stretch(&atlas, &samples);

@@ -4,8 +4,8 @@
 //! the action cheaply and computes the edit only when it is chosen (`codeAction/resolve`).
 
 use super::{seed_edit, Document};
-use crate::bake::mesh::surface_samples;
 use crate::diagnostic::Edit;
+use crate::reference::mesh::surface_samples;
 use crate::sema::AtlasDef;
 use crate::span::Span;
 use crate::syntax::ast::AtlasStmt;

@@ -1,9 +1,11 @@
 //! The CPU reference layer above the UV math: the f64 interpreter of material fields
-//! ([`material`]) and the environment that evaluates displacement heights and
+//! ([`material`]), the mesher of zero sets and its surface samples ([`mesh`]), and the
+//! environment that evaluates displacement heights and
 //! shell-map uv from a scene's prepared atlases and decoded textures ([`Env`]), which
 //! the IR's evaluator takes as an argument ([`crate::ir::Heights`]).
 
 pub mod material;
+pub mod mesh;
 
 use crate::ir::texture::Textures;
 use crate::ir::{Height, Heights};

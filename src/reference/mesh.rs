@@ -1,4 +1,5 @@
-//! Stage 1: a quad mesh of the zero set by dual contouring.
+//! A quad mesh of the zero set by dual contouring (the bake's stage 1, and the surface
+//! samples of seed placement and coverage).
 //!
 //! The distance is sampled (CPU reference, f64) at the corners of a regular grid. Every
 //! grid edge whose ends have opposite signs gets one quad, joining the vertices of the

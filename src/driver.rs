@@ -367,6 +367,8 @@ pub fn compile_shape(
             if let Some(d) = inlined_too_large(analysis, shape, options, &validated.module) {
                 return Err(CompileError::Scene(vec![d]));
             }
+            let mut module = module;
+            module.derive_users(&validated.module);
             Ok(Compiled {
                 module,
                 validated: Arc::new(validated),

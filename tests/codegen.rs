@@ -426,7 +426,7 @@ fn compile_command_writes_every_target() {
         assert!(std::fs::metadata(&out).unwrap().len() > 1000);
         let m: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
-        assert_eq!(m["entry_points"][1][0], "fs_main");
+        assert_eq!(m["entry_points"][1]["name"], "fs_main");
     }
     // No stray temporary files are left beside the outputs.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 8);
@@ -621,7 +621,11 @@ fn templates_are_filled_completely_and_validate() {
 #[test]
 fn standalone_modules_carry_only_what_the_scene_uses() {
     let src = "let part2 = sphere(0.5);\nrender part2;";
-    let module = generate(src, None).unwrap();
+    // The validated module, whose header lists each binding's users as derived.
+    let analysis = sdfc::driver::check(src, None);
+    let module = sdfc::driver::compile(&analysis, &Default::default())
+        .unwrap()
+        .module;
     let (code, out, err) = common::sdfc_with_input(&["compile", "-"], src.as_bytes());
     assert_eq!(code, 0, "{err}");
     assert!(

@@ -61,14 +61,14 @@ pub const COMPUTE_GROUP: u32 = 1;
 /// The table for a module that samples `textures` and, with `tables`, reads the
 /// `tables` storage buffer (`Manifest::tables`).
 pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
-    let fragment = || vec!["fs_main", "cs_material", "cs_bake"];
+    let fragment = || vec!["fs_main", "fs_aov", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
         binding: 0,
         name: "globals".into(),
         kind: Kind::Uniform,
         detail: "Globals".into(),
-        used_by: vec!["vs_main", "fs_main"],
+        used_by: vec!["vs_main", "fs_main", "fs_aov"],
         resource: Resource::Globals,
     }];
     for (i, t) in textures.iter().enumerate() {
@@ -97,6 +97,7 @@ pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
     if tables {
         let used_by = vec![
             "fs_main",
+            "fs_aov",
             "cs_points",
             "cs_grid",
             "cs_atlas",

@@ -14,7 +14,9 @@ pub use compute::{
     eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
 };
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
-pub use render::{eval_stats, render, render_timed, Frame, Renderer, Targets, Timings, ViewMode};
+pub use render::{
+    eval_stats, globals, render, render_timed, Frame, Renderer, Targets, Timings, ViewMode,
+};
 
 use std::fmt;
 use std::sync::Arc;

@@ -111,8 +111,10 @@ pub struct Frame {
     pub timings: Timings,
 }
 
-/// The Globals uniform block, laid out as in shaders/render.wgsl.
-pub(super) fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
+/// The `Globals` uniform block of `view` in view `mode`, laid out as in
+/// `shaders/render.wgsl` (the manifest's `globals` say what each field holds): what a
+/// host uploads to binding 0 to draw the module as `sdfc render` does.
+pub fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
     let c = &view.camera;
     let v3 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
     [
@@ -485,7 +487,8 @@ pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
     }
 }
 
-/// The render pipeline of a module's vs_main and fs_main into the targets' formats.
+/// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
+/// the targets' formats.
 fn pipeline(
     d: &wgpu::Device,
     wgsl: &str,
@@ -526,7 +529,7 @@ fn pipeline(
         multisample: wgpu::MultisampleState::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_main"),
+            entry_point: Some("fs_aov"),
             compilation_options: Default::default(),
             targets: &targets,
         }),

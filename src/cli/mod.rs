@@ -119,9 +119,12 @@ pub enum Command {
     Eval(EvalArgs),
     /// Compile a scene to one standalone shader module, validated by naga.
     ///
-    /// The module has a full-screen render entry point pair (vs_main, fs_main), compute
-    /// entry points (cs_points, cs_grid) and an `sdf_NAME(p) -> f32` per named shape;
-    /// its header comment documents the bind groups. Exit status: 0 on success, 1 when
+    /// The module has a full-screen render (vs_main with fs_main, one colour target, or
+    /// fs_aov, with three float AOVs), compute entry points (cs_points, cs_grid,
+    /// cs_atlas, cs_material, cs_bake) and an `sdf_NAME(p) -> f32` per named shape; its
+    /// header comment documents the bind groups and which entry points use each, and
+    /// `--manifest` writes the module's contract as JSON (schemas/manifest.v1.json).
+    /// Exit status: 0 on success, 1 when
     /// the scene has errors, 2 on usage or I/O problems, 3 on an internal compiler error
     /// (the generated WGSL is saved for the bug report).
     Compile(CompileArgs),
@@ -420,7 +423,9 @@ pub struct CompileArgs {
     /// Output language.
     #[arg(long, value_parser = choice::<sdfc::codegen::Target>(), default_value = "wgsl")]
     pub target: sdfc::codegen::Target,
-    /// Also write a JSON description of the entry points and bindings.
+    /// Also write the module's manifest: entry points, render targets, bindings with the
+    /// entry points that use each, the globals' layout, meaning and the scene's values,
+    /// textures and tables (JSON; schemas/manifest.v1.json).
     #[arg(long, value_name = "FILE")]
     pub manifest: Option<PathBuf>,
     /// Render this named shape instead of the `render` item's target.
@@ -454,7 +459,8 @@ pub struct CompileArgs {
     /// The atlas of the atlas views and of `cs_atlas` (default: the first).
     #[arg(long)]
     pub atlas: Option<String>,
-    /// The entry point to translate for GLSL (one per file).
+    /// The entry point to translate for GLSL (one per file): vs_main, fs_main, fs_aov,
+    /// cs_points, cs_grid, cs_atlas, cs_material or cs_bake.
     #[arg(long, default_value = "fs_main")]
     pub entry: String,
 }

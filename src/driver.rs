@@ -128,6 +128,26 @@ pub enum CompileError {
     },
 }
 
+/// One line: the first error's message (and how many more), the usage message, or the
+/// internal error's.
+impl std::fmt::Display for CompileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CompileError::Scene(d) => match d.first() {
+                Some(first) if d.len() > 1 => {
+                    write!(f, "{} ({} more errors)", first.message, d.len() - 1)
+                }
+                Some(first) => f.write_str(&first.message),
+                None => f.write_str("the scene has errors"),
+            },
+            CompileError::Usage(m) => f.write_str(m),
+            CompileError::Internal { diagnostic, .. } => f.write_str(&diagnostic.message),
+        }
+    }
+}
+
+impl std::error::Error for CompileError {}
+
 /// Parses and checks a scene: the front end only. `base_dir` is the folder of the
 /// scene file: texture paths are relative to it, and confined to it.
 pub fn analyze(source: &str, base_dir: Option<&Path>) -> Analysis {

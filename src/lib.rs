@@ -61,7 +61,9 @@
 pub use codegen::{Module, Options, WalkForm};
 pub use diagnostic::{Diagnostic, Severity};
 pub use driver::{check, check_all, compile, compile_shape, Analysis, CompileError, Compiled};
-pub use gpu::{render, Backend, Frame, Gpu, GpuError, ViewMode};
+pub use gpu::embed::SceneRenderer;
+pub use gpu::{globals, render, Backend, Frame, Gpu, GpuError, ViewMode};
+pub use ir::texture::Textures;
 pub use span::Span;
 pub use view::View;
 

@@ -4,6 +4,7 @@
 
 pub mod cache;
 pub mod compute;
+pub mod embed;
 mod mesh;
 pub mod overdraw;
 mod render;

@@ -1,0 +1,119 @@
+//! Drawing a compiled scene with a host's own wgpu device: sdfc creates no instance,
+//! installs no error handler and never waits on the queue. [`SceneRenderer::new`]
+//! builds the module's render pipeline (`vs_main` with `fs_main`, one colour target)
+//! and its bind group on the caller's device; [`SceneRenderer::set_globals`] queues the
+//! `Globals` block ([`super::globals`] packs it from a view, or a host writes the
+//! manifest's fields itself); [`SceneRenderer::draw`] records the draw into the
+//! caller's render pass. `examples/embed.rs` renders a scene this way, headless.
+
+use super::scene_group::{self, Resources, Stage};
+use crate::codegen::Module;
+use crate::ir::texture::Textures;
+use wgpu::util::DeviceExt;
+
+/// A compiled scene ready to draw on a host's device.
+pub struct SceneRenderer {
+    pipeline: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+    globals: wgpu::Buffer,
+}
+
+impl SceneRenderer {
+    /// The render pipeline of `module` into targets of `format`, with its textures
+    /// (the program's, decoded: `Textures::load`) and tables uploaded through `queue`.
+    /// wgpu's validation errors go to the device's own error handler; the `Err` here is
+    /// a texture the module binds that `textures` lacks.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        module: &Module,
+        textures: &Textures,
+        format: wgpu::TextureFormat,
+    ) -> Result<SceneRenderer, String> {
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("sdfc scene"),
+            source: wgpu::ShaderSource::Wgsl(module.wgsl.as_str().into()),
+        });
+        let bindings = &module.manifest.bindings;
+        let layout = scene_group::layout(device, bindings, Stage::Render);
+        let images = module
+            .manifest
+            .textures
+            .iter()
+            .map(|t| {
+                let chain = textures
+                    .get(&t.path)
+                    .ok_or_else(|| format!("no decoded image for texture \"{}\"", t.path))?;
+                let texture = super::texture::upload_to(device, queue, chain, t.srgb);
+                Ok((
+                    texture.create_view(&Default::default()),
+                    super::texture::sampler_on(device, &t.wrap),
+                ))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let tables = (!module.manifest.tables.is_empty()).then(|| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sdfc tables"),
+                contents: bytemuck::cast_slice(&module.manifest.tables),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        });
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sdfc globals"),
+            size: 9 * 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let with = Resources {
+            images: &images,
+            tables: tables.as_ref(),
+            globals: Some(&globals),
+        };
+        let bind_group = scene_group::group(device, bindings, Stage::Render, &layout, &with)
+            .map_err(|e| e.to_string())?;
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("sdfc scene"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("sdfc scene"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        Ok(SceneRenderer {
+            pipeline,
+            bind_group,
+            globals,
+        })
+    }
+
+    /// Queues the `Globals` block (the manifest's `globals` say what each field holds).
+    pub fn set_globals(&self, queue: &wgpu::Queue, globals: &[[f32; 4]; 9]) {
+        queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(globals));
+    }
+
+    /// Records the full-screen draw into the caller's render pass (whose colour target
+    /// has the format given to [`SceneRenderer::new`]).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

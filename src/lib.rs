@@ -114,3 +114,5 @@ pub mod view;
 #[doc(hidden)]
 #[cfg(feature = "viewer")]
 pub mod viewer;
+#[doc(hidden)]
+pub mod web;

@@ -143,21 +143,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
     if let Some(path) = &args.manifest {
         // The scene's own values: its view's globals (as `sdfc render` uploads them, in
         // the colour view) and the rendered shape's bounds.
-        if let Ok(view) = sdfc::View::of(&analysis, args.shape.as_deref()) {
-            let globals = sdfc::gpu::globals(&view, sdfc::ViewMode::Color);
-            let bounds =
-                sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), args.shape.as_deref())
-                    .map(|s| s.framing_bounds())
-                    .ok();
-            let finite = |v: glam::DVec3| {
-                v.clamp(glam::DVec3::splat(-1e30), glam::DVec3::splat(1e30))
-                    .to_array()
-            };
-            compiled.module.manifest.scene = bounds.map(|b| sdfc::codegen::SceneValues {
-                globals: globals.to_vec(),
-                bounds: [finite(b.min), finite(b.max)],
-            });
-        }
+        compiled.module.manifest.scene = sdfc::gpu::scene_values(&analysis, args.shape.as_deref());
         let json = serde_json::to_string_pretty(&compiled.module.manifest).unwrap_or_default();
         if let Err(e) = write_output(path, json.as_bytes()) {
             eprintln!("error: cannot write {}: {e}", path.display());

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod check;
 pub mod compile;
 pub mod eval;
+pub mod export_web;
 pub mod fit_height;
 pub mod fmt;
 pub mod frame;
@@ -128,6 +129,13 @@ pub enum Command {
     /// the scene has errors, 2 on usage or I/O problems, 3 on an internal compiler error
     /// (the generated WGSL is saved for the bug report).
     Compile(CompileArgs),
+    /// Export a scene as a static web page: index.html, the WebGPU driver sdfc.js, the
+    /// WGSL, its manifest and the textures with their mip levels.
+    ///
+    /// Serve the folder from http://127.0.0.1 (WebGPU needs a secure context) with any
+    /// static file server and open it in a WebGPU browser: the page shows what
+    /// `sdfc render` shows, with orbit controls.
+    ExportWeb(export_web::ExportWebArgs),
     /// Render a scene headless to a PNG through wgpu (Vulkan, GL, Metal or DX12).
     ///
     /// Camera, size and light come from the scene's `render` item; the flags override

@@ -16,7 +16,8 @@ pub use compute::{
 };
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
 pub use render::{
-    eval_stats, globals, render, render_timed, Frame, Renderer, Targets, Timings, ViewMode,
+    eval_stats, globals, render, render_timed, scene_values, Frame, Renderer, Targets, Timings,
+    ViewMode,
 };
 
 use std::fmt;

@@ -111,6 +111,26 @@ pub struct Frame {
     pub timings: Timings,
 }
 
+/// The values a document's scene gives its module (the manifest's `scene`): the
+/// `Globals` block of its view in the colour view, and the rendered shape's bounds;
+/// `None` when the scene has errors or names no such shape.
+pub fn scene_values(
+    analysis: &crate::driver::Analysis,
+    shape: Option<&str>,
+) -> Option<crate::codegen::SceneValues> {
+    let view = View::of(analysis, shape).ok()?;
+    let target = crate::driver::pick_shape(analysis.scene.as_ref()?, shape).ok()?;
+    let b = target.framing_bounds();
+    let finite = |v: glam::DVec3| {
+        v.clamp(glam::DVec3::splat(-1e30), glam::DVec3::splat(1e30))
+            .to_array()
+    };
+    Some(crate::codegen::SceneValues {
+        globals: globals(&view, ViewMode::Color).to_vec(),
+        bounds: [finite(b.min), finite(b.max)],
+    })
+}
+
 /// The `Globals` uniform block of `view` in view `mode`, laid out as in
 /// `shaders/render.wgsl` (the manifest's `globals` say what each field holds): what a
 /// host uploads to binding 0 to draw the module as `sdfc render` does.

@@ -1,0 +1,264 @@
+// sdfc's WebGPU driver for a compiled scene: a plain ES module, no build step, no
+// framework. It takes a GPUDevice, the module's WGSL, its manifest (sdfc compile
+// --manifest; schemas/manifest.v1.json) and its textures' mip levels, and draws the
+// scene with `vs_main` + `fs_main`, one colour target, under WebGPU's default limits.
+// The bind group layout is built from the manifest's bindings whose `used_by` names
+// the render entry points, and nothing else.
+
+const KINDS = {
+  "uniform": { buffer: { type: "uniform" } },
+  "storage-read": { buffer: { type: "read-only-storage" } },
+  "texture-2d": { texture: { sampleType: "float", viewDimension: "2d" } },
+  "sampler": { sampler: { type: "filtering" } },
+};
+
+/// The render entry points, whose bindings the scene's one bind group holds.
+const RENDER = ["vs_main", "fs_main"];
+
+export class SdfcScene {
+  /// `textures[i]` holds texture i's mip levels (ImageBitmaps, level 0 first), in the
+  /// manifest's `textures` order; `format` is the colour target's (an -srgb format).
+  constructor(device, wgsl, manifest, textures, format) {
+    this.device = device;
+    this.code = wgsl;
+    this.manifest = manifest;
+    this.textures = textures;
+    this.module = device.createShaderModule({ label: "sdfc scene", code: wgsl });
+    const used = manifest.bindings.filter(
+      (b) => b.group === 0 && b.used_by.some((e) => RENDER.includes(e)),
+    );
+    const layout = device.createBindGroupLayout({
+      label: "sdfc render group",
+      entries: used.map((b) => ({
+        binding: b.binding,
+        visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT,
+        ...KINDS[b.kind],
+      })),
+    });
+    this.globals = device.createBuffer({
+      label: "sdfc globals",
+      size: 16 * manifest.globals_layout.length,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+    const images = manifest.textures.map((t, i) => {
+      const levels = textures[i];
+      const texture = device.createTexture({
+        label: t.path,
+        size: [levels[0].width, levels[0].height],
+        mipLevelCount: levels.length,
+        format: t.format,
+        usage: GPUTextureUsage.TEXTURE_BINDING | GPUTextureUsage.COPY_DST |
+          GPUTextureUsage.RENDER_ATTACHMENT,
+      });
+      levels.forEach((bitmap, level) => {
+        device.queue.copyExternalImageToTexture(
+          { source: bitmap },
+          { texture, mipLevel: level },
+          [bitmap.width, bitmap.height],
+        );
+      });
+      const sampler = device.createSampler({
+        addressModeU: t.address_mode,
+        addressModeV: t.address_mode,
+        magFilter: t.filter.mag,
+        minFilter: t.filter.min,
+        mipmapFilter: t.filter.mipmap,
+      });
+      return { view: texture.createView(), sampler };
+    });
+    let tables = null;
+    if (manifest.tables && manifest.tables.length > 0) {
+      tables = device.createBuffer({
+        label: "sdfc tables",
+        size: 4 * manifest.tables.length,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
+      device.queue.writeBuffer(tables, 0, new Uint32Array(manifest.tables));
+    }
+    const resource = (b) => {
+      if (b.name === "globals") return { buffer: this.globals };
+      if (b.name === "tables") return { buffer: tables };
+      const t = manifest.textures.findIndex((t) => t.texture_binding === b.binding);
+      if (t >= 0) return images[t].view;
+      const s = manifest.textures.findIndex((t) => t.sampler_binding === b.binding);
+      if (s >= 0) return images[s].sampler;
+      throw new Error(`no resource for binding ${b.name}`);
+    };
+    this.group = device.createBindGroup({
+      layout,
+      entries: used.map((b) => ({ binding: b.binding, resource: resource(b) })),
+    });
+    this.pipeline = device.createRenderPipeline({
+      label: "sdfc scene",
+      layout: device.createPipelineLayout({ bindGroupLayouts: [layout] }),
+      vertex: { module: this.module, entryPoint: "vs_main" },
+      fragment: { module: this.module, entryPoint: "fs_main", targets: [{ format }] },
+    });
+  }
+
+  /// Writes the Globals block: nine vec4 (the manifest's `globals` say what each holds).
+  setGlobals(globals) {
+    this.device.queue.writeBuffer(this.globals, 0, new Float32Array(globals.flat()));
+  }
+
+  /// Records the full-screen draw into a render pass.
+  draw(pass) {
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(0, this.group);
+    pass.draw(3);
+  }
+}
+
+/// Fetches what `sdfc export-web` wrote beside the page: the WGSL, the manifest and the
+/// textures' mip levels, decoded as data (no colour-space conversion, no premultiply).
+export async function load(base) {
+  const get = async (path) => {
+    const r = await fetch(new URL(path, base));
+    if (!r.ok) throw new Error(`${path}: ${r.status}`);
+    return r;
+  };
+  const wgsl = await (await get("scene.wgsl")).text();
+  const manifest = await (await get("manifest.json")).json();
+  const web = await (await get("web.json")).json();
+  const textures = await Promise.all(
+    web.textures.map((t) =>
+      Promise.all(
+        t.levels.map(async (level) =>
+          createImageBitmap(await (await get(level)).blob(), {
+            colorSpaceConversion: "none",
+            premultiplyAlpha: "none",
+          })
+        ),
+      )
+    ),
+  );
+  return { wgsl, manifest, web, textures };
+}
+
+const sub = (a, b) => a.map((x, i) => x - b[i]);
+const scale = (a, k) => a.map((x) => x * k);
+const dot = (a, b) => a.reduce((s, x, i) => s + x * b[i], 0);
+const norm = (a) => scale(a, 1 / Math.hypot(...a));
+const cross = (a, b) => [
+  a[1] * b[2] - a[2] * b[1],
+  a[2] * b[0] - a[0] * b[2],
+  a[0] * b[1] - a[1] * b[0],
+];
+
+/// The camera fields of `globals` looking from `eye` at `target` (as sdfc's
+/// Camera::look_at: right = forward × y, up = right × forward).
+export function lookAt(globals, eye, target) {
+  const forward = norm(sub(target, eye));
+  const helper = Math.hypot(...cross(forward, [0, 1, 0])) < 1e-6 ? [0, 0, 1] : [0, 1, 0];
+  const right = norm(cross(forward, helper));
+  const up = cross(right, forward);
+  globals[0] = [...eye, globals[0][3]];
+  globals[1] = [...forward, globals[1][3]];
+  globals[2] = [...right, 0];
+  globals[3] = [...up, 0];
+}
+
+/// Orbit controls on `canvas`: drag to turn around the centre of the shape's bounds,
+/// wheel to move nearer or farther; `changed()` is called after each move.
+export function orbit(canvas, globals, bounds, changed) {
+  const target = scale(bounds[0].map((x, i) => x + bounds[1][i]), 0.5);
+  let offset = sub(globals[0].slice(0, 3), target);
+  let radius = Math.hypot(...offset);
+  let yaw = Math.atan2(offset[0], offset[2]);
+  let pitch = Math.asin(Math.max(-1, Math.min(1, offset[1] / radius)));
+  const place = () => {
+    const dir = [Math.cos(pitch) * Math.sin(yaw), Math.sin(pitch), Math.cos(pitch) * Math.cos(yaw)];
+    lookAt(globals, target.map((x, i) => x + dir[i] * radius), target);
+    changed();
+  };
+  let last = null;
+  canvas.addEventListener("pointerdown", (e) => {
+    last = [e.clientX, e.clientY];
+    canvas.setPointerCapture(e.pointerId);
+  });
+  canvas.addEventListener("pointerup", () => (last = null));
+  canvas.addEventListener("pointermove", (e) => {
+    if (!last) return;
+    yaw -= (e.clientX - last[0]) * 0.01;
+    pitch = Math.max(-1.5, Math.min(1.5, pitch + (e.clientY - last[1]) * 0.01));
+    last = [e.clientX, e.clientY];
+    place();
+  });
+  canvas.addEventListener("wheel", (e) => {
+    e.preventDefault();
+    radius *= Math.exp(e.deltaY * 0.001);
+    place();
+  }, { passive: false });
+}
+
+/// The page's whole program: loads the scene beside the page and shows it in `canvas`
+/// at the scene's size (or `size`, [width, height]), with orbit controls. Resolves to
+/// the scene and its globals.
+export async function show(canvas, base = document.baseURI, size = null) {
+  if (!navigator.gpu) throw new Error("this browser has no WebGPU");
+  const adapter = await navigator.gpu.requestAdapter();
+  if (!adapter) throw new Error("no WebGPU adapter");
+  const device = await adapter.requestDevice();
+  device.addEventListener("uncapturederror", (e) => console.error(`WebGPU: ${e.error.message}`));
+  device.lost.then((info) => console.error(`WebGPU device lost: ${info.message}`));
+  const { wgsl, manifest, textures } = await load(base);
+  const globals = manifest.scene.globals.map((v) => [...v]);
+  if (size) [globals[7][0], globals[7][1]] = size;
+  canvas.width = globals[7][0];
+  canvas.height = globals[7][1];
+  const context = canvas.getContext("webgpu");
+  const format = navigator.gpu.getPreferredCanvasFormat();
+  const srgb = `${format}-srgb`;
+  context.configure({ device, format, viewFormats: [srgb], alphaMode: "opaque" });
+  const scene = new SdfcScene(device, wgsl, manifest, textures, srgb);
+  const info = await scene.module.getCompilationInfo();
+  const frame = () => {
+    scene.setGlobals(globals);
+    const encoder = device.createCommandEncoder();
+    const pass = encoder.beginRenderPass({
+      colorAttachments: [{
+        view: context.getCurrentTexture().createView({ format: srgb }),
+        loadOp: "clear",
+        storeOp: "store",
+        clearValue: [0, 0, 0, 1],
+      }],
+    });
+    scene.draw(pass);
+    pass.end();
+    device.queue.submit([encoder.finish()]);
+  };
+  frame();
+  orbit(canvas, globals, manifest.scene.bounds, () => requestAnimationFrame(frame));
+  return { adapter, device, scene, globals, messages: info.messages };
+}
+
+/// Renders the scene's first frame into an rgba8unorm-srgb texture and reads it back:
+/// the pixels (RGBA, rows top first), for tests.
+export async function readPixels(device, scene, globals) {
+  const [w, h] = [globals[7][0], globals[7][1]];
+  const texture = device.createTexture({
+    size: [w, h],
+    format: "rgba8unorm-srgb",
+    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+  });
+  const row = Math.ceil((4 * w) / 256) * 256;
+  const buffer = device.createBuffer({
+    size: row * h,
+    usage: GPUBufferUsage.COPY_DST | GPUBufferUsage.MAP_READ,
+  });
+  const probe = new SdfcScene(device, scene.code, scene.manifest, scene.textures, "rgba8unorm-srgb");
+  probe.setGlobals(globals);
+  const encoder = device.createCommandEncoder();
+  const pass = encoder.beginRenderPass({
+    colorAttachments: [{ view: texture.createView(), loadOp: "clear", storeOp: "store", clearValue: [0, 0, 0, 1] }],
+  });
+  probe.draw(pass);
+  pass.end();
+  encoder.copyTextureToBuffer({ texture }, { buffer, bytesPerRow: row }, [w, h]);
+  device.queue.submit([encoder.finish()]);
+  await buffer.mapAsync(GPUMapMode.READ);
+  const data = new Uint8Array(buffer.getMappedRange());
+  const out = new Uint8Array(4 * w * h);
+  for (let y = 0; y < h; y++) out.set(data.subarray(y * row, y * row + 4 * w), 4 * w * y);
+  return out;
+}

@@ -41,15 +41,11 @@
 //!     let frame = sdfc::render(&gpu, &compiled.module, &view, sdfc::ViewMode::Color, here);
 //!     assert_eq!(frame.unwrap().color.len(), 64 * 48 * 4);
 //! }
-//! ```
-//!
-//! A scene with errors gives [`Diagnostic`]s with spans, codes and fixes instead:
-//!
-//! ```
-//! let analysis = sdfc::check("render sphere(radius: -1);", None);
-//! let first = &analysis.diagnostics[0];
-//! assert!(first.is_error());
-//! println!("{}", sdfc::diagnostic::render("scene.sdf", "render sphere(radius: -1);", &analysis.diagnostics, false));
+//! // A scene with errors gives diagnostics with spans, codes and fixes instead.
+//! let bad = "render sphere(radius: -1);";
+//! let analysis = sdfc::check(bad, None);
+//! assert!(analysis.diagnostics[0].is_error());
+//! eprint!("{}", sdfc::diagnostic::render("bad.sdf", bad, &analysis.diagnostics, false));
 //! ```
 //!
 //! The modules below the public surface are the compiler's rooms (ARCHITECTURE.md);

@@ -3,8 +3,8 @@
 //! (puppeteer-core, installed by `npm ci` from its lockfile), pages served from
 //! http://127.0.0.1 by a small file server in this test.
 //!
-//! - Every example (loop walk) compiles in Tint with no message, and every pipeline
-//!   builds with one bind group layout per group from the manifest's users alone, on a
+//! - Every example (loop walk, and `sphere.sdf` unrolled too) compiles in Tint with no
+//!   message, and every pipeline builds with one bind group layout per group from the manifest's users alone, on a
 //!   device with WebGPU's default limits.
 //! - The page `sdfc export-web` writes renders `capsule.sdf` and `normal_map.sdf`
 //!   within the reference-image tolerance of `sdfc render` at the same size.
@@ -107,8 +107,12 @@ fn serve(root: PathBuf) -> String {
 }
 
 fn export(scene: &str, dir: &Path) {
+    export_with(scene, dir, "loop")
+}
+
+fn export_with(scene: &str, dir: &Path, walk: &str) {
     let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(["export-web", scene, "-o"])
+        .args(["export-web", scene, "--walk", walk, "-o"])
         .arg(dir)
         .env("NODEVICE_SELECT", "1")
         .output()
@@ -153,6 +157,13 @@ fn every_example_compiles_in_tint_and_builds_from_the_manifest_under_default_lim
         }
     }
     names.sort();
+    // One module with the unrolled walk (Tint builds the robot's slowly: the sphere's).
+    export_with(
+        "examples/sphere.sdf",
+        &root.path().join("sphere_unrolled"),
+        "unrolled",
+    );
+    names.push("sphere_unrolled".into());
     std::fs::write(
         root.path().join("modules.json"),
         serde_json::to_vec(&names).unwrap(),

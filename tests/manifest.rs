@@ -5,6 +5,8 @@
 //! in wgpu on the software adapter); `fs_main` fits WebGPU's default limits. And the
 //! embedding example draws what `sdfc render` draws (below).
 
+mod common;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -19,20 +21,10 @@ fn schema() -> jsonschema::Validator {
 fn manifest_of(scene: &Path) -> Value {
     let dir = tempfile::tempdir().unwrap();
     let (wgsl, json) = (dir.path().join("m.wgsl"), dir.path().join("m.json"));
-    let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(["compile", "--walk", "loop", "-o"])
-        .arg(&wgsl)
-        .arg("--manifest")
-        .arg(&json)
-        .arg(scene)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}: {}",
-        scene.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (wgsl, json) = (wgsl.to_str().unwrap(), json.to_str().unwrap());
+    let args = ["compile", "--walk", "loop", "-o", wgsl, "--manifest", json];
+    let (code, _, err) = common::sdfc(&[&args[..], &[scene.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{}: {err}", scene.display());
     serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
 }
 
@@ -339,16 +331,19 @@ fn the_embedding_example_draws_what_sdfc_render_draws() {
             "{scene}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-            .args(["render", scene, "--walk", "loop", "--size", "96x72", "-o"])
-            .arg(&reference)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{scene}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let reference_path = reference.to_str().unwrap();
+        let args = [
+            "render",
+            scene,
+            "--walk",
+            "loop",
+            "--size",
+            "96x72",
+            "-o",
+            reference_path,
+        ];
+        let (code, _, err) = common::sdfc(&args);
+        assert_eq!(code, 0, "{scene}: {err}");
         let (a, b) = (decode(&mine), decode(&reference));
         assert_eq!(a.dimensions(), b.dimensions());
         // A picture, not a cleared target: the shape's shading has many colours.

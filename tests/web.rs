@@ -111,17 +111,16 @@ fn export(scene: &str, dir: &Path) {
 }
 
 fn export_with(scene: &str, dir: &Path, walk: &str) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-        .args(["export-web", scene, "--walk", walk, "-o"])
-        .arg(dir)
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{scene}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let args = [
+        "export-web",
+        scene,
+        "--walk",
+        walk,
+        "-o",
+        dir.to_str().unwrap(),
+    ];
+    let (code, _, err) = common::sdfc(&args);
+    assert_eq!(code, 0, "{scene}: {err}");
 }
 
 /// Runs the page script on `url`; its JSON line.
@@ -230,25 +229,13 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         let browser = std::fs::read(&raw).unwrap();
         assert_eq!(browser.len(), (4 * w * h) as usize);
         let reference = dir.path().join("ref.png");
-        let out = Command::new(env!("CARGO_BIN_EXE_sdfc"))
-            .args([
-                "render",
-                scene,
-                "--walk",
-                "loop",
-                "--size",
-                &format!("{w}x{h}"),
-                "-o",
-            ])
-            .arg(&reference)
-            .env("NODEVICE_SELECT", "1")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{scene}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let size = format!("{w}x{h}");
+        let out_path = reference.to_str().unwrap();
+        let args = [
+            "render", scene, "--walk", "loop", "--size", &size, "-o", out_path,
+        ];
+        let (code, _, err) = common::sdfc(&args);
+        assert_eq!(code, 0, "{scene}: {err}");
         let reference = image::open(&reference).unwrap().to_rgba8();
         let (mean, share) = common::image_difference(reference.as_raw(), &browser);
         eprintln!(

@@ -217,3 +217,23 @@ fn op_mirror(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 fn op_elongate(p: vec3<f32>, h: vec3<f32>) -> vec3<f32> {
     return p - clamp(p, -h, h);
 }
+
+// The rotation by `angle` radians about the unit `axis` (Rodrigues' formula; the
+// lowering's `DMat3::from_axis_angle`): run-time rotations multiply the point by it
+// from the left of the row vector, `p * R`, which is the inverse rotation.
+fn sdfc_axis_angle(axis: vec3<f32>, angle: f32) -> mat3x3<f32> {
+    let s = sin(angle);
+    let c = cos(angle);
+    let t = 1.0 - c;
+    let a = axis;
+    return mat3x3<f32>(
+        vec3<f32>(t * a.x * a.x + c, t * a.x * a.y + s * a.z, t * a.x * a.z - s * a.y),
+        vec3<f32>(t * a.x * a.y - s * a.z, t * a.y * a.y + c, t * a.y * a.z + s * a.x),
+        vec3<f32>(t * a.x * a.z + s * a.y, t * a.y * a.z - s * a.x, t * a.z * a.z + c),
+    );
+}
+
+// The smallest component: a run-time scale's distance factor.
+fn sdfc_min3(v: vec3<f32>) -> f32 {
+    return min(v.x, min(v.y, v.z));
+}

@@ -26,6 +26,11 @@ pub struct Access {
     /// Every allowed root, canonical: the base, then the extra ones (`--allow-path`,
     /// the language server's workspace folders).
     roots: Vec<PathBuf>,
+    /// Run-time parameters set for this check (`--param NAME=VALUE`, `--time T`), by
+    /// name, as the bits of their components: what the compile-time consumers (the CPU
+    /// reference, seed placement) read as the parameters' current values. Unset ones
+    /// take their defaults, `time` 0.
+    params: std::collections::BTreeMap<String, Vec<u64>>,
 }
 
 /// Why a path cannot be read.
@@ -67,6 +72,7 @@ impl Access {
         let mut access = Access {
             base: base.map(Path::to_path_buf),
             roots: Vec::new(),
+            params: Default::default(),
         };
         if let Some(b) = base {
             access.allow(b);
@@ -80,6 +86,24 @@ impl Access {
         if !self.roots.contains(&dir) {
             self.roots.push(dir);
         }
+    }
+
+    /// Sets run-time parameter `name` (or `time`) to `value` for this check.
+    pub fn set_param(&mut self, name: &str, value: &[f64]) {
+        self.params
+            .insert(name.to_string(), value.iter().map(|x| x.to_bits()).collect());
+    }
+
+    /// The value set for run-time parameter `name`, if any.
+    pub fn param(&self, name: &str) -> Option<Vec<f64>> {
+        self.params
+            .get(name)
+            .map(|v| v.iter().map(|b| f64::from_bits(*b)).collect())
+    }
+
+    /// The names of the parameters set.
+    pub fn params_set(&self) -> impl Iterator<Item = &str> {
+        self.params.keys().map(String::as_str)
     }
 
     pub fn roots(&self) -> &[PathBuf] {

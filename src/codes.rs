@@ -48,6 +48,8 @@ codes! {
     E_DISPLACE_ATLAS = "E0206": "a displacement height read from an atlas on another shape";
     E_DISPLACE_HEIGHT = "E0207": "a displacement height whose slope cannot be bounded (a jump, or an input without a bound)";
     E_NORMAL_MAP_ATLAS = "E0209": "a normal map whose uv does not come from exactly one atlas (its tangent frame is that atlas's)";
+    E_RUN_TIME = "E0210": "a run-time parameter where a compile-time constant is required (a setting, a seed, a comparison, or a shape argument parameters cannot set)";
+    E_PARAM_RANGE = "E0211": "a malformed `param` item: a default or range that is not constant, no range, a default outside its range, or one parameter too many";
     E_OUT_OF_RANGE = "E0300": "a constant outside the range the parameter accepts";
     E_NOT_POSITIVE = "E0301": "a distance, size or radius that is zero or negative";
     E_NON_FINITE = "E0302": "a constant that is NaN, infinite, or beyond the single-precision (f32) range";
@@ -59,6 +61,7 @@ codes! {
     E_SEED_PROJECTION = "E0401": "a seed that cannot be projected onto its atlas's surface";
     E_UNREACHABLE_MERGE = "E0402": "a merge whose seeds cannot reach each other by the geodesic walk";
     E_DERIVED_OVERFLOW = "E0403": "a shape whose derived bounds or Lipschitz bound overflow single precision (long chains of warps)";
+    E_UNBOUNDED_STEP = "E0404": "a shape whose step bound depends on a run-time value with no bound over its parameters' ranges (`time` is unbounded)";
     E_INTERNAL = "E0900": "an internal compiler error: naga rejected generated code";
     W_UNUSED = "W0001": "a `let` binding that is never used";
     W_DUPLICATE_MERGE = "W0002": "the same merge edge given twice";

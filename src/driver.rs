@@ -270,7 +270,24 @@ fn lower_displaced(
     };
     let (scene, errors) = ir::lower_with(program, &textures);
     let heights = crate::reference::Env::shared(atlases, &textures);
+    let steps = errors.steps.into_iter().map(|(span, why)| {
+        Diagnostic::error(
+            crate::codes::E_UNBOUNDED_STEP,
+            "this shape's step bound has no bound over its parameters' ranges",
+            span,
+            why,
+        )
+        .with_note(
+            "sphere tracing divides each step by the shape's Lipschitz bound, taken over every \
+             value the parameters may take; `time` grows without bound",
+        )
+        .with_help(
+            "bound the expression: `sin(time)`, `fract(time / 4)`, `clamp(time, 0, 10)`, or a \
+             `param` with a range",
+        )
+    });
     let diags = errors
+        .heights
         .into_iter()
         .map(|(span, why)| {
             Diagnostic::error(
@@ -284,6 +301,7 @@ fn lower_displaced(
                  height's slope; both come from the height's expression and its textures' texels",
             )
         })
+        .chain(steps)
         .collect();
     (scene, heights, diags)
 }

@@ -33,6 +33,7 @@ pub struct BakePass {
     textures: wgpu::BindGroup,
     /// Bound in `textures`.
     _tables: Option<wgpu::Buffer>,
+    _params: Option<wgpu::Buffer>,
 }
 
 impl BakePass {
@@ -51,6 +52,7 @@ impl BakePass {
             })
             .collect::<Result<Vec<_>, GpuError>>()?;
         let tables = scene_group::tables(gpu, module)?;
+        let params = scene_group::params(gpu, module)?;
         let bindings = &module.manifest.bindings;
         let stage = Stage::Compute { textured: true };
         let (pipeline, layout0) = gpu.scoped(|| {
@@ -93,12 +95,14 @@ impl BakePass {
             images: &loaded,
             tables: tables.as_ref(),
             globals: None,
+            params: params.as_ref(),
         };
         let textures = gpu.scoped(|| scene_group::group(d, bindings, stage, &layout0, &with))??;
         Ok(BakePass {
             pipeline,
             textures,
             _tables: tables,
+            _params: params,
         })
     }
 

@@ -194,6 +194,7 @@ fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Ve
 }
 
 pub fn run(args: BakeArgs) -> ExitCode {
+    args.run_time.install();
     let options = match options(&args) {
         Ok(o) => o,
         Err(e) => {

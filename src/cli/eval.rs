@@ -87,6 +87,7 @@ fn fail(message: impl std::fmt::Display, code: u8) -> Failed {
 }
 
 pub fn run(args: EvalArgs) -> ExitCode {
+    args.run_time.install();
     match eval(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,

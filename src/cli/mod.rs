@@ -6,6 +6,7 @@ pub mod check;
 pub mod compile;
 pub mod eval;
 pub mod export_web;
+pub mod params;
 pub mod fit_height;
 pub mod fmt;
 pub mod frame;
@@ -80,6 +81,9 @@ pub fn access(path: &Path) -> sdfc::access::Access {
     let mut access = sdfc::access::Access::new(Some(&base_dir(path)));
     for dir in ALLOWED.get().into_iter().flatten() {
         access.allow(dir);
+    }
+    for (name, value) in params::set() {
+        access.set_param(name, value);
     }
     access
 }
@@ -299,6 +303,8 @@ pub struct BenchArgs {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
+    #[command(flatten)]
+    pub run_time: params::ParamArgs,
     /// The scene file, or a baked mesh (`.glb`).
     pub scene: PathBuf,
     /// The PNG to write (atomically).
@@ -365,6 +371,8 @@ pub enum Layout {
 
 #[derive(clap::Args)]
 pub struct BakeArgs {
+    #[command(flatten)]
+    pub run_time: params::ParamArgs,
     /// The scene file.
     pub scene: PathBuf,
     /// The binary glTF to write (atomically).
@@ -504,6 +512,8 @@ pub struct CheckArgs {
 
 #[derive(clap::Args)]
 pub struct EvalArgs {
+    #[command(flatten)]
+    pub run_time: params::ParamArgs,
     /// The scene file.
     pub scene: PathBuf,
     /// The shape to evaluate (a `let` name); default: the render target, or the only shape.
@@ -612,6 +622,10 @@ pub fn load(path: &Path) -> Result<(String, sdfc::driver::Analysis), std::proces
     );
     if analysis.has_errors() {
         return Err(std::process::ExitCode::from(exit::SCENE));
+    }
+    if let Err(e) = params::validate(&analysis.program) {
+        eprintln!("error: {e}");
+        return Err(std::process::ExitCode::from(exit::USAGE));
     }
     Ok((source, analysis))
 }

@@ -40,6 +40,7 @@ pub fn parse_aov(s: &str) -> Result<(String, PathBuf), String> {
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
+    args.run_time.install();
     if is_glb(&args.scene) {
         return super::render_mesh::run(args);
     }

@@ -343,8 +343,8 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     for (i, o) in rest.occurrences.iter().enumerate() {
         let mut body = String::new();
         let mut q = String::from("p");
-        for (j, op) in o.steps.iter().enumerate() {
-            let e = point_expr(op, &q).unwrap_or_else(|| q.clone());
+        for (j, node) in o.steps.iter().enumerate() {
+            let e = point_expr(node, &q).unwrap_or_else(|| q.clone());
             body.push_str(&format!("    let q{j} = {e};\n"));
             q = format!("q{j}");
         }

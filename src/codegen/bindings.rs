@@ -38,6 +38,8 @@ pub enum Resource {
     Normals,
     /// The module's constant tables (`Manifest::tables`), read.
     Tables,
+    /// The run-time parameters' block (`Manifest::params`).
+    Params,
 }
 
 /// A resource binding of the generated module.
@@ -60,7 +62,7 @@ pub const COMPUTE_GROUP: u32 = 1;
 
 /// The table for a module that samples `textures` and, with `tables`, reads the
 /// `tables` storage buffer (`Manifest::tables`).
-pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
+pub fn table(textures: &[TextureUse], tables: bool, params: bool) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "fs_aov", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -112,6 +114,26 @@ pub fn table(textures: &[TextureUse], tables: bool) -> Vec<Binding> {
             detail: "array<u32>".into(),
             used_by,
             resource: Resource::Tables,
+        });
+    }
+    if params {
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: out.len() as u32,
+            name: "params".into(),
+            kind: Kind::Uniform,
+            detail: "Params".into(),
+            used_by: vec![
+                "vs_main",
+                "fs_main",
+                "fs_aov",
+                "cs_points",
+                "cs_grid",
+                "cs_atlas",
+                "cs_material",
+                "cs_bake",
+            ],
+            resource: Resource::Params,
         });
     }
     let compute = [

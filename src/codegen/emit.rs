@@ -2,7 +2,8 @@
 //! `field` (surface fields), the only code that writes WGSL expressions from Rust; the
 //! shared functions it calls live in `shaders/*.wgsl`.
 
-use crate::ir::{Csg, NodeId, Op, Prim, Shape};
+use crate::ir::dynamic::Dyn;
+use crate::ir::{Csg, Node, NodeId, Op, Prim, Shape};
 use glam::{DMat3, DVec3};
 use std::fmt::Write;
 
@@ -216,9 +217,15 @@ impl Writer {
         if let Some(g) = shape.group(id).filter(|_| !self.unions_as_code) {
             return self.group(shape, g, &d, p);
         }
+        let dynamic = shape[id].dynamic.as_deref();
+        // A node's one run-time number, or its constant written by `constant`.
+        let one = |constant: String| match dynamic {
+            Some(Dyn::One(s)) => super::params::slot(s, false),
+            _ => constant,
+        };
         match &shape[id].op {
             Op::Prim(pr) => {
-                let call = prim_call(pr, p);
+                let call = prim_call(pr, dynamic, p);
                 let v = self.leaf(&call, "0.0");
                 self.line(&format!("let {d} = {v};"));
             }
@@ -230,20 +237,25 @@ impl Writer {
                     Csg::Difference => "op_difference",
                 };
                 let mode = if self.blend { "_blend" } else { "" };
-                self.line(&format!("let {d} = {f}{mode}({da}, {db}, {});", lit(*k)));
+                let k = one(lit(*k));
+                self.line(&format!("let {d} = {f}{mode}({da}, {db}, {k});"));
             }
             Op::Translate { child, .. } | Op::Rotate { child, .. } => {
-                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                let q = point_expr(&shape[id], p).unwrap_or_default();
                 return self.point(shape, *child, &q);
             }
             Op::Scale { factor, child } => {
-                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                let q = point_expr(&shape[id], p).unwrap_or_default();
                 let dc = self.point(shape, *child, &q);
-                let v = self.with_d(&dc, &format!("{dc}.x * {}", lit(factor.min_element())));
+                let m = match dynamic {
+                    Some(Dyn::One(s)) => format!("sdfc_min3({})", super::params::slot(s, true)),
+                    _ => lit(factor.min_element()),
+                };
+                let v = self.with_d(&dc, &format!("{dc}.x * {m}"));
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Twist { radius, child, .. } | Op::Bend { radius, child, .. } => {
-                let inner = point_expr(&shape[id].op, p).unwrap_or_default();
+                let inner = point_expr(&shape[id], p).unwrap_or_default();
                 if radius.is_finite() {
                     self.bounded_warp(shape, *child, *radius, &inner, p, &d);
                 } else {
@@ -251,17 +263,18 @@ impl Writer {
                 }
             }
             Op::Repeat { child, .. } | Op::Mirror { child, .. } | Op::Elongate { child, .. } => {
-                let q = point_expr(&shape[id].op, p).unwrap_or_default();
+                let q = point_expr(&shape[id], p).unwrap_or_default();
                 return self.point(shape, *child, &q);
             }
             Op::Round { r, child } => {
                 let dc = self.shape(shape, *child, p);
-                let v = self.with_d(&dc, &format!("{dc}.x - {}", lit(*r)));
+                let v = self.with_d(&dc, &format!("{dc}.x - {}", one(lit(*r))));
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Shell { thickness, child } => {
                 let dc = self.shape(shape, *child, p);
-                let v = self.with_d(&dc, &format!("abs({dc}.x) - {}", lit(thickness * 0.5)));
+                let half = one(lit(thickness * 0.5));
+                let v = self.with_d(&dc, &format!("abs({dc}.x) - {half}"));
                 self.line(&format!("let {d} = {v};"));
             }
             Op::Displace { height, child } => {
@@ -551,19 +564,43 @@ impl Writer {
     }
 }
 
-/// The WGSL call of a primitive's distance at point `p` ([`Prim::wgsl_call`]).
-fn prim_call(pr: &Prim, p: &str) -> String {
-    pr.wgsl_call(p, lit, vec3)
+/// The WGSL call of a primitive's distance at point `p` ([`Prim::wgsl_call`]), its
+/// run-time numbers from the parameters' block.
+fn prim_call(pr: &Prim, dynamic: Option<&Dyn>, p: &str) -> String {
+    let run_time = |i: usize, slot: crate::ir::prim::Slot| match dynamic {
+        Some(Dyn::Prim(slots)) => slots.get(i)?.as_ref().map(|s| {
+            super::params::slot(s, slot == crate::ir::prim::Slot::Vec3)
+        }),
+        _ => None,
+    };
+    pr.wgsl_call(p, lit, vec3, run_time)
 }
 
-/// The WGSL of the point at which a point-mapping op evaluates its child (the
-/// `ir::Op::child_point` of the CPU), for the point expression `p`; `None` for ops
-/// that are not point maps.
-pub fn point_expr(op: &Op, p: &str) -> Option<String> {
+/// The WGSL of the point at which a point-mapping node evaluates its child (the
+/// `ir::Op::child_point` of the CPU), for the point expression `p`, its run-time
+/// numbers from the parameters' block; `None` for ops that are not point maps.
+pub fn point_expr(node: &Node, p: &str) -> Option<String> {
+    let op = &node.op;
+    let run_time = |vec3: bool| match node.dynamic.as_deref() {
+        Some(Dyn::One(s)) => Some(super::params::slot(s, vec3)),
+        _ => None,
+    };
+    if let Some(Dyn::Rotate { axis, angle }) = node.dynamic.as_deref() {
+        // The inverse rotation: p times the forward matrix.
+        return Some(format!(
+            "({p} * sdfc_axis_angle({}, {}))",
+            vec3(*axis),
+            super::params::slot(angle, false)
+        ));
+    }
     Some(match op {
-        Op::Translate { offset, .. } => format!("{p} - {}", vec3(*offset)),
+        Op::Translate { offset, .. } => {
+            format!("{p} - {}", run_time(true).unwrap_or_else(|| vec3(*offset)))
+        }
         Op::Rotate { inverse, .. } => format!("{} * {p}", mat3(*inverse)),
-        Op::Scale { factor, .. } => format!("{p} / {}", vec3(*factor)),
+        Op::Scale { factor, .. } => {
+            format!("{p} / {}", run_time(true).unwrap_or_else(|| vec3(*factor)))
+        }
         Op::Twist { frame, rate, .. } | Op::Bend { frame, rate, .. } => {
             let warp = if matches!(op, Op::Twist { .. }) {
                 "op_twist"
@@ -572,12 +609,19 @@ pub fn point_expr(op: &Op, p: &str) -> Option<String> {
             };
             apply(
                 frame.transpose(),
-                &format!("{warp}({}, {})", apply(*frame, p), lit(*rate)),
+                &format!(
+                    "{warp}({}, {})",
+                    apply(*frame, p),
+                    run_time(false).unwrap_or_else(|| lit(*rate))
+                ),
             )
         }
         Op::Repeat { period, .. } => format!("op_repeat({p}, {})", vec3(*period)),
         Op::Mirror { normal, .. } => format!("op_mirror({p}, {})", vec3(*normal)),
-        Op::Elongate { h, .. } => format!("op_elongate({p}, {})", vec3(*h)),
+        Op::Elongate { h, .. } => format!(
+            "op_elongate({p}, {})",
+            run_time(true).unwrap_or_else(|| vec3(*h))
+        ),
         _ => return None,
     })
 }

@@ -111,7 +111,12 @@ fn field_expr_inner(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
             c.len(),
             c.iter().map(|x| lit(*x)).collect::<Vec<_>>().join(", ")
         ),
+        Value::Uniform(u) => {
+            let ty = v.ty();
+            field_expr_inner(&Value::Field(u.expr.clone(), ty), tex)?
+        }
         Value::Field(expr, ty) => match &**expr {
+            FieldExpr::Param(p) => format!("params.{}", super::params::member(&p.name)),
             FieldExpr::Input(SurfaceInput::Position) => match &tex.offset {
                 Some((_, dp)) => format!("(p + {dp})"),
                 None => String::from("p"),

@@ -39,6 +39,10 @@ pub struct Manifest {
     /// uploads as they are; empty, with no binding, when the module has neither.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub tables: Vec<u32>,
+    /// The run-time parameters' uniform block (`params`, binding `params` of group 0):
+    /// each parameter's member, offset, type, default and range, and the block's size.
+    /// Empty (size 0) for a scene without parameters or `time`.
+    pub params: super::params::ParamsLayout,
 }
 
 pub const GLOBALS_LAYOUT: &[&str] = &[

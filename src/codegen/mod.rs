@@ -17,6 +17,7 @@ mod field;
 mod group;
 pub mod inline_cost;
 mod manifest;
+pub mod params;
 pub mod mesh;
 pub mod shake;
 pub mod targets;
@@ -317,14 +318,16 @@ pub fn generate(
     if groups {
         g.out.push_str(group::READERS);
     }
-    let table = bindings::table(&textures, !g.tables.is_empty());
+    let params = params::ParamsLayout::of(&program.params);
+    g.out.push_str(&params.wgsl_struct());
+    let table = bindings::table(&textures, !g.tables.is_empty(), !params.fields.is_empty());
     let entry = template::fill(
         template::ENTRY,
         &[("bindings", bindings::declarations(&table))],
     )
     .map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
-    Ok(g.finish(target, scene, table, textures))
+    Ok(g.finish(target, scene, table, textures, params))
 }
 
 /// The module being written: the scene's code after the libraries, with its source map.
@@ -682,6 +685,7 @@ impl Generator<'_> {
         scene: &Scene,
         table: Vec<Binding>,
         textures: Vec<TextureUse>,
+        params: params::ParamsLayout,
     ) -> Module {
         let rendered: Vec<usize> = target.heights().iter().map(|h| h.id).collect();
         let mut header = String::new();
@@ -698,6 +702,22 @@ impl Generator<'_> {
             GLOBALS_LAYOUT.len(),
             GLOBALS_LAYOUT.join(", ")
         );
+        if !params.fields.is_empty() {
+            let fields: Vec<String> = params
+                .fields
+                .iter()
+                .map(|f| {
+                    let max = f.max.map_or(String::from("inf"), |m| format!("{m}"));
+                    format!("{} {} at {} in [{}, {max}]", f.member, f.ty, f.offset, f.min)
+                })
+                .collect();
+            let _ = writeln!(
+                header,
+                "// Params ({} bytes, set by the host per frame; values outside a range void the step bounds): {}.",
+                params.size,
+                fields.join(", ")
+            );
+        }
         let _ = writeln!(header, "// GridParams: origin.xyz, spacing.xyz (vec4<f32> each), dims.xyz (vec4<u32>); results[i] = (distance, gradient.xyz).\n");
         // Only the library functions the scene's code reaches (shake.rs): naga parses
         // every byte of the module, and what it validates is what `compile` writes.
@@ -745,6 +765,7 @@ impl Generator<'_> {
                 .collect(),
             textures,
             tables: self.tables,
+            params,
         };
         Module {
             wgsl,

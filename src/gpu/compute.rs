@@ -270,6 +270,10 @@ fn run(
         .iter()
         .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
+    let params = match group0 {
+        Some(g) => scene_group::params(gpu, g.module)?,
+        None => None,
+    };
     let (images, tables) = match group0 {
         Some(Group0 {
             module,
@@ -290,6 +294,7 @@ fn run(
             images: &images,
             tables: tables.as_ref(),
             globals: None,
+            params: params.as_ref(),
         },
     };
     run_raw(gpu, wgsl, &bound, entry_name, &data, per_point)
@@ -380,6 +385,7 @@ pub fn eval_materials(
         slot(Resource::Results)?,
     );
     let tables = scene_group::tables(gpu, module)?;
+    let params = scene_group::params(gpu, module)?;
     let slots = [points_at, normals_at, results_at];
     let key = cache::key(
         "cs_material",
@@ -394,6 +400,7 @@ pub fn eval_materials(
         images: &images,
         tables: tables.as_ref(),
         globals: None,
+        params: params.as_ref(),
     };
     let stage = Stage::Compute { textured: true };
     let bindings = &module.manifest.bindings;

@@ -16,6 +16,7 @@ pub struct SceneRenderer {
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
     globals: wgpu::Buffer,
+    params: Option<wgpu::Buffer>,
 }
 
 impl SceneRenderer {
@@ -64,10 +65,13 @@ impl SceneRenderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let params = (!module.manifest.params.fields.is_empty())
+            .then(|| super::scene_group::params_on(device, module));
         let with = Resources {
             images: &images,
             tables: tables.as_ref(),
             globals: Some(&globals),
+            params: params.as_ref(),
         };
         let bind_group = scene_group::group(device, bindings, Stage::Render, &layout, &with)
             .map_err(|e| e.to_string())?;
@@ -101,12 +105,21 @@ impl SceneRenderer {
             pipeline,
             bind_group,
             globals,
+            params,
         })
     }
 
     /// Queues the `Globals` block (the manifest's `globals` say what each field holds).
     pub fn set_globals(&self, queue: &wgpu::Queue, globals: &[[f32; 4]; 9]) {
         queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(globals));
+    }
+
+    /// Queues the run-time parameters' block (the manifest's `params`: bytes laid out
+    /// as `ParamsLayout::bytes` writes them); nothing for a module without parameters.
+    pub fn set_params(&self, queue: &wgpu::Queue, bytes: &[u8]) {
+        if let Some(b) = &self.params {
+            queue.write_buffer(b, 0, bytes);
+        }
     }
 
     /// Records the full-screen draw into the caller's render pass (whose colour target

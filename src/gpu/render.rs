@@ -224,6 +224,8 @@ pub struct Renderer {
     textures: Vec<(wgpu::TextureView, wgpu::Sampler)>,
     /// The module's `tables` storage buffer, when it has one.
     tables: Option<wgpu::Buffer>,
+    /// The run-time parameters' block, when the module has one ([`Renderer::set_params`]).
+    params: Option<wgpu::Buffer>,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
@@ -265,6 +267,7 @@ impl Renderer {
             })
             .collect::<Result<_, GpuError>>()?;
         let tables = scene_group::tables(gpu, module)?;
+        let params = scene_group::params(gpu, module)?;
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
         let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
@@ -284,10 +287,20 @@ impl Renderer {
             layout,
             textures,
             tables,
+            params,
             formats,
             pipeline_time: started.elapsed(),
             pipeline_cached,
         })
+    }
+
+    /// Queues new values of the run-time parameters (the bytes of the manifest's
+    /// `params` block, `ParamsLayout::bytes`) for the frames rendered after it: no new
+    /// pipeline. Nothing to do for a module without parameters.
+    pub fn set_params(&self, gpu: &Gpu, bytes: &[u8]) {
+        if let Some(b) = &self.params {
+            gpu.queue.write_buffer(b, 0, bytes);
+        }
     }
 
     /// The render group's bind group, built from the binding table.
@@ -296,6 +309,7 @@ impl Renderer {
             images: &self.textures,
             tables: self.tables.as_ref(),
             globals: Some(globals),
+            params: self.params.as_ref(),
         };
         scene_group::group(
             &gpu.device,

@@ -32,7 +32,7 @@ fn slots(bindings: &[Binding], stage: Stage) -> impl Iterator<Item = &Binding> {
             (Resource::Globals, Stage::Render) => true,
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Render) => true,
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Compute { textured }) => textured,
-            (Resource::Tables, _) => true,
+            (Resource::Tables | Resource::Params, _) => true,
             _ => false,
         })
 }
@@ -48,6 +48,17 @@ pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::Bin
             let (visibility, ty) = match b.resource {
                 Resource::Globals => (
                     wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                Resource::Params => (
+                    match stage {
+                        Stage::Render => wgpu::ShaderStages::VERTEX_FRAGMENT,
+                        Stage::Compute { .. } => wgpu::ShaderStages::COMPUTE,
+                    },
                     wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
@@ -107,12 +118,33 @@ pub fn tables(gpu: &Gpu, module: &Module) -> Result<Option<wgpu::Buffer>, GpuErr
     })
 }
 
+/// The run-time parameters' uniform block of a module at its defaults (the values
+/// the scene was checked with), writable for later values; `None` when it has none.
+pub fn params(gpu: &Gpu, module: &Module) -> Result<Option<wgpu::Buffer>, GpuError> {
+    if module.manifest.params.fields.is_empty() {
+        return Ok(None);
+    }
+    gpu.scoped(|| Some(params_on(&gpu.device, module)))
+}
+
+/// [`params`] on any device (no error scope).
+pub fn params_on(d: &wgpu::Device, module: &Module) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("params"),
+        contents: &module.manifest.params.bytes(&|_| None),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
 /// What group 0 binds: the module's images, its tables buffer and, for rendering, the
 /// globals.
 pub struct Resources<'a> {
     pub images: &'a [(wgpu::TextureView, wgpu::Sampler)],
     pub tables: Option<&'a wgpu::Buffer>,
     pub globals: Option<&'a wgpu::Buffer>,
+    /// The run-time parameters' block ([`params`]).
+    pub params: Option<&'a wgpu::Buffer>,
 }
 
 /// The bind group of `layout` (made by [`layout`] for the same `stage`); an error when a
@@ -141,6 +173,10 @@ pub fn group(
                 Resource::Tables => with
                     .tables
                     .ok_or_else(|| missing("tables"))?
+                    .as_entire_binding(),
+                Resource::Params => with
+                    .params
+                    .ok_or_else(|| missing("parameters block"))?
                     .as_entire_binding(),
                 _ => return Err(missing("compute buffer in the render group")),
             };

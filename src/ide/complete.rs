@@ -202,7 +202,7 @@ pub fn completions(doc: &Document, offset: usize) -> Vec<Completion> {
     // Where a name is being defined, there is nothing to offer.
     if matches!(
         last,
-        Some(Token::Let | Token::Atlas | Token::Material | Token::Seed)
+        Some(Token::Let | Token::Param | Token::Atlas | Token::Material | Token::Seed)
     ) {
         return Vec::new();
     }
@@ -267,7 +267,7 @@ pub fn completions(doc: &Document, offset: usize) -> Vec<Completion> {
             continue;
         }
         let kind = match d.kind {
-            DefKind::Let => CompletionKind::Variable,
+            DefKind::Let | DefKind::Param => CompletionKind::Variable,
             DefKind::Atlas => CompletionKind::Atlas,
             DefKind::Material => CompletionKind::Material,
             DefKind::Seed { .. } => continue,

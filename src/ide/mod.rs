@@ -153,6 +153,30 @@ pub fn hover(doc: &Document, offset: usize) -> Option<Hover> {
                 ),
                 _ => format!("```sdf\nlet {}: {}\n```", def.name, def.ty),
             },
+            DefKind::Param => {
+                let p = program.params.iter().find(|p| p.span == def.span)?;
+                let show = |v: &[f64]| {
+                    if v.len() == 1 {
+                        Value::Float(v[0]).display()
+                    } else {
+                        Value::Vec(v.to_vec()).display()
+                    }
+                };
+                format!(
+                    "```sdf\nparam {}: {} = {} in {}\n```\nA run-time parameter: the host sets it \
+                     (a slider, `sdfc render --param {}=…`) without recompiling. Default {}, \
+                     range [{}, {}]{}.",
+                    p.name,
+                    def.ty,
+                    show(&p.default),
+                    show(&[p.range.0, p.range.1]),
+                    p.name,
+                    show(&p.default),
+                    Value::Float(p.range.0).display(),
+                    Value::Float(p.range.1).display(),
+                    if p.size > 1 { " per component" } else { "" }
+                )
+            }
             DefKind::Atlas => {
                 let a = program.atlases.iter().find(|a| a.def == id)?;
                 let p = &a.params;
@@ -343,7 +367,9 @@ impl Symbol {
 impl<'a> Visitor<'a> for Outline {
     fn item(&mut self, item: &'a Item) {
         let symbol = match &item.kind {
-            ItemKind::Let { name, .. } => Symbol::leaf(name, SymbolKind::Let, item.span),
+            ItemKind::Let { name, .. } | ItemKind::Param { name, .. } => {
+                Symbol::leaf(name, SymbolKind::Let, item.span)
+            }
             ItemKind::Material { name, .. } => Symbol::leaf(name, SymbolKind::Material, item.span),
             ItemKind::Atlas { name, .. } => Symbol::leaf(name, SymbolKind::Atlas, item.span),
             ItemKind::Render { target, .. } => Symbol {

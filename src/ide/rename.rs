@@ -35,6 +35,8 @@ fn refuse(doc: &Document, offset: usize) -> RenameError {
         Some(Token::Ident(n)) => format!("`{n}` is not a name defined in this scene"),
         Some(
             t @ (Token::Let
+            | Token::Param
+            | Token::In
             | Token::Atlas
             | Token::Material
             | Token::Render

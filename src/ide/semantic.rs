@@ -117,7 +117,7 @@ impl<'a> Visitor<'a> for Names {
 
 fn def_kind(kind: DefKind) -> TokenKind {
     match kind {
-        DefKind::Let => TokenKind::Variable,
+        DefKind::Let | DefKind::Param => TokenKind::Variable,
         DefKind::Atlas => TokenKind::Atlas,
         DefKind::Material => TokenKind::Material,
         DefKind::Seed { .. } => TokenKind::Seed,
@@ -157,6 +157,8 @@ pub fn semantic_tokens(doc: &Document) -> Vec<SemanticToken> {
         };
         let t = match tok {
             Token::Let
+            | Token::Param
+            | Token::In
             | Token::Atlas
             | Token::Material
             | Token::Render

@@ -42,6 +42,12 @@ pub fn walk_file<'a, V: Visitor<'a> + ?Sized>(v: &mut V, file: &'a File) {
 pub fn walk_item<'a, V: Visitor<'a> + ?Sized>(v: &mut V, item: &'a Item) {
     match &item.kind {
         ItemKind::Let { value, .. } => v.expr(value),
+        ItemKind::Param { value, range, .. } => {
+            v.expr(value);
+            if let Some(r) = range {
+                v.expr(r);
+            }
+        }
         ItemKind::Atlas { shape, body, .. } => {
             v.expr(shape);
             for s in body {

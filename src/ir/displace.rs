@@ -193,7 +193,7 @@ pub fn samples_texture(v: &Value) -> bool {
             builtin: BuiltinId::Sample,
             ..
         } => true,
-        FieldExpr::Atlas { .. } | FieldExpr::Input(_) => false,
+        FieldExpr::Atlas { .. } | FieldExpr::Input(_) | FieldExpr::Param(_) => false,
         FieldExpr::Unary { operand, .. } => samples_texture(operand),
         FieldExpr::Binary { lhs, rhs, .. } => samples_texture(lhs) || samples_texture(rhs),
         FieldExpr::Swizzle { base, .. } => samples_texture(base),
@@ -206,7 +206,7 @@ fn atlas_of(v: &Value) -> Option<AtlasId> {
     let Value::Field(e, _) = v else { return None };
     match &**e {
         FieldExpr::Atlas { atlas, .. } => Some(*atlas),
-        FieldExpr::Input(_) => None,
+        FieldExpr::Input(_) | FieldExpr::Param(_) => None,
         FieldExpr::Unary { operand, .. } => atlas_of(operand),
         FieldExpr::Binary { lhs, rhs, .. } => atlas_of(lhs).or_else(|| atlas_of(rhs)),
         FieldExpr::Swizzle { base, .. } => atlas_of(base),
@@ -420,6 +420,7 @@ fn bound_inner(v: &Value, textures: &Textures) -> Result<B, String> {
     };
     let r = |v: &Value| bound(v, textures);
     Ok(match e {
+        FieldExpr::Param(_) => return Err(String::from("a run-time parameter has no bound here")),
         FieldExpr::Input(SurfaceInput::Position) => B::free(3, f64::NEG_INFINITY),
         FieldExpr::Atlas {
             attr: AtlasAttr::Uv,

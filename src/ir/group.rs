@@ -91,6 +91,10 @@ fn leaf(shape: &Shape, id: NodeId) -> Option<Leaf> {
     let (mut m, mut c, mut material) = (DMat3::IDENTITY, DVec3::ZERO, None);
     let mut at = id;
     loop {
+        // Run-time numbers are generated as code, not as the group's data.
+        if shape[at].dynamic.is_some() {
+            return None;
+        }
         match &shape[at].op {
             Op::Translate { offset, child } => {
                 c -= *offset;

@@ -87,7 +87,9 @@ pub fn exact_outside(shape: &Shape) -> Vec<bool> {
     let mut exact = vec![false; shape.nodes.len()];
     for (i, n) in shape.nodes.iter().enumerate() {
         let e = |id: &NodeId| exact[id.index()];
-        exact[i] = match &n.op {
+        // A node with run-time numbers keeps none of these guarantees over its range.
+        exact[i] = n.dynamic.is_none()
+            && match &n.op {
             // IQ's ellipsoid and triangular prism are bounds that underestimate.
             Op::Prim(Prim::Ellipsoid { .. } | Prim::TriPrism { .. }) => false,
             Op::Prim(_) => true,
@@ -154,6 +156,9 @@ pub fn guards(shape: &Shape) -> Vec<Option<Guard>> {
             else {
                 return None;
             };
+            if n.dynamic.is_some() {
+                return None;
+            }
             let can = |o: NodeId| exact[o.index()] && shape[o].bounds.is_finite();
             // Both: the smaller box, which more points are far from (in a chain of
             // unions, the new operand against the running union), or the costlier.

@@ -14,11 +14,23 @@ pub fn lower(program: &Program) -> Scene {
     lower_with(program, &Textures::default()).0
 }
 
+/// What a lowering could not do: the span and why, for each displacement whose height
+/// has no bound, and for each run-time value a step bound depends on that has none.
+/// The shapes they are in are left out.
+#[derive(Debug, Default)]
+pub struct Unlowered {
+    pub heights: Vec<(Span, String)>,
+    pub steps: Vec<(Span, String)>,
+}
+
+/// The most run-time numbers one call may have (its bounds are taken over the
+/// 2^n corners of their ranges).
+pub const MAX_RUN_TIME_COMPONENTS: usize = 12;
+
 /// [`lower`] with the decoded textures that displacement heights read (their texels
-/// bound the heights' range and slope). Also returns, for each displacement whose
-/// height has no bound, its call's span and why; those shapes are left out.
-pub fn lower_with(program: &Program, textures: &Textures) -> (Scene, Vec<(Span, String)>) {
-    let mut errors = Vec::new();
+/// bound the heights' range and slope), and what could not be lowered.
+pub fn lower_with(program: &Program, textures: &Textures) -> (Scene, Unlowered) {
+    let mut errors = Unlowered::default();
     let shapes = program
         .defs
         .iter()
@@ -34,32 +46,35 @@ pub fn lower_with(program: &Program, textures: &Textures) -> (Scene, Vec<(Span, 
         .render
         .as_ref()
         .and_then(|r| lower_shape_with(&r.target, textures, &mut errors));
-    errors.sort_by_key(|e: &(Span, String)| (e.0.start, e.0.end));
-    errors.dedup();
+    for e in [&mut errors.heights, &mut errors.steps] {
+        e.sort_by_key(|e: &(Span, String)| (e.0.start, e.0.end));
+        e.dedup();
+    }
     (Scene { shapes, render }, errors)
 }
 
 /// Lowers one shape value; `None` for values that are not (error-free) shapes.
 pub fn lower_shape(value: &Value) -> Option<Shape> {
-    lower_shape_with(value, &Textures::default(), &mut Vec::new())
+    lower_shape_with(value, &Textures::default(), &mut Unlowered::default())
 }
 
 /// [`lower_shape`] with the decoded textures its displacements' heights read.
 pub fn lower_shape_textured(value: &Value, textures: &Textures) -> Option<Shape> {
-    lower_shape_with(value, textures, &mut Vec::new())
+    lower_shape_with(value, textures, &mut Unlowered::default())
 }
 
 fn lower_shape_with(
     value: &Value,
     textures: &Textures,
-    errors: &mut Vec<(Span, String)>,
+    errors: &mut Unlowered,
 ) -> Option<Shape> {
     let mut shape = Shape::default();
     Lowerer {
         out: &mut shape,
         shared: std::collections::HashMap::new(),
         textures,
-        errors,
+        errors: &mut errors.heights,
+        unbounded: &mut errors.steps,
     }
     .node(value)?;
     Some(shape)
@@ -72,6 +87,7 @@ struct Lowerer<'a> {
     shared: std::collections::HashMap<*const crate::sema::Node, NodeId>,
     textures: &'a Textures,
     errors: &'a mut Vec<(Span, String)>,
+    unbounded: &'a mut Vec<(Span, String)>,
 }
 
 fn f(v: &Value) -> Option<f64> {
@@ -99,6 +115,7 @@ impl Lowerer<'_> {
             op,
             bounds,
             lipschitz,
+            dynamic: None,
         });
         Some(NodeId::new(self.out.nodes.len() - 1))
     }
@@ -121,6 +138,9 @@ impl Lowerer<'_> {
             return Some(id);
         }
         let id = stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.node_inner(value))?;
+        if n.args.iter().any(|a| a.uniform().is_some()) {
+            self.run_time(n, id)?;
+        }
         self.shared.insert(key, id);
         Some(id)
     }
@@ -544,6 +564,99 @@ impl Lowerer<'_> {
             b.expand(thickness),
             lipschitz,
         )
+    }
+
+    /// Node `id`, lowered from `n` at its run-time arguments' current values: its
+    /// run-time numbers, and its bounds and Lipschitz constant over every value they may
+    /// take. Those come from the node lowered again at each corner of the arguments'
+    /// box of intervals (exact for the bounds and constants of primitives, blends,
+    /// translations, scales, warps, elongations, roundings and shells, which are
+    /// monotone in each number), but for rotations, bounded by the ball that holds
+    /// their child at every angle.
+    fn run_time(&mut self, n: &crate::sema::Node, id: NodeId) -> Option<()> {
+        let slots = match &self.out[id].op {
+            Op::Prim(p) => p.kind().slots.len(),
+            _ => 0,
+        };
+        let d = super::dynamic::of(n.builtin, &n.args, slots)?;
+        let comps: Vec<(usize, usize, (f64, f64))> = n
+            .args
+            .iter()
+            .enumerate()
+            .filter_map(|(i, a)| Some((i, a.uniform()?)))
+            .flat_map(|(i, u)| u.range.iter().enumerate().map(move |(c, r)| (i, c, *r)))
+            .collect();
+        if comps.len() > MAX_RUN_TIME_COMPONENTS {
+            self.unbounded.push((
+                n.span,
+                format!(
+                    "`{}` has {} run-time numbers; one call may have at most {MAX_RUN_TIME_COMPONENTS}",
+                    n.builtin.name(),
+                    comps.len()
+                ),
+            ));
+            return None;
+        }
+        let (mut bounds, mut lipschitz) = self.info(id);
+        let len = self.out.nodes.len();
+        for mask in 0u32..1 << comps.len() {
+            let mut args: Vec<Value> = n
+                .args
+                .iter()
+                .map(|a| match a {
+                    Value::Uniform(u) if u.value.len() == 1 => Value::Float(u.value[0]),
+                    Value::Uniform(u) => Value::Vec(u.value.clone()),
+                    v => v.clone(),
+                })
+                .collect();
+            for (j, &(i, c, r)) in comps.iter().enumerate() {
+                let x = if mask >> j & 1 == 0 { r.0 } else { r.1 };
+                match &mut args[i] {
+                    Value::Float(v) => *v = x,
+                    Value::Vec(v) => v[c] = x,
+                    _ => {}
+                }
+            }
+            let corner = Value::Shape(std::sync::Arc::new(crate::sema::Node {
+                builtin: n.builtin,
+                args,
+                span: n.span,
+            }));
+            match self.node_inner(&corner) {
+                Some(c) => {
+                    let (b, l) = self.info(c);
+                    let nan = b.min.is_nan() || b.max.is_nan();
+                    bounds = if nan { Aabb::INFINITE } else { bounds.union(b) };
+                    lipschitz = if l.is_nan() { f64::INFINITY } else { lipschitz.max(l) };
+                }
+                None => lipschitz = f64::INFINITY,
+            }
+            self.out.nodes.truncate(len);
+        }
+        if let Op::Rotate { child, .. } = self.out[id].op {
+            bounds = Aabb::centered(DVec3::splat(self.out[child].bounds.radius_from_origin()));
+        }
+        if !lipschitz.is_finite() {
+            let culprit = n
+                .args
+                .iter()
+                .filter_map(Value::uniform)
+                .find(|u| !u.is_bounded())
+                .map_or(n.span, |u| u.span);
+            self.unbounded.push((
+                culprit,
+                format!(
+                    "the step bound of `{}` depends on this value, which has no bound over its parameters' ranges",
+                    n.builtin.name()
+                ),
+            ));
+            return None;
+        }
+        let node = &mut self.out[id];
+        node.bounds = bounds;
+        node.lipschitz = lipschitz;
+        node.dynamic = Some(std::sync::Arc::new(d));
+        Some(())
     }
 
     fn translate(&mut self, offset: DVec3, child: NodeId) -> Option<NodeId> {

@@ -9,6 +9,7 @@
 //! ([`eval`]) both walk this IR.
 
 pub mod displace;
+pub mod dynamic;
 pub mod eval;
 pub mod group;
 pub mod guard;
@@ -20,7 +21,7 @@ pub mod texture;
 
 pub use displace::{Height, Heights, NoHeights};
 pub use eval::Field;
-pub use lower::{lower, lower_shape, lower_shape_textured, lower_with};
+pub use lower::{lower, lower_shape, lower_shape_textured, lower_with, Unlowered};
 pub use prim::Prim;
 
 use glam::{DMat3, DVec3};
@@ -377,6 +378,9 @@ pub struct Node {
     pub bounds: Aabb,
     /// An upper bound of |∇f|: sphere-tracing steps are divided by it.
     pub lipschitz: f64,
+    /// The node's numbers that the host sets at run time, if any: the op holds their
+    /// current values, `bounds` and `lipschitz` hold over their whole ranges.
+    pub dynamic: Option<std::sync::Arc<dynamic::Dyn>>,
 }
 
 /// A lowered shape: nodes in child-before-parent order, the last one the root. A node

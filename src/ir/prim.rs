@@ -182,27 +182,29 @@ impl Prim {
     }
 
     /// The WGSL call at point expression `p`, the numbers written by `float` and
-    /// `vec3` (the generator's literal forms).
+    /// `vec3` (the generator's literal forms), but slot `i`'s written by `run_time(i)`
+    /// where it gives one (a run-time value's expression).
     pub fn wgsl_call(
         &self,
         p: &str,
         float: impl Fn(f64) -> String,
         vec3: impl Fn(DVec3) -> String,
+        run_time: impl Fn(usize, Slot) -> Option<String>,
     ) -> String {
         let params = self.params();
         let mut args = vec![p.to_string()];
         let mut at = 0;
-        for slot in self.kind().slots {
-            match slot {
-                Slot::Float => {
-                    args.push(float(params[at]));
-                    at += 1;
-                }
-                Slot::Vec3 => {
-                    args.push(vec3(DVec3::from_slice(&params[at..at + 3])));
-                    at += 3;
-                }
-            }
+        for (i, slot) in self.kind().slots.iter().enumerate() {
+            let width = match slot {
+                Slot::Float => 1,
+                Slot::Vec3 => 3,
+            };
+            let written = run_time(i, *slot).unwrap_or_else(|| match slot {
+                Slot::Float => float(params[at]),
+                Slot::Vec3 => vec3(DVec3::from_slice(&params[at..at + 3])),
+            });
+            args.push(written);
+            at += width;
         }
         format!("{}({})", self.kind().wgsl, args.join(", "))
     }

@@ -30,20 +30,21 @@ pub const MAX_OCCURRENCES: usize = 16;
 /// root down to it (each op's own child point, see [`Op::child_point`]).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Occurrence {
-    pub steps: Vec<Op>,
+    /// The point-mapping nodes (with their run-time numbers, if any).
+    pub steps: Vec<super::Node>,
 }
 
 impl Occurrence {
     /// ω⁻¹(p).
     pub fn apply(&self, p: DVec3) -> DVec3 {
-        self.steps.iter().fold(p, |q, op| op.child_point(q))
+        self.steps.iter().fold(p, |q, n| n.op.child_point(q))
     }
 
     /// Whether tangent vectors change on the way (anything but translations).
     pub fn moves_frames(&self) -> bool {
         self.steps
             .iter()
-            .any(|op| !matches!(op, Op::Translate { .. }))
+            .any(|n| !matches!(n.op, Op::Translate { .. }))
     }
 
     /// The Jacobian of ω⁻¹ at `p` (columns ∂ω⁻¹/∂x, ∂/∂y, ∂/∂z) by central differences
@@ -100,7 +101,7 @@ impl RestQuery {
         target: &Shape,
         id: NodeId,
         found: &Found,
-        steps: &mut Vec<Op>,
+        steps: &mut Vec<super::Node>,
         stretched: &mut bool,
     ) {
         if !found.contains[id.index()] || self.truncated {
@@ -121,7 +122,7 @@ impl RestQuery {
         let maps = op.is_point_map();
         let was = *stretched;
         if maps {
-            steps.push(op.clone());
+            steps.push(target[id].clone());
             *stretched |= matches!(op, Op::Elongate { .. });
         }
         // A shell map's tile is evaluated at shell coordinates, not at a moved point:

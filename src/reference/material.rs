@@ -375,8 +375,9 @@ impl<'a> MaterialEval<'a> {
     /// Rejects what `codegen::field::field` rejects, and textures without an image.
     fn validate(&self, v: &Value) -> Result<(), String> {
         match v {
-            Value::Float(_) | Value::Vec(_) | Value::Bool(_) => Ok(()),
+            Value::Float(_) | Value::Vec(_) | Value::Bool(_) | Value::Uniform(_) => Ok(()),
             Value::Field(e, _) => match &**e {
+                FieldExpr::Param(_) => Err(String::from("a parameter outside a run-time value")),
                 FieldExpr::Input(_) => Ok(()),
                 FieldExpr::Atlas { atlas, .. } if atlas.index() < self.atlases.len() => Ok(()),
                 FieldExpr::Atlas { .. } => Err(String::from("an atlas outside the program")),

@@ -366,6 +366,10 @@ pub static CONSTANTS: &[Constant] = &[
         doc: "τ = 2π = 6.28318…",
     },
     Constant {
+        name: "time",
+        doc: "Seconds since the start, from 0: a run-time parameter the host sets each frame (`sdfc render --time T`, `--animate`). It may reach a shape only through expressions the compiler can bound (`sin(time)`, `fract(time / 4)`, `clamp(time, 0, 10)`), or where the step bound does not depend on it (a translation).",
+    },
+    Constant {
         name: "position",
         doc: "The surface point being shaded (field<vec3>).",
     },

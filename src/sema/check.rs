@@ -117,7 +117,7 @@ impl Checker<'_> {
         self.diags.push(d);
     }
 
-    fn define(&mut self, name: &Ident, kind: DefKind, item_span: Span, value: Value) -> DefId {
+    pub(crate) fn define(&mut self, name: &Ident, kind: DefKind, item_span: Span, value: Value) -> DefId {
         let id = DefId::new(self.prog.defs.len());
         self.prog.defs.push(Def {
             name: name.name.clone(),
@@ -161,6 +161,10 @@ impl Checker<'_> {
                     let v = self.bounded(v, value.span);
                     Some((self.define(name, DefKind::Let, item.span, v), name))
                 }
+                ItemKind::Param { name, value, range } => Some((
+                    self.param_item(name, value, range.as_ref(), item.span),
+                    name,
+                )),
                 ItemKind::Atlas { name, shape, body } => {
                     Some((self.atlas(name, shape, body, item.span), name))
                 }
@@ -292,6 +296,10 @@ impl Checker<'_> {
         if value.is_error() {
             return value;
         }
+        if matches!(value, Value::Uniform(_)) && !spec.field {
+            self.refuse_run_time(&format!("`{}`", spec.name), span);
+            return Value::Error;
+        }
         let ty = value.ty();
         if ty.is_field() && !spec.field {
             self.error(
@@ -395,6 +403,10 @@ impl Checker<'_> {
         match &v {
             Value::Error => None,
             Value::Vec(c) if c.len() == 3 => Some([c[0], c[1], c[2]]),
+            Value::Uniform(_) => {
+                self.refuse_run_time(&format!("a seed's {what}"), e.span);
+                None
+            }
             Value::Field(..) => {
                 self.error(Diagnostic::error(
                     codes::E_NOT_CONSTANT,

@@ -38,8 +38,14 @@ pub fn displaced(v: &Value) -> Option<Span> {
 /// Why a height cannot be bounded: the first builtin, operator or input in it that
 /// jumps or has no slope bound.
 fn unbounded(v: &Value) -> Option<String> {
+    if let Value::Uniform(_) = v {
+        return Some(String::from(
+            "a run-time parameter (a height is bounded at compile time, so parameters cannot set it yet)",
+        ));
+    }
     let Value::Field(e, _) = v else { return None };
     match &**e {
+        FieldExpr::Param(_) => Some(String::from("a run-time parameter")),
         FieldExpr::Input(SurfaceInput::Position) => None,
         FieldExpr::Input(SurfaceInput::Normal) => Some(String::from(
             "`normal` has no slope bound (it turns with the surface's curvature)",
@@ -107,7 +113,7 @@ fn atlases(v: &Value, out: &mut Vec<super::AtlasId>) {
                 out.push(*atlas)
             }
         }
-        FieldExpr::Input(_) => {}
+        FieldExpr::Input(_) | FieldExpr::Param(_) => {}
         FieldExpr::Unary { operand, .. } => atlases(operand, out),
         FieldExpr::Binary { lhs, rhs, .. } => {
             atlases(lhs, out);

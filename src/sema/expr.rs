@@ -55,6 +55,8 @@ impl Checker<'_> {
                         format!("this is {ty}"),
                     ));
                     Value::Error
+                } else if let Value::Uniform(_) = &v {
+                    self.uniform_neg(v, e.span)
                 } else if let Value::Field(_, t) = &v {
                     let t = t.clone();
                     Value::field(
@@ -119,10 +121,13 @@ impl Checker<'_> {
         if let Some(&id) = self.scope.get(n) {
             self.prog.references.push(Reference { span, def: id });
             self.used.insert(id);
-            return self.prog.def(id).value.clone();
+            let v = self.prog.def(id).value.clone();
+            self.mark_param_use(&v);
+            return v;
         }
         match n {
             "pi" => return Value::Float(std::f64::consts::PI),
+            "time" => return self.time(span),
             "tau" => return Value::Float(std::f64::consts::TAU),
             "position" => {
                 return Value::field(FieldExpr::Input(SurfaceInput::Position), Ty::Vec(3))
@@ -215,6 +220,9 @@ impl Checker<'_> {
         if values.iter().any(|v| v.ty().is_field()) {
             return Value::field(FieldExpr::Vector(values), Ty::Vec(count as u8));
         }
+        if values.iter().any(|v| v.uniform().is_some()) {
+            return self.uniform_vector(values, span);
+        }
         Value::Vec(
             values
                 .iter()
@@ -268,6 +276,9 @@ impl Checker<'_> {
                 }))
             }
             Ok(ty) if field => Value::field(FieldExpr::Binary { op, lhs: l, rhs: r }, ty),
+            Ok(_) if l.uniform().is_some() || r.uniform().is_some() => {
+                self.uniform_binary(op, l, r, span)
+            }
             Ok(_) => {
                 let v = fold::binary(op, &l, &r);
                 self.finite(v, span)
@@ -318,6 +329,9 @@ impl Checker<'_> {
                             } else {
                                 Value::Vec(out)
                             }
+                        }
+                        Value::Uniform(_) => {
+                            self.uniform_swizzle(r.clone(), components, field.span)
                         }
                         _ => {
                             let ty = if components.len() == 1 {
@@ -600,6 +614,17 @@ impl Checker<'_> {
                     }
                 }
             }
+            if let Value::Uniform(u) = v {
+                let lifts = lifts || b.ret == Ret::Float || b.ret == Ret::T;
+                let refused = matches!(b.ret, Ret::Camera | Ret::Light | Ret::Texture);
+                if refused {
+                    self.refuse_run_time(&format!("`{}` of `{}`", p.name, b.name), *vspan);
+                    ok = false;
+                } else if !self.check_run_time_arg(b, p, u, *vspan, lifts) {
+                    ok = false;
+                }
+                continue;
+            }
             if !ty.is_field() && !self.check_constant(p.name, p.check, v, *vspan) {
                 ok = false;
             }
@@ -661,6 +686,9 @@ impl Checker<'_> {
                 },
                 ret_ty,
             ),
+            _ if args.iter().any(|a| a.uniform().is_some()) => {
+                self.uniform_math(b.id, args, n as usize, span)
+            }
             _ => {
                 let v = fold::math(b.id, &args, n as usize);
                 self.finite(v, span)

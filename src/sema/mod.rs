@@ -9,9 +9,11 @@
 
 pub mod builtins;
 mod check;
+pub mod params;
 mod displace;
 mod expr;
 pub mod fold;
+pub mod interval;
 pub mod math;
 pub mod settings;
 mod show;
@@ -25,7 +27,8 @@ pub use check::{check, MAX_SEEDS};
 pub use displace::{displaced, undisplaced};
 pub use settings::{AtlasParams, MaterialAttrs, RenderSettings};
 pub use types::{
-    AtlasAttr, AtlasId, Camera, FieldExpr, Light, MaterialId, Node, SurfaceInput, Ty, Value,
+    AtlasAttr, AtlasId, Camera, FieldExpr, Light, MaterialId, Node, ParamRef, SurfaceInput, Ty,
+    Uniform, Value,
 };
 
 use crate::span::Span;
@@ -39,6 +42,8 @@ crate::id::define_id!(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DefKind {
     Let,
+    /// A run-time parameter (`param`).
+    Param,
     Atlas,
     Material,
     Seed { atlas: AtlasId },
@@ -131,6 +136,40 @@ pub struct Program {
     pub materials: Vec<MaterialDef>,
     pub render: Option<RenderDef>,
     pub textures: Vec<TextureRef>,
+    /// The run-time parameters: `time` first, then each `param` item in order.
+    pub params: Vec<ParamDef>,
+}
+
+/// A run-time parameter: a `param` item, or the built-in `time`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamDef {
+    pub name: String,
+    /// 1 for a float, else the vector size.
+    pub size: usize,
+    pub default: Vec<f64>,
+    /// The value this check used (the default unless set, see `Access::set_param`).
+    pub value: Vec<f64>,
+    /// Every value the host may set lies in `[range.0, range.1]` (per component).
+    pub range: (f64, f64),
+    /// The name where it is defined (empty for `time`).
+    pub span: Span,
+    /// Whether the scene reads it.
+    pub used: bool,
+}
+
+impl ParamDef {
+    /// The built-in `time`: seconds, from 0.
+    pub fn time() -> ParamDef {
+        ParamDef {
+            name: String::from("time"),
+            size: 1,
+            default: vec![0.0],
+            value: vec![0.0],
+            range: (0.0, f64::INFINITY),
+            span: Span::new(0, 0),
+            used: false,
+        }
+    }
 }
 
 impl Program {

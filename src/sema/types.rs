@@ -173,6 +173,9 @@ impl AtlasAttr {
 #[derive(Debug, Clone, PartialEq)]
 pub enum FieldExpr {
     Input(SurfaceInput),
+    /// A run-time parameter (`param` item, or `time`): the same at every point, set by
+    /// the host. It appears only inside a [`Uniform`].
+    Param(ParamRef),
     Atlas {
         atlas: AtlasId,
         attr: AtlasAttr,
@@ -200,6 +203,45 @@ pub enum FieldExpr {
     },
 }
 
+/// A run-time parameter as a leaf of an expression: its index in
+/// [`super::Program::params`] and its name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParamRef {
+    pub index: u32,
+    pub name: Arc<str>,
+}
+
+/// A value computed from run-time parameters: the same at every point of space, set by
+/// the host per frame (sliders, `time`). Its expression is generated into the shaders;
+/// every compile-time consumer reads `value`, the value at the parameters' current
+/// values (their defaults, or what `--param` set), and what must hold for every value
+/// reads `range`, an interval per component that holds over the parameters' ranges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Uniform {
+    /// Over [`FieldExpr::Param`] leaves, constants and math.
+    pub expr: Arc<FieldExpr>,
+    pub value: Vec<f64>,
+    pub range: Vec<(f64, f64)>,
+    /// The expression in the source.
+    pub span: Span,
+}
+
+impl Uniform {
+    /// The interval of the whole value (the hull of its components').
+    pub fn hull(&self) -> (f64, f64) {
+        self.range
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r.0), b.max(r.1))
+            })
+    }
+
+    /// Whether every component's range is finite.
+    pub fn is_bounded(&self) -> bool {
+        self.range.iter().all(|r| r.0.is_finite() && r.1.is_finite())
+    }
+}
+
 /// The folded value of an expression. Constants are folded completely; surface
 /// fields stay symbolic; scene objects are trees of [`Node`]s.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,6 +258,8 @@ pub enum Value {
     Material(MaterialId),
     /// A surface field with the type of its per-point values.
     Field(Arc<FieldExpr>, Ty),
+    /// A float or vector computed from run-time parameters.
+    Uniform(Arc<Uniform>),
     Error,
 }
 
@@ -233,6 +277,8 @@ impl Value {
             Value::Atlas(_) => Ty::Atlas,
             Value::Material(_) => Ty::Material,
             Value::Field(_, t) => Ty::Field(Box::new(t.clone())),
+            Value::Uniform(u) if u.value.len() == 1 => Ty::Float,
+            Value::Uniform(u) => Ty::Vec(u.value.len() as u8),
             Value::Error => Ty::Error,
         }
     }
@@ -247,7 +293,7 @@ impl Value {
         fn walk(v: &Value, out: &mut std::collections::BTreeSet<AtlasId>) {
             let Value::Field(e, _) = v else { return };
             stacker::maybe_grow(64 * 1024, 1024 * 1024, || match &**e {
-                FieldExpr::Input(_) => {}
+                FieldExpr::Input(_) | FieldExpr::Param(_) => {}
                 FieldExpr::Atlas { atlas, .. } => {
                     out.insert(*atlas);
                 }
@@ -271,25 +317,47 @@ impl Value {
         Value::Field(Arc::new(expr), ty)
     }
 
+    /// A float, or a run-time float at its current value.
     pub fn as_float(&self) -> Option<f64> {
         match self {
             Value::Float(x) => Some(*x),
+            Value::Uniform(u) if u.value.len() == 1 => Some(u.value[0]),
             _ => None,
         }
     }
 
+    /// A vec3, or a run-time vec3 at its current value.
     pub fn as_vec3(&self) -> Option<[f64; 3]> {
-        match self {
-            Value::Vec(v) if v.len() == 3 => Some([v[0], v[1], v[2]]),
+        match self.components() {
+            Some(v) if v.len() == 3 && !matches!(self, Value::Float(_)) => Some([v[0], v[1], v[2]]),
             _ => None,
         }
     }
 
-    /// Components of a constant float or vector.
+    /// Components of a float or vector: a constant's, or a run-time value's at the
+    /// parameters' current values.
     pub fn components(&self) -> Option<&[f64]> {
         match self {
             Value::Float(x) => Some(std::slice::from_ref(x)),
             Value::Vec(v) => Some(v),
+            Value::Uniform(u) => Some(&u.value),
+            _ => None,
+        }
+    }
+
+    /// The interval of each component over the parameters' ranges (a point for a
+    /// constant).
+    pub fn ranges(&self) -> Option<Vec<(f64, f64)>> {
+        match self {
+            Value::Uniform(u) => Some(u.range.clone()),
+            _ => Some(self.components()?.iter().map(|&x| (x, x)).collect()),
+        }
+    }
+
+    /// The run-time value, if this is one.
+    pub fn uniform(&self) -> Option<&Uniform> {
+        match self {
+            Value::Uniform(u) => Some(u),
             _ => None,
         }
     }
@@ -299,6 +367,8 @@ impl Value {
         match self {
             Value::Float(x) => fmt_num(*x),
             Value::Vec(v) => fmt_vec(v),
+            Value::Uniform(u) if u.value.len() == 1 => format!("{} (run time)", fmt_num(u.value[0])),
+            Value::Uniform(u) => format!("{} (run time)", fmt_vec(&u.value)),
             Value::Bool(b) => b.to_string(),
             Value::Str(s) => format!("{s:?}"),
             Value::Shape(n) | Value::Texture(n) => format!("{}(…)", n.builtin.name()),

@@ -25,6 +25,13 @@ pub struct Item {
 pub enum ItemKind {
     /// `let name = value;`
     Let { name: Ident, value: Expr },
+    /// `param name = default in [min, max];`: a value the host sets at run time
+    /// (`in …` may be left out for vectors, whose components then range over [0, 1]).
+    Param {
+        name: Ident,
+        value: Expr,
+        range: Option<Expr>,
+    },
     /// `atlas name on shape { … }`
     Atlas {
         name: Ident,
@@ -44,6 +51,7 @@ impl Item {
     pub fn name(&self) -> Option<&Ident> {
         match &self.kind {
             ItemKind::Let { name, .. }
+            | ItemKind::Param { name, .. }
             | ItemKind::Atlas { name, .. }
             | ItemKind::Material { name, .. } => Some(name),
             ItemKind::Error { name } => name.as_ref(),

@@ -32,6 +32,10 @@ pub enum Token<'a> {
 
     #[token("let")]
     Let,
+    #[token("param")]
+    Param,
+    #[token("in")]
+    In,
     #[token("atlas")]
     Atlas,
     #[token("material")]
@@ -127,7 +131,8 @@ pub enum Token<'a> {
 /// Every keyword of the language, in the order the grammar lists them.
 /// The TextMate grammar's keyword list is tested against this.
 pub const KEYWORDS: &[&str] = &[
-    "let", "atlas", "material", "render", "on", "seed", "tangent", "merge", "true", "false",
+    "let", "param", "atlas", "material", "render", "on", "in", "seed", "tangent", "merge", "true",
+    "false",
 ];
 
 impl Token<'_> {
@@ -137,7 +142,7 @@ impl Token<'_> {
     pub fn starts_item(&self) -> bool {
         matches!(
             self,
-            Token::Let | Token::Atlas | Token::Material | Token::Render
+            Token::Let | Token::Param | Token::Atlas | Token::Material | Token::Render
         )
     }
 
@@ -167,6 +172,8 @@ impl fmt::Display for Token<'_> {
         let s = match self {
             Token::Error => "an invalid character",
             Token::Let => "`let`",
+            Token::Param => "`param`",
+            Token::In => "`in`",
             Token::Atlas => "`atlas`",
             Token::Material => "`material`",
             Token::Render => "`render`",

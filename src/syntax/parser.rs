@@ -131,7 +131,10 @@ fn chunk_span(chunk: &[(Token, SimpleSpan)]) -> Span {
 /// The name an item would define, read straight off its tokens, for items that fail to parse.
 fn fallback_name(chunk: &[(Token, SimpleSpan)]) -> Option<Ident> {
     match (chunk.first(), chunk.get(1)) {
-        (Some((Token::Let | Token::Atlas | Token::Material, _)), Some((Token::Ident(n), s))) => {
+        (
+            Some((Token::Let | Token::Param | Token::Atlas | Token::Material, _)),
+            Some((Token::Ident(n), s)),
+        ) => {
             Some(Ident {
                 name: n.to_string(),
                 span: to_span(*s),
@@ -345,6 +348,8 @@ where
     select! {
         Token::Ident(n) => n,
         Token::Let => "let",
+        Token::Param => "param",
+        Token::In => "in",
         Token::Atlas => "atlas",
         Token::Material => "material",
         Token::Render => "render",
@@ -679,6 +684,13 @@ where
         .then_ignore(just(Token::Assign))
         .then(expr_semi)
         .map(|(name, value)| ItemKind::Let { name, value });
+    let param_item = just(Token::Param)
+        .ignore_then(ident())
+        .then_ignore(just(Token::Assign))
+        .then(expr.clone())
+        .then(just(Token::In).ignore_then(expr.clone()).or_not())
+        .then_ignore(just(Token::Semi))
+        .map(|((name, value), range)| ItemKind::Param { name, value, range });
     let atlas_item = just(Token::Atlas)
         .ignore_then(ident())
         .then_ignore(just(Token::On))
@@ -695,6 +707,7 @@ where
         .map(|(target, body)| ItemKind::Render { target, body });
 
     let_item
+        .or(param_item)
         .or(atlas_item)
         .or(material_item)
         .or(render_item)

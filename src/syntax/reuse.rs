@@ -81,6 +81,13 @@ fn shift_item(item: &mut Item, by: isize) {
             shift_ident(name, by);
             shift_expr(value, by);
         }
+        ItemKind::Param { name, value, range } => {
+            shift_ident(name, by);
+            shift_expr(value, by);
+            if let Some(r) = range {
+                shift_expr(r, by);
+            }
+        }
         ItemKind::Atlas { name, shape, body } => {
             shift_ident(name, by);
             shift_expr(shape, by);

@@ -136,12 +136,17 @@ impl Cx<'_> {
         let (expr, ty) = match v {
             Value::Float(x) => return V::float(*x),
             Value::Vec(c) => return V::from_slice(c),
+            // A run-time value at the parameters' current values.
+            Value::Uniform(u) if u.value.len() == 1 => return V::float(u.value[0]),
+            Value::Uniform(u) => return V::from_slice(&u.value),
             Value::Bool(b) => return V::Bool(*b),
             Value::Field(e, ty) => (&**e, ty),
             // Rejected by `MaterialEval::new`.
             _ => return V::float(0.0),
         };
         match expr {
+            // Only inside a `Value::Uniform`, whose value is read above.
+            FieldExpr::Param(_) => V::float(0.0),
             FieldExpr::Input(SurfaceInput::Position) => {
                 vec3v(self.p + self.offset.map_or(DVec3::ZERO, |o| o.1))
             }

@@ -90,8 +90,10 @@ impl Access {
 
     /// Sets run-time parameter `name` (or `time`) to `value` for this check.
     pub fn set_param(&mut self, name: &str, value: &[f64]) {
-        self.params
-            .insert(name.to_string(), value.iter().map(|x| x.to_bits()).collect());
+        self.params.insert(
+            name.to_string(),
+            value.iter().map(|x| x.to_bits()).collect(),
+        );
     }
 
     /// The value set for run-time parameter `name`, if any.

@@ -63,7 +63,9 @@ fn parse_param(s: &str) -> Result<(String, Vec<f64>), String> {
 fn parse_time(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
-        _ => Err(format!("`{s}` is not a time in seconds (a finite number ≥ 0)")),
+        _ => Err(format!(
+            "`{s}` is not a time in seconds (a finite number ≥ 0)"
+        )),
     }
 }
 
@@ -74,7 +76,10 @@ pub fn validate(program: &sdfc::sema::Program) -> Result<(), String> {
         if name == "time" {
             continue;
         }
-        let Some(p) = program.params.iter().find(|p| &p.name == name && p.name != "time")
+        let Some(p) = program
+            .params
+            .iter()
+            .find(|p| &p.name == name && p.name != "time")
         else {
             let names: Vec<&str> = program
                 .params

@@ -568,9 +568,10 @@ impl Writer {
 /// run-time numbers from the parameters' block.
 fn prim_call(pr: &Prim, dynamic: Option<&Dyn>, p: &str) -> String {
     let run_time = |i: usize, slot: crate::ir::prim::Slot| match dynamic {
-        Some(Dyn::Prim(slots)) => slots.get(i)?.as_ref().map(|s| {
-            super::params::slot(s, slot == crate::ir::prim::Slot::Vec3)
-        }),
+        Some(Dyn::Prim(slots)) => slots
+            .get(i)?
+            .as_ref()
+            .map(|s| super::params::slot(s, slot == crate::ir::prim::Slot::Vec3)),
         _ => None,
     };
     pr.wgsl_call(p, lit, vec3, run_time)

@@ -17,8 +17,8 @@ mod field;
 mod group;
 pub mod inline_cost;
 mod manifest;
-pub mod params;
 pub mod mesh;
+pub mod params;
 pub mod shake;
 pub mod targets;
 pub mod template;
@@ -708,7 +708,10 @@ impl Generator<'_> {
                 .iter()
                 .map(|f| {
                     let max = f.max.map_or(String::from("inf"), |m| format!("{m}"));
-                    format!("{} {} at {} in [{}, {max}]", f.member, f.ty, f.offset, f.min)
+                    format!(
+                        "{} {} at {} in [{}, {max}]",
+                        f.member, f.ty, f.offset, f.min
+                    )
                 })
                 .collect();
             let _ = writeln!(

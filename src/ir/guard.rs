@@ -90,50 +90,52 @@ pub fn exact_outside(shape: &Shape) -> Vec<bool> {
         // A node with run-time numbers keeps none of these guarantees over its range.
         exact[i] = n.dynamic.is_none()
             && match &n.op {
-            // IQ's ellipsoid and triangular prism are bounds that underestimate.
-            Op::Prim(Prim::Ellipsoid { .. } | Prim::TriPrism { .. }) => false,
-            Op::Prim(_) => true,
-            // min(a, b) minus at most k/4 (the bounds grow by k/4).
-            Op::Csg {
-                op: Csg::Union,
-                a,
-                b,
-                ..
-            } => e(a) && e(b),
-            // max(a, b) plus a non-negative blend term: at least an operand whose box is
-            // the intersection's.
-            Op::Csg {
-                op: Csg::Intersection,
-                a,
-                b,
-                ..
-            } => [a, b].iter().any(|o| e(o) && shape[**o].bounds == n.bounds),
-            // At least max(a, -b) ≥ a, and the bounds are a's.
-            Op::Csg {
-                op: Csg::Difference,
-                a,
-                ..
-            } => e(a),
-            // Rigid maps and uniform scales carry the bound; a non-uniform scale
-            // underestimates by min(factor).
-            Op::Translate { child, .. } | Op::Rotate { child, .. } | Op::Paint { child, .. } => {
-                e(child)
-            }
-            Op::Scale { factor, child } => e(child) && factor.min_element() == factor.max_element(),
-            // Warps rotate points about the origin within the child's ball (radius R):
-            // the field is at least |p| − R, and the box holds the ball. An unbounded
-            // child has no ball (its warp's box is only a framing guess).
-            Op::Twist { child, radius, .. } | Op::Bend { child, radius, .. } => {
-                e(child) && radius.is_finite()
-            }
-            // The child's box grows by what the operation can subtract.
-            Op::Mirror { child, .. }
-            | Op::Elongate { child, .. }
-            | Op::Round { child, .. }
-            | Op::Shell { child, .. }
-            | Op::Displace { child, .. } => e(child),
-            Op::Repeat { .. } | Op::ShellMap { .. } => false,
-        };
+                // IQ's ellipsoid and triangular prism are bounds that underestimate.
+                Op::Prim(Prim::Ellipsoid { .. } | Prim::TriPrism { .. }) => false,
+                Op::Prim(_) => true,
+                // min(a, b) minus at most k/4 (the bounds grow by k/4).
+                Op::Csg {
+                    op: Csg::Union,
+                    a,
+                    b,
+                    ..
+                } => e(a) && e(b),
+                // max(a, b) plus a non-negative blend term: at least an operand whose box is
+                // the intersection's.
+                Op::Csg {
+                    op: Csg::Intersection,
+                    a,
+                    b,
+                    ..
+                } => [a, b].iter().any(|o| e(o) && shape[**o].bounds == n.bounds),
+                // At least max(a, -b) ≥ a, and the bounds are a's.
+                Op::Csg {
+                    op: Csg::Difference,
+                    a,
+                    ..
+                } => e(a),
+                // Rigid maps and uniform scales carry the bound; a non-uniform scale
+                // underestimates by min(factor).
+                Op::Translate { child, .. }
+                | Op::Rotate { child, .. }
+                | Op::Paint { child, .. } => e(child),
+                Op::Scale { factor, child } => {
+                    e(child) && factor.min_element() == factor.max_element()
+                }
+                // Warps rotate points about the origin within the child's ball (radius R):
+                // the field is at least |p| − R, and the box holds the ball. An unbounded
+                // child has no ball (its warp's box is only a framing guess).
+                Op::Twist { child, radius, .. } | Op::Bend { child, radius, .. } => {
+                    e(child) && radius.is_finite()
+                }
+                // The child's box grows by what the operation can subtract.
+                Op::Mirror { child, .. }
+                | Op::Elongate { child, .. }
+                | Op::Round { child, .. }
+                | Op::Shell { child, .. }
+                | Op::Displace { child, .. } => e(child),
+                Op::Repeat { .. } | Op::ShellMap { .. } => false,
+            };
     }
     exact
 }

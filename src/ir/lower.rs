@@ -63,11 +63,7 @@ pub fn lower_shape_textured(value: &Value, textures: &Textures) -> Option<Shape>
     lower_shape_with(value, textures, &mut Unlowered::default())
 }
 
-fn lower_shape_with(
-    value: &Value,
-    textures: &Textures,
-    errors: &mut Unlowered,
-) -> Option<Shape> {
+fn lower_shape_with(value: &Value, textures: &Textures, errors: &mut Unlowered) -> Option<Shape> {
     let mut shape = Shape::default();
     Lowerer {
         out: &mut shape,
@@ -627,7 +623,11 @@ impl Lowerer<'_> {
                     let (b, l) = self.info(c);
                     let nan = b.min.is_nan() || b.max.is_nan();
                     bounds = if nan { Aabb::INFINITE } else { bounds.union(b) };
-                    lipschitz = if l.is_nan() { f64::INFINITY } else { lipschitz.max(l) };
+                    lipschitz = if l.is_nan() {
+                        f64::INFINITY
+                    } else {
+                        lipschitz.max(l)
+                    };
                 }
                 None => lipschitz = f64::INFINITY,
             }

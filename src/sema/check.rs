@@ -117,7 +117,13 @@ impl Checker<'_> {
         self.diags.push(d);
     }
 
-    pub(crate) fn define(&mut self, name: &Ident, kind: DefKind, item_span: Span, value: Value) -> DefId {
+    pub(crate) fn define(
+        &mut self,
+        name: &Ident,
+        kind: DefKind,
+        item_span: Span,
+        value: Value,
+    ) -> DefId {
         let id = DefId::new(self.prog.defs.len());
         self.prog.defs.push(Def {
             name: name.name.clone(),

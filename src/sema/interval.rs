@@ -159,12 +159,21 @@ pub fn math(m: Math, args: &[Vec<Iv>], n: usize) -> Vec<Iv> {
         a[c.min(a.len() - 1)]
     };
     let per = |f: &dyn Fn(usize) -> Iv| (0..n).map(f).collect::<Vec<Iv>>();
-    let f = |m: Math| move |x: &[f64]| -> f64 {
-        let comps: Vec<[f64; 1]> = x.iter().map(|&v| [v]).collect();
-        let refs: Vec<&[f64]> = comps.iter().map(|c| c.as_slice()).collect();
-        m.eval(&refs)[0]
+    let f = |m: Math| {
+        move |x: &[f64]| -> f64 {
+            let comps: Vec<[f64; 1]> = x.iter().map(|&v| [v]).collect();
+            let refs: Vec<&[f64]> = comps.iter().map(|c| c.as_slice()).collect();
+            m.eval(&refs)[0]
+        }
     };
-    let by_corners = |m: Math| per(&|c| corners(&(0..args.len()).map(|i| arg(i, c)).collect::<Vec<_>>(), f(m)));
+    let by_corners = |m: Math| {
+        per(&|c| {
+            corners(
+                &(0..args.len()).map(|i| arg(i, c)).collect::<Vec<_>>(),
+                f(m),
+            )
+        })
+    };
     match m {
         // Monotone in each argument, or multilinear (mix).
         Math::Asin
@@ -242,7 +251,11 @@ pub fn math(m: Math, args: &[Vec<Iv>], n: usize) -> Vec<Iv> {
             } else {
                 zip(&args[0], &args[1], |a, b| hull([a.0 - b.1, a.1 - b.0]))
             };
-            let lo = comps.iter().map(|&a| min_abs(a).powi(2)).sum::<f64>().sqrt();
+            let lo = comps
+                .iter()
+                .map(|&a| min_abs(a).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let hi = comps
                 .iter()
                 .map(|&a| a.0.abs().max(a.1.abs()).powi(2))
@@ -275,10 +288,7 @@ mod tests {
     /// Samples `f` densely over the box and checks the interval holds every sample.
     fn holds(iv: Iv, samples: impl Iterator<Item = f64>) {
         for s in samples {
-            assert!(
-                s >= iv.0 - 1e-12 && s <= iv.1 + 1e-12,
-                "{s} outside {iv:?}"
-            );
+            assert!(s >= iv.0 - 1e-12 && s <= iv.1 + 1e-12, "{s} outside {iv:?}");
         }
     }
 
@@ -300,7 +310,13 @@ mod tests {
     fn arithmetic_holds_over_samples() {
         let (a, b) = ((-1.0, 2.0), (0.5, 3.0));
         let grid = |iv: Iv| (0..=20).map(move |i| iv.0 + (iv.1 - iv.0) * i as f64 / 20.0);
-        for op in [BinaryOp::Add, BinaryOp::Sub, BinaryOp::Mul, BinaryOp::Div, BinaryOp::Rem] {
+        for op in [
+            BinaryOp::Add,
+            BinaryOp::Sub,
+            BinaryOp::Mul,
+            BinaryOp::Div,
+            BinaryOp::Rem,
+        ] {
             let iv = binary(op, &[a], &[b]).unwrap()[0];
             for x in grid(a) {
                 holds(
@@ -309,13 +325,19 @@ mod tests {
                 );
             }
         }
-        assert_eq!(binary(BinaryOp::Div, &[a], &[(-1.0, 1.0)]).unwrap()[0], UNBOUNDED);
+        assert_eq!(
+            binary(BinaryOp::Div, &[a], &[(-1.0, 1.0)]).unwrap()[0],
+            UNBOUNDED
+        );
     }
 
     #[test]
     fn unbounded_time_stays_unbounded_until_bounded() {
         let time = (0.0, f64::INFINITY);
-        assert_eq!(binary(BinaryOp::Mul, &[time], &[(2.0, 2.0)]).unwrap()[0].1, f64::INFINITY);
+        assert_eq!(
+            binary(BinaryOp::Mul, &[time], &[(2.0, 2.0)]).unwrap()[0].1,
+            f64::INFINITY
+        );
         assert_eq!(math(Math::Sin, &[vec![time]], 1)[0], (-1.0, 1.0));
         assert_eq!(math(Math::Fract, &[vec![time]], 1)[0], (0.0, 1.0));
         let c = math(

@@ -9,12 +9,12 @@
 
 pub mod builtins;
 mod check;
-pub mod params;
 mod displace;
 mod expr;
 pub mod fold;
 pub mod interval;
 pub mod math;
+pub mod params;
 pub mod settings;
 mod show;
 pub mod size;
@@ -46,7 +46,9 @@ pub enum DefKind {
     Param,
     Atlas,
     Material,
-    Seed { atlas: AtlasId },
+    Seed {
+        atlas: AtlasId,
+    },
 }
 
 /// A named definition.

@@ -10,7 +10,7 @@ use super::interval::{self, Iv};
 use super::math::Math;
 use super::show::fmt_num;
 use super::types::{FieldExpr, ParamRef, Uniform, Value};
-use super::{DefKind, DefId, ParamDef};
+use super::{DefId, DefKind, ParamDef};
 use crate::codes;
 use crate::diagnostic::Diagnostic;
 use crate::span::Span;
@@ -137,7 +137,10 @@ impl Checker<'_> {
             self.error(
                 Diagnostic::error(
                     codes::E_PARAM_RANGE,
-                    format!("the default of `{}` must be a constant number or vector", name.name),
+                    format!(
+                        "the default of `{}` must be a constant number or vector",
+                        name.name
+                    ),
                     value.span,
                     format!("this is {}", default.ty()),
                 )
@@ -285,12 +288,7 @@ impl Checker<'_> {
             return Value::Error;
         };
         let value = super::fold::binary(op, &l, &r);
-        uniform(
-            FieldExpr::Binary { op, lhs: l, rhs: r },
-            value,
-            range,
-            span,
-        )
+        uniform(FieldExpr::Binary { op, lhs: l, rhs: r }, value, range, span)
     }
 
     /// `[a, b, …]` with a run-time component.
@@ -305,7 +303,12 @@ impl Checker<'_> {
     }
 
     /// A swizzle of a run-time vector.
-    pub(crate) fn uniform_swizzle(&mut self, base: Value, components: Vec<u8>, span: Span) -> Value {
+    pub(crate) fn uniform_swizzle(
+        &mut self,
+        base: Value,
+        components: Vec<u8>,
+        span: Span,
+    ) -> Value {
         let (Some(r), Some(v)) = (base.ranges(), base.components().map(<[f64]>::to_vec)) else {
             return Value::Error;
         };
@@ -320,7 +323,13 @@ impl Checker<'_> {
     }
 
     /// A math builtin with a run-time argument (`n`: the call's vector size).
-    pub(crate) fn uniform_math(&mut self, b: BuiltinId, args: Vec<Value>, n: usize, span: Span) -> Value {
+    pub(crate) fn uniform_math(
+        &mut self,
+        b: BuiltinId,
+        args: Vec<Value>,
+        n: usize,
+        span: Span,
+    ) -> Value {
         let Some(m) = Math::of(b) else {
             return Value::Error;
         };
@@ -402,7 +411,10 @@ impl Checker<'_> {
                         param.name
                     ),
                     span,
-                    format!("over the parameters' ranges this is in {}", ranges.join(" × ")),
+                    format!(
+                        "over the parameters' ranges this is in {}",
+                        ranges.join(" × ")
+                    ),
                 )
                 .with_help("narrow the parameter's range, or clamp the expression"),
             );

@@ -28,7 +28,9 @@ impl Sizes {
             Value::Field(e, _) => (
                 std::sync::Arc::as_ptr(e) as *const (),
                 match &**e {
-                    FieldExpr::Input(_) | FieldExpr::Param(_) | FieldExpr::Atlas { .. } => Vec::new(),
+                    FieldExpr::Input(_) | FieldExpr::Param(_) | FieldExpr::Atlas { .. } => {
+                        Vec::new()
+                    }
                     FieldExpr::Unary { operand, .. } => vec![operand],
                     FieldExpr::Binary { lhs, rhs, .. } => vec![lhs, rhs],
                     FieldExpr::Swizzle { base, .. } => vec![base],

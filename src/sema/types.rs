@@ -238,7 +238,9 @@ impl Uniform {
 
     /// Whether every component's range is finite.
     pub fn is_bounded(&self) -> bool {
-        self.range.iter().all(|r| r.0.is_finite() && r.1.is_finite())
+        self.range
+            .iter()
+            .all(|r| r.0.is_finite() && r.1.is_finite())
     }
 }
 
@@ -367,7 +369,9 @@ impl Value {
         match self {
             Value::Float(x) => fmt_num(*x),
             Value::Vec(v) => fmt_vec(v),
-            Value::Uniform(u) if u.value.len() == 1 => format!("{} (run time)", fmt_num(u.value[0])),
+            Value::Uniform(u) if u.value.len() == 1 => {
+                format!("{} (run time)", fmt_num(u.value[0]))
+            }
             Value::Uniform(u) => format!("{} (run time)", fmt_vec(&u.value)),
             Value::Bool(b) => b.to_string(),
             Value::Str(s) => format!("{s:?}"),

@@ -134,12 +134,10 @@ fn fallback_name(chunk: &[(Token, SimpleSpan)]) -> Option<Ident> {
         (
             Some((Token::Let | Token::Param | Token::Atlas | Token::Material, _)),
             Some((Token::Ident(n), s)),
-        ) => {
-            Some(Ident {
-                name: n.to_string(),
-                span: to_span(*s),
-            })
-        }
+        ) => Some(Ident {
+            name: n.to_string(),
+            span: to_span(*s),
+        }),
         _ => None,
     }
 }

@@ -1,0 +1,362 @@
+//! Run-time parameters against their constants: a scene with `param x = … in [lo, hi]`
+//! set to a value renders, evaluates on the CPU and on the GPU as the same scene with
+//! that value written in; its WGSL is the same whatever the value (no recompiling);
+//! at the range's ends no ray passes through the surface.
+
+use glam::DVec3;
+use sdfc::access::Access;
+use sdfc::gpu::{self, gpu_for_tests, ViewMode};
+use sdfc::ir::eval;
+use sdfc::view::{trace_cpu, View};
+use std::path::Path;
+
+mod common;
+
+/// A scene around one number: `{P}` is replaced by a parameter or by the constant.
+struct Case {
+    template: &'static str,
+    lo: f64,
+    hi: f64,
+}
+
+const CAMERA: &str =
+    "camera = orbit(target: [0, 0, 0], distance: 5, yaw: 30deg, pitch: 20deg); size = [96, 64];";
+
+/// One case per kind of run-time number the generator writes from the block.
+const CASES: &[Case] = &[
+    Case {
+        template: "sphere({P})",
+        lo: 0.4,
+        hi: 1.1,
+    },
+    Case {
+        template: "box({P})",
+        lo: 0.5,
+        hi: 1.5,
+    },
+    Case {
+        template: "box([{P}, 1, 0.6])",
+        lo: 0.3,
+        hi: 1.6,
+    },
+    Case {
+        template: "box_frame([1.2, 1, 0.8], thickness: {P})",
+        lo: 0.05,
+        hi: 0.3,
+    },
+    Case {
+        template: "torus({P}, 0.25)",
+        lo: 0.5,
+        hi: 1.2,
+    },
+    Case {
+        template: "capsule([0, -0.8, 0], [{P}, 0.8, 0], 0.3)",
+        lo: -0.8,
+        hi: 0.8,
+    },
+    Case {
+        template: "cylinder(0.5, {P})",
+        lo: 0.5,
+        hi: 2.0,
+    },
+    Case {
+        template: "capped_cone(1.2, {P}, 0.2)",
+        lo: 0.3,
+        hi: 0.9,
+    },
+    Case {
+        template: "smooth_union(sphere(0.6), box([0.5, 1.4, 0.5]).translate([0.7, 0, 0]), {P})",
+        lo: 0.05,
+        hi: 0.6,
+    },
+    Case {
+        template: "box([0.8, 0.8, 0.8]).translate([{P}, 0.2, 0])",
+        lo: -1.0,
+        hi: 1.0,
+    },
+    Case {
+        template: "box([0.6, 1.4, 0.8]).rotate_z({P})",
+        lo: -1.2,
+        hi: 1.2,
+    },
+    Case {
+        template: "box([0.6, 1.4, 0.8]).rotate(axis: [1, 1, 0], angle: {P})",
+        lo: 0.0,
+        hi: 2.5,
+    },
+    Case {
+        template: "octahedron(0.8).scale({P})",
+        lo: 0.6,
+        hi: 1.4,
+    },
+    Case {
+        template: "octahedron(0.8).scale([1, {P}, 1.2])",
+        lo: 0.5,
+        hi: 1.5,
+    },
+    Case {
+        template: "box([0.7, 2, 0.7]).twist(rate: {P})",
+        lo: -1.5,
+        hi: 1.5,
+    },
+    Case {
+        template: "box([2.4, 0.4, 0.7]).bend(rate: {P})",
+        lo: -0.6,
+        hi: 0.6,
+    },
+    Case {
+        template: "sphere(0.5).elongate([{P}, 0.2, 0])",
+        lo: 0.0,
+        hi: 0.8,
+    },
+    Case {
+        template: "box(1).round({P})",
+        lo: 0.0,
+        hi: 0.3,
+    },
+    Case {
+        template: "sphere(0.9).shell({P}) - box([2, 0.5, 2]).translate([0, 0.6, 0])",
+        lo: 0.05,
+        hi: 0.4,
+    },
+];
+
+fn num(x: f64) -> String {
+    format!("{x:?}")
+}
+
+/// The parametric source and the constant one at `value`.
+fn sources(c: &Case, value: f64) -> (String, String) {
+    let mid = 0.5 * (c.lo + c.hi);
+    let body = |p: &str| format!("render ({}) {{ {CAMERA} }}\n", c.template.replace("{P}", p));
+    let param = format!(
+        "param x = {} in [{}, {}];\n{}",
+        num(mid),
+        num(c.lo),
+        num(c.hi),
+        body("x")
+    );
+    (param, body(&format!("({})", num(value))))
+}
+
+fn analyze(src: &str, value: Option<f64>) -> sdfc::driver::Analysis {
+    let mut access = Access::new(None);
+    if let Some(v) = value {
+        access.set_param("x", &[v]);
+    }
+    let a = sdfc::driver::check_all_with(src, &access);
+    assert!(!a.has_errors(), "{src}: {:?}", a.diagnostics);
+    a
+}
+
+fn shape(a: &sdfc::driver::Analysis) -> sdfc::ir::Shape {
+    a.scene.as_ref().unwrap().render.clone().unwrap()
+}
+
+fn module(a: &sdfc::driver::Analysis) -> sdfc::Module {
+    a.compiled.as_ref().expect("a module").module.clone()
+}
+
+fn points(n: usize) -> Vec<DVec3> {
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    (0..n)
+        .map(|_| DVec3::new(next(), next(), next()) * 1.8)
+        .collect()
+}
+
+#[test]
+fn a_parameter_equals_its_constant_on_the_cpu_and_its_wgsl_does_not_change() {
+    for c in CASES {
+        let mut wgsl: Option<String> = None;
+        for value in [c.lo, 0.5 * (c.lo + c.hi), c.hi] {
+            let (param, constant) = sources(c, value);
+            let (a, b) = (analyze(&param, Some(value)), analyze(&constant, None));
+            let (sa, sb) = (shape(&a), shape(&b));
+            for p in points(500) {
+                let (da, db) = (eval::distance(&sa, p), eval::distance(&sb, p));
+                assert!(
+                    (da - db).abs() <= 1e-5,
+                    "{}: at {value}, {p}: {da} ≠ {db}",
+                    c.template
+                );
+                let (ga, gb) = (eval::gradient(&sa, p), eval::gradient(&sb, p));
+                assert!(
+                    (ga - gb).length() <= 1e-5,
+                    "{}: gradient at {p}",
+                    c.template
+                );
+            }
+            // The range's bounds hold the shape at this value, and the step bound.
+            let (ra, rb) = (sa.root_node(), sb.root_node());
+            assert!(
+                ra.lipschitz >= rb.lipschitz - 1e-12,
+                "{}: {value}",
+                c.template
+            );
+            if rb.bounds.is_finite() {
+                assert!(
+                    ra.bounds.min.cmple(rb.bounds.min + 1e-9).all()
+                        && ra.bounds.max.cmpge(rb.bounds.max - 1e-9).all(),
+                    "{}: at {value} the bounds {:?} do not hold {:?}",
+                    c.template,
+                    ra.bounds,
+                    rb.bounds
+                );
+            }
+            let m = module(&a);
+            match &wgsl {
+                None => wgsl = Some(m.wgsl.clone()),
+                Some(w) => assert_eq!(
+                    w, &m.wgsl,
+                    "{}: the WGSL changed with the value",
+                    c.template
+                ),
+            }
+            let field = m
+                .manifest
+                .params
+                .fields
+                .iter()
+                .find(|f| f.name == "x")
+                .unwrap();
+            assert_eq!(field.default, vec![value]);
+            assert_eq!((field.min, field.max), (c.lo, Some(c.hi)));
+        }
+    }
+}
+
+#[test]
+fn a_parameter_equals_its_constant_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut worst: (f64, &str) = (0.0, "");
+    for c in CASES {
+        for value in [c.lo, c.hi] {
+            let (param, constant) = sources(c, value);
+            let (a, b) = (analyze(&param, Some(value)), analyze(&constant, None));
+            let (ma, mb) = (module(&a), module(&b));
+            // The view of the constant scene for both (the camera is explicit).
+            let view = View::new(b.program.render.as_ref(), &shape(&b));
+            let fa = gpu::render(&gpu, &ma, &view, ViewMode::Color, root).unwrap();
+            let fb = gpu::render(&gpu, &mb, &view, ViewMode::Color, root).unwrap();
+            let (mean, share) = common::image_difference(&fa.color, &fb.color);
+            assert!(
+                mean <= 1.5 && share <= 0.005,
+                "{} at {value}: mean {mean}/255, share over 16 {share}",
+                c.template
+            );
+            if mean > worst.0 {
+                worst = (mean, c.template);
+            }
+            // Distances on the GPU against the constant scene's CPU reference.
+            let pts = points(400);
+            let values = gpu::eval_points(&gpu, &ma, &pts).unwrap();
+            let sb = shape(&b);
+            for (p, v) in pts.iter().zip(&values) {
+                let d = eval::distance(&sb, *p);
+                assert!(
+                    (v[0] as f64 - d).abs() <= 1e-4 * d.abs().max(1.0),
+                    "{} at {value}, {p}: GPU {} CPU {d}",
+                    c.template,
+                    v[0]
+                );
+            }
+        }
+    }
+    eprintln!("worst mean difference {:.3}/255 ({})", worst.0, worst.1);
+}
+
+#[test]
+fn no_ray_passes_through_the_surface_at_the_ends_of_a_range() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (template, lo, hi) in [
+        ("box([0.8, 2.5, 0.8]).twist(rate: {P})", -1.8, 1.8),
+        ("box([3, 0.4, 0.8]).bend(rate: {P})", -0.8, 0.8),
+        ("octahedron(0.8).scale([1, {P}, 1.5])", 0.4, 1.6),
+        (
+            "smooth_union(box([0.4, 2, 0.4]), sphere(0.7).translate([0.6, 0, 0]), {P})",
+            0.05,
+            0.8,
+        ),
+    ] {
+        let c = Case { template, lo, hi };
+        for value in [lo, hi] {
+            let (param, constant) = sources(&c, value);
+            let (a, b) = (analyze(&param, Some(value)), analyze(&constant, None));
+            let mut view = View::new(b.program.render.as_ref(), &shape(&b));
+            (view.width, view.height) = (96, 96);
+            let steps = view.max_steps;
+            // Steps over the range's bounds are smaller than the constant's: enough of
+            // them that a miss can only be an overshoot.
+            view.max_steps = steps * 4;
+            let frame = gpu::render(&gpu, &module(&a), &view, ViewMode::Color, root).unwrap();
+            let sb = shape(&b);
+            let (mut covered, mut holes) = (0, 0);
+            for y in 0..view.height {
+                for x in 0..view.width {
+                    let dir = view.camera.ray(x as f64 + 0.5, y as f64 + 0.5, 96.0, 96.0);
+                    // Conservative reference: half steps, four times as many.
+                    if trace_cpu(&sb, &view, dir, 0.5, steps * 4).is_some() {
+                        covered += 1;
+                        if frame.position[(y * view.width + x) as usize][3] < 0.0 {
+                            holes += 1;
+                        }
+                    }
+                }
+            }
+            assert!(
+                covered > 300,
+                "{template} at {value}: {covered} pixels covered"
+            );
+            assert!(
+                holes as f64 <= 0.01 * covered as f64,
+                "{template} at {value}: {holes} holes in {covered} covered pixels"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_command_line_sets_parameters_and_refuses_bad_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("p.sdf");
+    std::fs::write(
+        &scene,
+        "param radius = 0.6 in [0.3, 0.9];\nrender sphere(radius).translate([0.2 * sin(time), 0, 0]);\n",
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let out = dir.path().join("o.png");
+    let o = out.to_str().unwrap();
+    let (code, _, err) = common::sdfc(&[
+        "render",
+        s,
+        "--param",
+        "radius=0.8",
+        "--time",
+        "2",
+        "-o",
+        o,
+        "--size",
+        "32x32",
+        "--walk",
+        "loop",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = common::sdfc(&["render", s, "--param", "radiu=0.8", "-o", o]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("did you mean `radius`"), "{err}");
+    let (code, _, err) =
+        common::sdfc_with_input(&["eval", s, "--param", "radius=1.5"], b"[[0, 0, 0]]");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("outside the range of `radius`"), "{err}");
+    let (code, _, err) = common::sdfc(&["render", s, "--time", "-1", "-o", o]);
+    assert_eq!(code, 2, "{err}");
+}

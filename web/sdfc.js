@@ -66,6 +66,16 @@ export class SdfcScene {
       });
       return { view: texture.createView(), sampler };
     });
+    // The run-time parameters' block (the manifest's `params`), at its defaults.
+    this.params = null;
+    if (manifest.params && manifest.params.fields.length > 0) {
+      this.params = device.createBuffer({
+        label: "sdfc params",
+        size: manifest.params.size,
+        usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+      });
+      this.setParams({});
+    }
     let tables = null;
     if (manifest.tables && manifest.tables.length > 0) {
       tables = device.createBuffer({
@@ -78,6 +88,7 @@ export class SdfcScene {
     const resource = (b) => {
       if (b.name === "globals") return { buffer: this.globals };
       if (b.name === "tables") return { buffer: tables };
+      if (b.name === "params") return { buffer: this.params };
       const t = manifest.textures.findIndex((t) => t.texture_binding === b.binding);
       if (t >= 0) return images[t].view;
       const s = manifest.textures.findIndex((t) => t.sampler_binding === b.binding);
@@ -94,6 +105,19 @@ export class SdfcScene {
       vertex: { module: this.module, entryPoint: "vs_main" },
       fragment: { module: this.module, entryPoint: "fs_main", targets: [{ format }] },
     });
+  }
+
+  /// Writes the run-time parameters' block: `values` maps a parameter's name (`time`
+  /// for the time) to a number or an array; the others keep their defaults. Values
+  /// must lie in each parameter's [min, max]: the step bounds hold only there.
+  setParams(values) {
+    if (!this.params) return;
+    const block = new Float32Array(this.manifest.params.size / 4);
+    for (const f of this.manifest.params.fields) {
+      const v = values[f.name] ?? f.default;
+      block.set(Array.isArray(v) ? v : [v], f.offset / 4);
+    }
+    this.device.queue.writeBuffer(this.params, 0, block);
   }
 
   /// Writes the Globals block: nine vec4 (the manifest's `globals` say what each holds).
@@ -229,6 +253,17 @@ export async function show(canvas, base = document.baseURI, size = null) {
   };
   frame();
   orbit(canvas, globals, manifest.scene.bounds, () => requestAnimationFrame(frame));
+  // A scene that reads `time` animates (`?still` keeps its first frame, for tests).
+  const animated = manifest.params && manifest.params.fields.some((f) => f.name === "time");
+  if (animated && !new URL(location.href).searchParams.has("still")) {
+    const start = performance.now();
+    const tick = (now) => {
+      scene.setParams({ time: (now - start) / 1000 });
+      frame();
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  }
   return { adapter, device, scene, globals, messages: info.messages };
 }
 

@@ -4,7 +4,7 @@
 //   node tools/browser/page.mjs http://127.0.0.1:PORT/index.html?size=WxH OUT.rgba
 //     an exported scene (`sdfc export-web`): the WGSL compiler's messages, the page's
 //     error if any, the frame's size; its first frame's pixels (RGBA, rows top first,
-//     rendered offscreen by the page's own pipeline) go to OUT.rgba.
+//     read from the canvas's own texture in the frame that draws it) go to OUT.rgba.
 //   node tools/browser/page.mjs live http://127.0.0.1:PORT/?size=WxH DIR
 //     a page served by `sdfc serve`: waits for its first build, then for each line on
 //     standard input, a JavaScript condition on the page (`window.sdfcGeneration > 1`,
@@ -78,7 +78,7 @@ async function scene(page, console) {
   let readError = null;
   if (!error) {
     try {
-      pixels = await page.evaluate("window.sdfcPixels(true)");
+      pixels = await page.evaluate("window.sdfcPixels(false)");
     } catch (e) {
       readError = String(e);
     }

@@ -378,16 +378,23 @@ fn serve_answers_only_for_the_page_and_the_scene_folder() {
     }
     // GET and HEAD only; a bounded head; loopback names only.
     let host = served.addr.clone();
-    let (code, body) = served.raw(&format!("HEAD /scene.wgsl HTTP/1.1\r\nHost: {host}\r\n\r\n"));
+    let (code, body) = served.raw(&format!(
+        "HEAD /scene.wgsl HTTP/1.1\r\nHost: {host}\r\n\r\n"
+    ));
     assert_eq!((code, body.len()), (200, 0));
     for method in ["POST", "PUT", "DELETE"] {
         let r = served.raw(&format!("{method} / HTTP/1.1\r\nHost: {host}\r\n\r\n"));
         assert_eq!(r.0, 405, "{method}");
     }
     let big = "x".repeat(16 << 10);
-    let r = served.raw(&format!("GET / HTTP/1.1\r\nHost: {host}\r\nX: {big}\r\n\r\n"));
+    let r = served.raw(&format!(
+        "GET / HTTP/1.1\r\nHost: {host}\r\nX: {big}\r\n\r\n"
+    ));
     assert_eq!(r.0, 431);
-    assert_eq!(served.raw("GET / HTTP/1.1\r\nHost: example.com\r\n\r\n").0, 421);
+    assert_eq!(
+        served.raw("GET / HTTP/1.1\r\nHost: example.com\r\n\r\n").0,
+        421
+    );
     // The event stream starts with the state: the first good build.
     let mut events = std::net::TcpStream::connect(&served.addr).unwrap();
     write!(events, "GET /events HTTP/1.1\r\nHost: {host}\r\n\r\n").unwrap();
@@ -398,7 +405,8 @@ fn serve_answers_only_for_the_page_and_the_scene_folder() {
     }
     reader.read_line(&mut stream).unwrap();
     assert!(
-        stream.contains("text/event-stream") && stream.contains("event: scene\ndata: {\"generation\":1,"),
+        stream.contains("text/event-stream")
+            && stream.contains("event: scene\ndata: {\"generation\":1,"),
         "{stream}"
     );
 }
@@ -479,9 +487,8 @@ fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
     let mut next = |k: usize| -> (serde_json::Value, Vec<u8>) {
         let mut line = String::new();
         from_page.read_line(&mut line).unwrap();
-        let report: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| {
-            panic!("{e}: {line:?}\nserver: {}", served.log.lock().unwrap())
-        });
+        let report: serde_json::Value = serde_json::from_str(&line)
+            .unwrap_or_else(|e| panic!("{e}: {line:?}\nserver: {}", served.log.lock().unwrap()));
         assert!(report["error"].is_null(), "{report}");
         eprintln!("serve: report {k} after {:.1?}", t.elapsed());
         let px = std::fs::read(frames.join(format!("{k}.rgba"))).unwrap();
@@ -490,13 +497,22 @@ fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
     };
     let close = |px: &[u8], reference: &[u8], what: &str| {
         let (mean, share) = common::image_difference(reference, px);
-        eprintln!("serve: {what} against sdfc render: mean {mean:.3}/255, share over 16 {share:.4}");
-        assert!(mean <= 1.5 && share <= 0.005, "{what}: mean {mean}, share {share}");
+        eprintln!(
+            "serve: {what} against sdfc render: mean {mean:.3}/255, share over 16 {share:.4}"
+        );
+        assert!(
+            mean <= 1.5 && share <= 0.005,
+            "{what}: mean {mean}, share {share}"
+        );
     };
     // The first build, read from the canvas itself.
     let (first, px0) = next(0);
     assert_eq!(first["generation"], 1, "{first}");
-    assert_eq!(first["messages"], serde_json::json!([]), "Tint said something");
+    assert_eq!(
+        first["messages"],
+        serde_json::json!([]),
+        "Tint said something"
+    );
     close(&px0, &refs[0], "the first build");
     // An edit reaches the page: a new generation, the edited picture.
     save(&scene, &edited);
@@ -510,16 +526,26 @@ fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
     writeln!(to_page, "window.sdfcDiagnostics").unwrap();
     let (third, px2) = next(2);
     assert_eq!(third["generation"], 2, "{third}");
-    assert_eq!(third["diagnostics"]["diagnostics"][0]["code"], "E0010", "{third}");
-    assert_eq!(third["diagnostics"]["diagnostics"][0]["start"]["line"], 3, "{third}");
+    assert_eq!(
+        third["diagnostics"]["diagnostics"][0]["code"], "E0010",
+        "{third}"
+    );
+    assert_eq!(
+        third["diagnostics"]["diagnostics"][0]["start"]["line"], 3,
+        "{third}"
+    );
     let overlay = third["overlay"].as_str().unwrap_or_default();
     assert!(
-        overlay.contains("error[E0010]: expected an expression") && overlay.contains("let radius = ;"),
+        overlay.contains("error[E0010]: expected an expression")
+            && overlay.contains("let radius = ;"),
         "{third}"
     );
     assert!(px2 == px1, "the picture changed after a broken edit");
     drop(to_page);
     assert!(node.wait().unwrap().success());
     let log = served.log.lock().unwrap().clone();
-    assert!(log.contains("not rebuilt; the page keeps generation 2"), "{log}");
+    assert!(
+        log.contains("not rebuilt; the page keeps generation 2"),
+        "{log}"
+    );
 }

@@ -104,9 +104,7 @@ pub fn decode_path(target: &str) -> Result<Vec<String>, Refused> {
     rest.split('/')
         .map(|raw| {
             let part = percent_decode(raw)?;
-            let bad = part.is_empty()
-                || part.starts_with('.')
-                || part.contains(['/', '\\', '\0']);
+            let bad = part.is_empty() || part.starts_with('.') || part.contains(['/', '\\', '\0']);
             if bad {
                 Err(Refused::Path)
             } else {
@@ -213,7 +211,10 @@ mod tests {
     #[test]
     fn paths_decode_into_components_below_the_root() {
         assert_eq!(decode_path("/"), Ok(vec![]));
-        assert_eq!(decode_path("/a/b%20c.png?x=1"), Ok(vec!["a".into(), "b c.png".into()]));
+        assert_eq!(
+            decode_path("/a/b%20c.png?x=1"),
+            Ok(vec!["a".into(), "b c.png".into()])
+        );
         for bad in [
             "/../x",
             "/%2e%2e/x",
@@ -250,7 +251,10 @@ mod tests {
         assert_eq!(req("GET / HTTP/2\r\n\r\n"), Err(Refused::Bad));
         assert_eq!(req("GET  / HTTP/1.1\r\n\r\n"), Err(Refused::Bad));
         assert_eq!(req("GET / HTTP/1.1\r\n"), Err(Refused::Gone));
-        let long = format!("GET / HTTP/1.1\r\nX: {}\r\n\r\n", "a".repeat(MAX_HEAD_BYTES));
+        let long = format!(
+            "GET / HTTP/1.1\r\nX: {}\r\n\r\n",
+            "a".repeat(MAX_HEAD_BYTES)
+        );
         assert_eq!(req(&long), Err(Refused::TooLarge));
     }
 

@@ -243,7 +243,14 @@ impl Server {
             ["events"] => return self.events(stream, head),
             [] | ["index.html"] => {
                 let page = super::index_html(&self.title, true);
-                return http::respond(stream, "200 OK", http::content_type("x.html"), &page, head, "");
+                return http::respond(
+                    stream,
+                    "200 OK",
+                    http::content_type("x.html"),
+                    &page,
+                    head,
+                    "",
+                );
             }
             ["sdfc.js"] => {
                 let js = super::DRIVER_JS.as_bytes();

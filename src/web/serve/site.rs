@@ -96,14 +96,13 @@ pub fn build(source: &Source) -> Result<Built, Failed> {
     }
     let mut compiled = driver::compile_shape(&analysis, source.shape.as_deref(), &source.options)
         .map_err(|e| match e {
-            CompileError::Scene(d) => failed(&d, ""),
-            CompileError::Usage(m) => plain(format!("error: {m}\n")),
-            CompileError::Internal {
-                diagnostic, naga, ..
-            } => failed(&[*diagnostic], &format!("{naga}\n")),
-        })?;
-    compiled.module.manifest.scene =
-        crate::gpu::scene_values(&analysis, source.shape.as_deref());
+        CompileError::Scene(d) => failed(&d, ""),
+        CompileError::Usage(m) => plain(format!("error: {m}\n")),
+        CompileError::Internal {
+            diagnostic, naga, ..
+        } => failed(&[*diagnostic], &format!("{naga}\n")),
+    })?;
+    compiled.module.manifest.scene = crate::gpu::scene_values(&analysis, source.shape.as_deref());
     let decoded = Textures::load(&analysis.program).map_err(|e| Failed {
         text: format!("error: {e}\n"),
         diagnostics: Vec::new(),
@@ -145,6 +144,9 @@ fn read_limited(path: &Path, limit: usize) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// A good build's files by path, shared with the connections that serve them.
+pub type Files = Arc<HashMap<String, Vec<u8>>>;
+
 /// The state the server shares between the builder and the connections.
 #[derive(Debug, Default)]
 pub struct State {
@@ -153,7 +155,7 @@ pub struct State {
     /// The number of good builds so far (the page's `sdfcGeneration`).
     pub generation: u64,
     /// The last good build's files, if any.
-    pub files: Option<Arc<HashMap<String, Vec<u8>>>>,
+    pub files: Option<Files>,
     /// The last good build's warnings.
     pub warnings: String,
     /// The file as it is, while it does not build.
@@ -243,7 +245,7 @@ impl Shared {
     }
 
     /// The last good build's files and its generation.
-    pub fn files(&self) -> (u64, Option<Arc<HashMap<String, Vec<u8>>>>) {
+    pub fn files(&self) -> (u64, Option<Files>) {
         let state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         (state.generation, state.files.clone())
     }

@@ -398,6 +398,9 @@ fn serve_answers_only_for_the_page_and_the_scene_folder() {
     // The event stream starts with the state: the first good build.
     let mut events = std::net::TcpStream::connect(&served.addr).unwrap();
     write!(events, "GET /events HTTP/1.1\r\nHost: {host}\r\n\r\n").unwrap();
+    events
+        .set_read_timeout(Some(std::time::Duration::from_secs(20)))
+        .unwrap();
     let mut reader = BufReader::new(events);
     let mut stream = String::new();
     while !stream.contains("\ndata: ") {
@@ -409,6 +412,23 @@ fn serve_answers_only_for_the_page_and_the_scene_folder() {
             && stream.contains("event: scene\ndata: {\"generation\":1,"),
         "{stream}"
     );
+    // A change to the texture the scene reads is a new build, told to the stream.
+    let bricks = site.join("textures/bricks.png");
+    let mut image = image::open(&bricks).unwrap().to_rgba8();
+    image::imageops::invert(&mut image);
+    let tmp = site.join("textures/new.png");
+    image.save(&tmp).unwrap();
+    std::fs::rename(&tmp, &bricks).unwrap();
+    let mut more = String::new();
+    let t = std::time::Instant::now();
+    while !more.contains("event: scene\ndata: {\"generation\":2,") {
+        let n = reader.read_line(&mut more).unwrap_or(0);
+        let late = t.elapsed().as_secs() > 30;
+        assert!(
+            n > 0 && !late,
+            "no new build after the texture changed: {more}"
+        );
+    }
 }
 
 #[test]

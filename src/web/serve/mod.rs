@@ -120,7 +120,11 @@ pub fn run(options: Options) -> Result<(), ServeError> {
     };
     eprintln!("serving {} at http://{shown}/ (Ctrl-C stops)", server.title);
     for stream in listener.incoming() {
-        let Ok(stream) = stream else { continue };
+        let Ok(stream) = stream else {
+            // Out of file descriptors, say: wait a little rather than spin.
+            std::thread::sleep(Duration::from_millis(50));
+            continue;
+        };
         if server.connections.fetch_add(1, Ordering::SeqCst) >= MAX_CONNECTIONS {
             server.connections.fetch_sub(1, Ordering::SeqCst);
             let mut stream = stream;

@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => cli::eval::run(args),
         Command::Compile(args) => cli::compile::run(args),
         Command::ExportWeb(args) => cli::export_web::run(args),
+        Command::Serve(args) => cli::serve::run(args),
         Command::Render(args) => cli::render::run(args),
         Command::View(args) => cli::view::run(args),
         Command::Bake(args) => cli::bake::run(args),

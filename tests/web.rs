@@ -248,3 +248,324 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         );
     }
 }
+
+/// `sdfc serve` running on a scene, on a free port of 127.0.0.1; killed when dropped.
+struct Served {
+    child: std::process::Child,
+    /// `127.0.0.1:PORT`.
+    addr: String,
+    /// Its standard error after the line that says where (drained by a thread).
+    log: std::sync::Arc<std::sync::Mutex<String>>,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Served {
+    fn start(scene: &Path) -> Served {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sdfc"))
+            .args(["serve", scene.to_str().unwrap(), "--port", "0"])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut reader = BufReader::new(child.stderr.take().unwrap());
+        let mut said = String::new();
+        let addr = loop {
+            let mut line = String::new();
+            if reader.read_line(&mut line).unwrap_or(0) == 0 {
+                let _ = child.kill();
+                panic!("sdfc serve ended before serving:\n{said}");
+            }
+            said.push_str(&line);
+            if let Some(at) = line.strip_prefix("serving ") {
+                let url = at.split(" at http://").nth(1).expect("a URL");
+                break url.split('/').next().unwrap().to_string();
+            }
+        };
+        let log = std::sync::Arc::new(std::sync::Mutex::new(said));
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            while reader.read_line(&mut line).unwrap_or(0) > 0 {
+                sink.lock().unwrap().push_str(&line);
+                line.clear();
+            }
+        });
+        Served { child, addr, log }
+    }
+
+    /// Sends `request` as it is; the status and the body.
+    fn raw(&self, request: &str) -> (u16, Vec<u8>) {
+        use std::io::Read;
+        let mut s = std::net::TcpStream::connect(&self.addr).unwrap();
+        s.write_all(request.as_bytes()).unwrap();
+        let mut out = Vec::new();
+        let _ = s.read_to_end(&mut out);
+        let end = out
+            .windows(4)
+            .position(|w| w == b"\r\n\r\n")
+            .unwrap_or_else(|| panic!("no head in {:?}", String::from_utf8_lossy(&out)));
+        let status = String::from_utf8_lossy(&out[9..12]).parse().unwrap();
+        (status, out[end + 4..].to_vec())
+    }
+
+    fn get(&self, path: &str) -> (u16, Vec<u8>) {
+        let host = &self.addr;
+        self.raw(&format!("GET {path} HTTP/1.1\r\nHost: {host}\r\n\r\n"))
+    }
+}
+
+/// A folder with `capsule.sdf` and its texture: a scene to serve or render.
+fn capsule_site(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir.join("textures")).unwrap();
+    std::fs::copy(
+        "examples/textures/bricks.png",
+        dir.join("textures/bricks.png"),
+    )
+    .unwrap();
+    let scene = dir.join("capsule.sdf");
+    std::fs::copy("examples/capsule.sdf", &scene).unwrap();
+    scene
+}
+
+#[test]
+fn serve_answers_only_for_the_page_and_the_scene_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let site = dir.path().join("site");
+    let scene = capsule_site(&site);
+    let secret = dir.path().join("secret.txt");
+    std::fs::write(&secret, "outside").unwrap();
+    std::os::unix::fs::symlink("../secret.txt", site.join("link.txt")).unwrap();
+    std::os::unix::fs::symlink("..", site.join("up")).unwrap();
+    std::fs::write(site.join(".hidden"), "hidden").unwrap();
+    let served = Served::start(&scene);
+    // The page, its files from memory, and the scene's folder.
+    let (code, page) = served.get("/");
+    assert_eq!(code, 200);
+    assert!(String::from_utf8_lossy(&page).contains("const live = true;"));
+    let (code, wgsl) = served.get("/scene.wgsl");
+    assert_eq!(code, 200);
+    assert!(String::from_utf8_lossy(&wgsl).contains("fn fs_main"));
+    assert_eq!(served.get("/gen/1/scene.wgsl"), (200, wgsl));
+    assert_eq!(served.get("/gen/2/scene.wgsl").0, 410);
+    assert_eq!(served.get("/textures/0/0.png").0, 200);
+    let own = std::fs::read(&scene).unwrap();
+    assert_eq!(served.get("/capsule.sdf"), (200, own));
+    let png = std::fs::read(site.join("textures/bricks.png")).unwrap();
+    assert_eq!(served.get("/textures/bricks.png"), (200, png));
+    // Out of the folder, however written, and a missing file: the same 404.
+    let missing = served.get("/missing.txt");
+    assert_eq!(missing.0, 404);
+    let absolute = format!("/{}", secret.display());
+    for path in [
+        "/../secret.txt",
+        "/%2e%2e/secret.txt",
+        "/%2E%2E%2Fsecret.txt",
+        "/textures/%2e%2e/%2e%2e/secret.txt",
+        "/link.txt",
+        "/up/secret.txt",
+        "/.hidden",
+        absolute.as_str(),
+        &format!("/{}", secret.display().to_string().replace('/', "%2F")),
+    ] {
+        assert_eq!(served.get(path), missing, "{path}");
+    }
+    // GET and HEAD only; a bounded head; loopback names only.
+    let host = served.addr.clone();
+    let (code, body) = served.raw(&format!(
+        "HEAD /scene.wgsl HTTP/1.1\r\nHost: {host}\r\n\r\n"
+    ));
+    assert_eq!((code, body.len()), (200, 0));
+    for method in ["POST", "PUT", "DELETE"] {
+        let r = served.raw(&format!("{method} / HTTP/1.1\r\nHost: {host}\r\n\r\n"));
+        assert_eq!(r.0, 405, "{method}");
+    }
+    let big = "x".repeat(16 << 10);
+    let r = served.raw(&format!(
+        "GET / HTTP/1.1\r\nHost: {host}\r\nX: {big}\r\n\r\n"
+    ));
+    assert_eq!(r.0, 431);
+    assert_eq!(
+        served.raw("GET / HTTP/1.1\r\nHost: example.com\r\n\r\n").0,
+        421
+    );
+    // The event stream starts with the state: the first good build.
+    let mut events = std::net::TcpStream::connect(&served.addr).unwrap();
+    write!(events, "GET /events HTTP/1.1\r\nHost: {host}\r\n\r\n").unwrap();
+    events
+        .set_read_timeout(Some(std::time::Duration::from_secs(20)))
+        .unwrap();
+    let mut reader = BufReader::new(events);
+    let mut stream = String::new();
+    while !stream.contains("\ndata: ") {
+        assert!(reader.read_line(&mut stream).unwrap() > 0, "{stream}");
+    }
+    reader.read_line(&mut stream).unwrap();
+    assert!(
+        stream.contains("text/event-stream")
+            && stream.contains("event: scene\ndata: {\"generation\":1,"),
+        "{stream}"
+    );
+    // A change to the texture the scene reads is a new build, told to the stream.
+    let bricks = site.join("textures/bricks.png");
+    let mut image = image::open(&bricks).unwrap().to_rgba8();
+    image::imageops::invert(&mut image);
+    let tmp = site.join("textures/new.png");
+    image.save(&tmp).unwrap();
+    std::fs::rename(&tmp, &bricks).unwrap();
+    let mut more = String::new();
+    let t = std::time::Instant::now();
+    while !more.contains("event: scene\ndata: {\"generation\":2,") {
+        let n = reader.read_line(&mut more).unwrap_or(0);
+        let late = t.elapsed().as_secs() > 30;
+        assert!(
+            n > 0 && !late,
+            "no new build after the texture changed: {more}"
+        );
+    }
+}
+
+#[test]
+fn serve_says_when_the_port_is_taken() {
+    let taken = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    let (code, _, err) = common::sdfc(&["serve", "examples/sphere.sdf", "--port", &port]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot listen on 127.0.0.1:"), "{err}");
+    let (code, _, err) = common::sdfc(&["serve", "examples/no_such.sdf"]);
+    assert_eq!(code, 2, "{err}");
+}
+
+/// Writes `text` over `path` the way editors do: a new file renamed over the old.
+fn save(path: &Path, text: &str) {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+/// `sdfc render` of `text` (beside a copy of the capsule's texture) at `w`×`h`.
+fn reference(dir: &Path, text: &str, (w, h): (u32, u32)) -> Vec<u8> {
+    let scene = capsule_site(dir);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("ref.png");
+    let size = format!("{w}x{h}");
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--walk",
+        "loop",
+        "--size",
+        &size,
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let (code, _, err) = common::sdfc(&args);
+    assert_eq!(code, 0, "{err}");
+    image::open(&out).unwrap().to_rgba8().into_raw()
+}
+
+#[test]
+fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
+    if !tools_present("sdfc serve in a browser") {
+        return;
+    }
+    let (w, h) = (160u32, 90u32);
+    let dir = tempfile::tempdir().unwrap();
+    let scene = capsule_site(&dir.path().join("site"));
+    let original = std::fs::read_to_string(&scene).unwrap();
+    let edited = original.replace("let radius = 0.5;", "let radius = 0.8;");
+    let broken = edited.replace("let radius = 0.8;", "let radius = ;");
+    assert!(edited != original && broken != edited);
+    let refs = [
+        reference(&dir.path().join("ref0"), &original, (w, h)),
+        reference(&dir.path().join("ref1"), &edited, (w, h)),
+    ];
+    // The edit changes the picture by more than twice the tolerance below.
+    let (mean, _) = common::image_difference(&refs[0], &refs[1]);
+    assert!(mean > 3.0, "the edit changes little: mean {mean}");
+    let served = Served::start(&scene);
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let t = std::time::Instant::now();
+    let mut node = Command::new("node")
+        .arg(tool().join("page.mjs"))
+        .arg("live")
+        .arg(format!("http://{}/index.html?size={w}x{h}", served.addr))
+        .arg(&frames)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut to_page = node.stdin.take().unwrap();
+    let mut from_page = BufReader::new(node.stdout.take().unwrap());
+    let mut next = |k: usize| -> (serde_json::Value, Vec<u8>) {
+        let mut line = String::new();
+        from_page.read_line(&mut line).unwrap();
+        let report: serde_json::Value = serde_json::from_str(&line)
+            .unwrap_or_else(|e| panic!("{e}: {line:?}\nserver: {}", served.log.lock().unwrap()));
+        assert!(report["error"].is_null(), "{report}");
+        eprintln!("serve: report {k} after {:.1?}", t.elapsed());
+        let px = std::fs::read(frames.join(format!("{k}.rgba"))).unwrap();
+        assert_eq!(px.len(), (4 * w * h) as usize);
+        (report, px)
+    };
+    let close = |px: &[u8], reference: &[u8], what: &str| {
+        let (mean, share) = common::image_difference(reference, px);
+        eprintln!(
+            "serve: {what} against sdfc render: mean {mean:.3}/255, share over 16 {share:.4}"
+        );
+        assert!(
+            mean <= 1.5 && share <= 0.005,
+            "{what}: mean {mean}, share {share}"
+        );
+    };
+    // The first build, read from the canvas itself.
+    let (first, px0) = next(0);
+    assert_eq!(first["generation"], 1, "{first}");
+    assert_eq!(
+        first["messages"],
+        serde_json::json!([]),
+        "Tint said something"
+    );
+    close(&px0, &refs[0], "the first build");
+    // An edit reaches the page: a new generation, the edited picture.
+    save(&scene, &edited);
+    writeln!(to_page, "window.sdfcGeneration > 1").unwrap();
+    let (second, px1) = next(1);
+    assert_eq!(second["generation"], 2, "{second}");
+    assert!(second["overlay"].is_null(), "{second}");
+    close(&px1, &refs[1], "the edited build");
+    // A broken edit: its diagnostics on the page, the last good picture kept.
+    save(&scene, &broken);
+    writeln!(to_page, "window.sdfcDiagnostics").unwrap();
+    let (third, px2) = next(2);
+    assert_eq!(third["generation"], 2, "{third}");
+    assert_eq!(
+        third["diagnostics"]["diagnostics"][0]["code"], "E0010",
+        "{third}"
+    );
+    assert_eq!(
+        third["diagnostics"]["diagnostics"][0]["start"]["line"], 3,
+        "{third}"
+    );
+    let overlay = third["overlay"].as_str().unwrap_or_default();
+    assert!(
+        overlay.contains("error[E0010]: expected an expression")
+            && overlay.contains("let radius = ;"),
+        "{third}"
+    );
+    assert!(px2 == px1, "the picture changed after a broken edit");
+    drop(to_page);
+    assert!(node.wait().unwrap().success());
+    let log = served.log.lock().unwrap().clone();
+    assert!(
+        log.contains("not rebuilt; the page keeps generation 2"),
+        "{log}"
+    );
+}

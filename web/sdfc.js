@@ -183,13 +183,19 @@ export function lookAt(globals, eye, target) {
 }
 
 /// Orbit controls on `canvas`: drag to turn around the centre of the shape's bounds,
-/// wheel to move nearer or farther; `changed()` is called after each move.
+/// wheel to move nearer or farther; `changed()` is called after each move. Returns
+/// `reset(bounds)`, which takes the camera now in `globals` and new bounds.
 export function orbit(canvas, globals, bounds, changed) {
-  const target = scale(bounds[0].map((x, i) => x + bounds[1][i]), 0.5);
-  let offset = sub(globals[0].slice(0, 3), target);
-  let radius = Math.hypot(...offset);
-  let yaw = Math.atan2(offset[0], offset[2]);
-  let pitch = Math.asin(Math.max(-1, Math.min(1, offset[1] / radius)));
+  let target, radius, yaw, pitch;
+  // Takes the camera in `globals` and the centre of `bounds` as the orbit's.
+  const reset = (bounds) => {
+    target = scale(bounds[0].map((x, i) => x + bounds[1][i]), 0.5);
+    const offset = sub(globals[0].slice(0, 3), target);
+    radius = Math.hypot(...offset);
+    yaw = Math.atan2(offset[0], offset[2]);
+    pitch = Math.asin(Math.max(-1, Math.min(1, offset[1] / radius)));
+  };
+  reset(bounds);
   const place = () => {
     const dir = [Math.cos(pitch) * Math.sin(yaw), Math.sin(pitch), Math.cos(pitch) * Math.cos(yaw)];
     lookAt(globals, target.map((x, i) => x + dir[i] * radius), target);
@@ -213,35 +219,95 @@ export function orbit(canvas, globals, bounds, changed) {
     radius *= Math.exp(e.deltaY * 0.001);
     place();
   }, { passive: false });
+  return reset;
 }
 
-/// The page's whole program: loads the scene beside the page and shows it in `canvas`
-/// at the scene's size (or `size`, [width, height]), with orbit controls. Resolves to
-/// the scene and its globals.
-export async function show(canvas, base = document.baseURI, size = null) {
-  if (!navigator.gpu) throw new Error("this browser has no WebGPU");
-  const adapter = await navigator.gpu.requestAdapter();
-  if (!adapter) throw new Error("no WebGPU adapter");
-  const device = await adapter.requestDevice();
-  device.addEventListener("uncapturederror", (e) => console.error(`WebGPU: ${e.error.message}`));
-  device.lost.then((info) => console.error(`WebGPU device lost: ${info.message}`));
-  const { wgsl, manifest, textures } = await load(base);
-  const globals = manifest.scene.globals.map((v) => [...v]);
-  if (size) [globals[7][0], globals[7][1]] = size;
-  canvas.width = globals[7][0];
-  canvas.height = globals[7][1];
-  const context = canvas.getContext("webgpu");
-  const format = navigator.gpu.getPreferredCanvasFormat();
-  const srgb = `${format}-srgb`;
-  context.configure({ device, format, viewFormats: [srgb], alphaMode: "opaque" });
-  const scene = new SdfcScene(device, wgsl, manifest, textures, srgb);
-  const info = await scene.module.getCompilationInfo();
-  const frame = () => {
+/// A scene shown in a canvas with orbit controls, whose scene can be swapped for a newer
+/// build (`sdfc serve`) keeping the camera once the user has moved it.
+export class SdfcView {
+  /// Opens a WebGPU device and configures `canvas`; `size` ([width, height]) overrides
+  /// the scene's size.
+  static async open(canvas, size = null) {
+    if (!navigator.gpu) throw new Error("this browser has no WebGPU");
+    const adapter = await navigator.gpu.requestAdapter();
+    if (!adapter) throw new Error("no WebGPU adapter");
+    const device = await adapter.requestDevice();
+    device.addEventListener("uncapturederror", (e) => console.error(`WebGPU: ${e.error.message}`));
+    device.lost.then((info) => console.error(`WebGPU device lost: ${info.message}`));
+    return new SdfcView(canvas, adapter, device, size);
+  }
+
+  constructor(canvas, adapter, device, size) {
+    Object.assign(this, { canvas, adapter, device, size });
+    this.context = canvas.getContext("webgpu");
+    this.format = navigator.gpu.getPreferredCanvasFormat();
+    this.srgb = `${this.format}-srgb`;
+    // COPY_SRC: the canvas's own texture can be read back in the frame that draws it.
+    this.context.configure({
+      device,
+      format: this.format,
+      viewFormats: [this.srgb],
+      alphaMode: "opaque",
+      usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+    });
+    this.scene = null;
+    this.globals = null;
+    this.moved = false;
+    this.messages = [];
+  }
+
+  /// Builds a scene from `load`'s data and, when its module compiles and its pipeline
+  /// builds, shows it instead of the current one (keeping the camera once moved) and
+  /// draws. Resolves to { ok, messages }: on failure the current scene stays.
+  async swap({ wgsl, manifest, textures }) {
+    this.device.pushErrorScope("validation");
+    let scene = null;
+    let thrown = null;
+    try {
+      scene = new SdfcScene(this.device, wgsl, manifest, textures, this.srgb);
+    } catch (e) {
+      thrown = e;
+    }
+    const error = await this.device.popErrorScope();
+    const messages = scene ? (await scene.module.getCompilationInfo()).messages : [];
+    const problem = thrown || error ||
+      messages.find((m) => m.type === "error") && new Error("the module did not compile");
+    if (problem) {
+      return { ok: false, messages: [...messages, { type: "error", message: String(problem.message || problem) }] };
+    }
+    const fresh = manifest.scene.globals.map((v) => [...v]);
+    if (this.size) [fresh[7][0], fresh[7][1]] = this.size;
+    [this.canvas.width, this.canvas.height] = [fresh[7][0], fresh[7][1]];
+    this.scene = scene;
+    this.messages = messages;
+    if (!this.globals) {
+      this.globals = fresh;
+      this.reorbit = orbit(this.canvas, this.globals, manifest.scene.bounds, () => {
+        this.moved = true;
+        requestAnimationFrame(() => this.frame());
+      });
+    } else {
+      // In place: the orbit controls hold this array. The camera rows stay once moved.
+      fresh.forEach((row, i) => {
+        if (!(this.moved && i < 4)) this.globals[i] = row;
+      });
+      if (!this.moved) this.reorbit(manifest.scene.bounds);
+    }
+    this.frame();
+    return { ok: true, messages };
+  }
+
+  /// Draws the scene into the canvas. With `read`, also copies the canvas's texture
+  /// in the same frame and resolves to its pixels (RGBA, rows top first).
+  frame(read = false) {
+    const { device, scene, globals } = this;
+    if (!scene) return Promise.resolve(null);
     scene.setGlobals(globals);
+    const texture = this.context.getCurrentTexture();
     const encoder = device.createCommandEncoder();
     const pass = encoder.beginRenderPass({
       colorAttachments: [{
-        view: context.getCurrentTexture().createView({ format: srgb }),
+        view: texture.createView({ format: this.srgb }),
         loadOp: "clear",
         storeOp: "store",
         clearValue: [0, 0, 0, 1],
@@ -249,22 +315,48 @@ export async function show(canvas, base = document.baseURI, size = null) {
     });
     scene.draw(pass);
     pass.end();
+    let buffer = null;
+    const [w, h] = [texture.width, texture.height];
+    const row = Math.ceil((4 * w) / 256) * 256;
+    if (read) {
+      buffer = device.createBuffer({ size: row * h, usage: GPUBufferUsage.COPY_DST | GPUBufferUsage.MAP_READ });
+      encoder.copyTextureToBuffer({ texture }, { buffer, bytesPerRow: row }, [w, h]);
+    }
     device.queue.submit([encoder.finish()]);
-  };
-  frame();
-  orbit(canvas, globals, manifest.scene.bounds, () => requestAnimationFrame(frame));
+    if (!read) return Promise.resolve(null);
+    const bgra = texture.format.startsWith("bgra");
+    return buffer.mapAsync(GPUMapMode.READ).then(() => {
+      const data = new Uint8Array(buffer.getMappedRange());
+      const out = new Uint8Array(4 * w * h);
+      for (let y = 0; y < h; y++) out.set(data.subarray(y * row, y * row + 4 * w), 4 * w * y);
+      if (bgra) for (let i = 0; i < out.length; i += 4) [out[i], out[i + 2]] = [out[i + 2], out[i]];
+      buffer.unmap();
+      return out;
+    });
+  }
+}
+
+/// The page's whole program: loads the scene beside the page and shows it in `canvas`
+/// at the scene's size (or `size`, [width, height]), with orbit controls. Resolves to
+/// the view (its `device`, `scene`, `globals`, and the compiler's `messages`).
+export async function show(canvas, base = document.baseURI, size = null) {
+  const view = await SdfcView.open(canvas, size);
+  const shown = await view.swap(await load(base));
+  if (!shown.ok) throw new Error(shown.messages.map((m) => `${m.type}: ${m.message}`).join("\n"));
   // A scene that reads `time` animates (`?still` keeps its first frame, for tests).
-  const animated = manifest.params && manifest.params.fields.some((f) => f.name === "time");
-  if (animated && !new URL(location.href).searchParams.has("still")) {
+  if (!new URL(location.href).searchParams.has("still")) {
     const start = performance.now();
     const tick = (now) => {
-      scene.setParams({ time: (now - start) / 1000 });
-      frame();
+      const params = view.scene && view.scene.manifest.params;
+      if (params && params.fields.some((f) => f.name === "time")) {
+        view.scene.setParams({ time: (now - start) / 1000 });
+        view.frame();
+      }
       requestAnimationFrame(tick);
     };
     requestAnimationFrame(tick);
   }
-  return { adapter, device, scene, globals, messages: info.messages };
+  return view;
 }
 
 /// Renders the scene's first frame into an rgba8unorm-srgb texture and reads it back:

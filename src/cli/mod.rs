@@ -17,6 +17,7 @@ pub mod render_mesh;
 pub mod report;
 pub mod scale;
 pub mod seeds;
+pub mod serve;
 pub mod sweep;
 pub mod view;
 
@@ -140,6 +141,16 @@ pub enum Command {
     /// static file server and open it in a WebGPU browser: the page shows what
     /// `sdfc render` shows, with orbit controls.
     ExportWeb(export_web::ExportWebArgs),
+    /// Serve a scene's web page (the one export-web writes) on 127.0.0.1 and rebuild it
+    /// when the scene or its textures change.
+    ///
+    /// The page reloads the new build keeping its camera; while the file has errors it
+    /// shows their diagnostics over the last good picture. Besides the page, only files
+    /// of the scene's own folder are served, with the same confinement as textures
+    /// (no `..`, no hidden names, no symbolic link out). Prints `serving NAME at URL`
+    /// on standard error; Ctrl-C stops. Exit status: 2 when the scene cannot be read or
+    /// the address cannot be listened on (the port is in use).
+    Serve(serve::ServeArgs),
     /// Render a scene headless to a PNG through wgpu (Vulkan, GL, Metal or DX12).
     ///
     /// Camera, size and light come from the scene's `render` item; the flags override

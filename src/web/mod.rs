@@ -3,7 +3,11 @@
 //! manifest and the textures' mip levels, and draws into a canvas with orbit
 //! controls), `scene.wgsl`, `manifest.json` (with the scene's own values), `web.json`
 //! (where each texture's levels are) and `textures/I/L.png`, every mip level of
-//! texture I as the runtime makes it. Any static file server can serve the folder.
+//! texture I as the runtime makes it. Any static file server can serve the folder;
+//! [`serve`] (`sdfc serve`) serves it from memory and rebuilds it on change.
+
+#[cfg(feature = "serve")]
+pub mod serve;
 
 use crate::codegen::Module;
 use crate::ir::texture::Textures;
@@ -13,24 +17,30 @@ use std::path::{Path, PathBuf};
 pub const DRIVER_JS: &str = include_str!("../../web/sdfc.js");
 const INDEX_HTML: &str = include_str!("../../web/index.html");
 
+/// The page, titled `title`. A `live` page (`sdfc serve`) follows the server's
+/// `/events` instead of loading the files beside it once.
+pub fn index_html(title: &str, live: bool) -> Vec<u8> {
+    let escaped = title
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;");
+    INDEX_HTML
+        .replace("{{TITLE}}", &escaped)
+        .replace("{{LIVE}}", if live { "true" } else { "false" })
+        .into_bytes()
+}
+
 /// The files of the page, as (path relative to the folder, bytes).
 pub fn files(
     title: &str,
     module: &Module,
     textures: &Textures,
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
-    let escaped = title
-        .replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;");
     let manifest =
         serde_json::to_vec_pretty(&module.manifest).map_err(|e| format!("the manifest: {e}"))?;
     let mut out = vec![
-        (
-            PathBuf::from("index.html"),
-            INDEX_HTML.replace("{{TITLE}}", &escaped).into_bytes(),
-        ),
+        (PathBuf::from("index.html"), index_html(title, false)),
         (PathBuf::from("sdfc.js"), DRIVER_JS.as_bytes().to_vec()),
         (PathBuf::from("scene.wgsl"), module.wgsl.as_bytes().to_vec()),
         (PathBuf::from("manifest.json"), manifest),

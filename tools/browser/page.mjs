@@ -4,7 +4,14 @@
 //   node tools/browser/page.mjs http://127.0.0.1:PORT/index.html?size=WxH OUT.rgba
 //     an exported scene (`sdfc export-web`): the WGSL compiler's messages, the page's
 //     error if any, the frame's size; its first frame's pixels (RGBA, rows top first,
-//     rendered offscreen by the page's own pipeline) go to OUT.rgba.
+//     read from the canvas's own texture in the frame that draws it) go to OUT.rgba.
+//   node tools/browser/page.mjs live http://127.0.0.1:PORT/?size=WxH DIR
+//     a page served by `sdfc serve`: waits for its first build, then for each line on
+//     standard input, a JavaScript condition on the page (`window.sdfcGeneration > 1`,
+//     `window.sdfcDiagnostics`), waits until it holds; after the first build and after
+//     each condition it writes the canvas's pixels to DIR/K.rgba (K = 0, 1, …) and
+//     prints a JSON line: generation, diagnostics, the overlay's and the status's text,
+//     the compiler's messages, the console so far. Ends at the end of its input.
 //   node tools/browser/page.mjs http://127.0.0.1:PORT/check.html
 //     the module check (check.js): every listed module compiled by Tint and every
 //     pipeline built from the manifest's users under default limits.
@@ -14,8 +21,10 @@
 import puppeteer from "puppeteer-core";
 
 import { writeFileSync } from "node:fs";
+import { createInterface } from "node:readline";
 
-const [url, rawOut] = process.argv.slice(2);
+const live = process.argv[2] === "live";
+const [url, rawOut] = process.argv.slice(live ? 3 : 2);
 const browser = await puppeteer.launch({
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
   headless: "new",
@@ -43,12 +52,18 @@ try {
   page.on("console", (m) => console.push(`${m.type()}: ${m.text()}`));
   page.on("pageerror", (e) => console.push(`pageerror: ${e.message}`));
   await page.goto(url, { waitUntil: "load" });
-  await page.waitForFunction("window.sdfcReady || window.sdfcError", { timeout: 240000 });
-  if (url.includes("check.html")) {
-    out = await page.evaluate("window.sdfcCheck || { error: window.sdfcError }");
-    out.console = console;
+  if (live) {
+    // Each report is printed as it comes.
+    await follow(page, console);
+    out = { done: true };
   } else {
-    out = await scene(page, console);
+    await page.waitForFunction("window.sdfcReady || window.sdfcError", { timeout: 240000 });
+    if (url.includes("check.html")) {
+      out = await page.evaluate("window.sdfcCheck || { error: window.sdfcError }");
+      out.console = console;
+    } else {
+      out = await scene(page, console);
+    }
   }
 } finally {
   await browser.close();
@@ -63,7 +78,7 @@ async function scene(page, console) {
   let readError = null;
   if (!error) {
     try {
-      pixels = await page.evaluate("window.sdfcPixels(true)");
+      pixels = await page.evaluate("window.sdfcPixels(false)");
     } catch (e) {
       readError = String(e);
     }
@@ -73,4 +88,30 @@ async function scene(page, console) {
   );
   if (pixels && rawOut) writeFileSync(rawOut, Buffer.from(pixels, "base64"));
   return { error: error || readError, messages, console, size };
+}
+
+/// The live mode: a report after the first build and after each condition read from
+/// standard input.
+async function follow(page, console) {
+  const lines = createInterface({ input: process.stdin })[Symbol.asyncIterator]();
+  let condition = "window.sdfcGeneration > 0 || window.sdfcError";
+  for (let k = 0; ; k++) {
+    await page.waitForFunction(condition, { timeout: 240000 });
+    const error = await page.evaluate("window.sdfcError || null");
+    let pixels = null;
+    if (!error) pixels = await page.evaluate("window.sdfcPixels(false)");
+    if (pixels) writeFileSync(`${rawOut}/${k}.rgba`, Buffer.from(pixels, "base64"));
+    const report = await page.evaluate(`({
+      generation: window.sdfcGeneration,
+      diagnostics: window.sdfcDiagnostics,
+      overlay: document.getElementById("diagnostics").hidden ? null
+        : document.getElementById("diagnostics").textContent,
+      status: document.getElementById("status").textContent,
+      messages: window.sdfcMessages || [],
+    })`);
+    process.stdout.write(JSON.stringify({ ...report, error, console, pixels: !!pixels }) + "\n");
+    const next = await lines.next();
+    if (next.done) return;
+    condition = next.value;
+  }
 }

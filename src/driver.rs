@@ -252,12 +252,10 @@ fn lower_displaced(
         .map(|d| &d.value)
         .chain(program.render.as_ref().map(|r| &r.target))
         .any(|v| sema::displaced(v).is_some());
-    if !displaced {
-        return (ir::lower(program), Arc::new(ir::NoHeights), Vec::new());
-    }
-    let textures = match ir::texture::Textures::load(program) {
-        Ok(t) => t,
-        Err(why) => {
+    let textures = match displaced.then(|| ir::texture::Textures::load(program)) {
+        None => ir::texture::Textures::default(),
+        Some(Ok(t)) => t,
+        Some(Err(why)) => {
             let span = program.textures.first().map(|t| t.span).unwrap_or_default();
             let d = Diagnostic::error(
                 crate::codes::E_IMAGE_FORMAT,
@@ -269,7 +267,11 @@ fn lower_displaced(
         }
     };
     let (scene, errors) = ir::lower_with(program, &textures);
-    let heights = crate::reference::Env::shared(atlases, &textures);
+    let heights: Arc<dyn ir::Heights> = if displaced {
+        crate::reference::Env::shared(atlases, &textures)
+    } else {
+        Arc::new(ir::NoHeights)
+    };
     let steps = errors.steps.into_iter().map(|(span, why)| {
         Diagnostic::error(
             crate::codes::E_UNBOUNDED_STEP,

@@ -360,3 +360,64 @@ fn the_command_line_sets_parameters_and_refuses_bad_ones() {
     let (code, _, err) = common::sdfc(&["render", s, "--time", "-1", "-o", o]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// §5.1 under animation: the bar twists by `1.2 · sin(time)` while its atlas stays on
+/// the rest pose. At each frame the uv the GPU computes with the parameters' block
+/// equals the uv of the scene with that frame's rate written in.
+#[test]
+fn an_animated_twist_keeps_the_rest_pose_uv_at_every_frame() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let source = std::fs::read_to_string(root.join("animated_bar.sdf")).unwrap();
+    let options = sdfc::Options {
+        walk: sdfc::WalkForm::Loop,
+        ..Default::default()
+    };
+    let build = |src: &str, time: Option<f64>| {
+        let mut access = Access::new(Some(&root));
+        if let Some(t) = time {
+            access.set_param("time", &[t]);
+        }
+        let a = sdfc::driver::check_with(src, &access);
+        assert!(!a.has_errors(), "{:?}", a.diagnostics);
+        let m = sdfc::driver::compile(&a, &options).unwrap().module;
+        (a, m)
+    };
+    let mut wgsl = None;
+    for t in [0.0, 0.7, 2.0, 4.5] {
+        let (a, param) = build(&source, Some(t));
+        let rate = 1.2 * f64::sin(t);
+        let constant = source.replace("swing * sin(time)", &format!("({rate:?})"));
+        let (b, fixed) = build(&constant, None);
+        match &wgsl {
+            None => wgsl = Some(param.wgsl.clone()),
+            Some(w) => assert_eq!(w, &param.wgsl, "the WGSL changed with the time"),
+        }
+        // The surface points of this frame (hits of the constant scene's render),
+        // and the uv both modules compute there.
+        let mut view = View::new(b.program.render.as_ref(), &shape(&b));
+        (view.width, view.height) = (64, 64);
+        let frame = gpu::render(&gpu, &fixed, &view, ViewMode::Color, &root).unwrap();
+        let points: Vec<DVec3> = frame
+            .position
+            .iter()
+            .filter(|p| p[3] >= 0.0)
+            .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect();
+        let ua = gpu::eval_atlas(&gpu, &param, &points).unwrap();
+        let ub = gpu::eval_atlas(&gpu, &fixed, &points).unwrap();
+        let (mut compared, mut worst) = (0, 0.0f32);
+        for (x, y) in ua.iter().zip(&ub) {
+            if x.status == 0 && y.status == 0 {
+                compared += 1;
+                worst = worst
+                    .max((x.uv[0] - y.uv[0]).abs())
+                    .max((x.uv[1] - y.uv[1]).abs());
+            }
+        }
+        let _ = &a;
+        eprintln!("time {t}: {compared} points, worst uv difference {worst:e}");
+        assert!(compared > 150, "time {t}: only {compared} points compared");
+        assert!(worst <= 1e-5, "time {t}: the uv differ by {worst}");
+    }
+}

@@ -189,7 +189,7 @@ impl Checker<'_> {
         if d.iter().any(|x| *x < bounds.0 || *x > bounds.1) {
             self.error(
                 Diagnostic::error(
-                    codes::E_OUT_OF_RANGE,
+                    codes::E_PARAM_RANGE,
                     format!("the default of `{}` lies outside its range", name.name),
                     value.span,
                     format!("{} is not in {}", default.display(), show_range(bounds)),

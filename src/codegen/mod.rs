@@ -16,6 +16,7 @@ mod emit;
 mod field;
 mod group;
 pub mod inline_cost;
+mod literal;
 mod manifest;
 pub mod mesh;
 pub mod params;

@@ -108,7 +108,7 @@ pub fn expr(v: &crate::sema::Value) -> String {
     use crate::sema::math::{self, Math};
     use crate::sema::{FieldExpr, Value};
     use crate::syntax::ast::UnaryOp;
-    let lit = super::emit::lit;
+    let lit = super::literal::lit;
     let ty_of = |v: &Value| match v.components().map_or(1, <[f64]>::len) {
         1 => String::from("f32"),
         n => format!("vec{n}<f32>"),
@@ -179,7 +179,7 @@ pub fn slot(s: &crate::ir::dynamic::Slot, vec3: bool) -> String {
         e = format!("vec3<f32>({e})");
     }
     if s.scale != 1.0 {
-        e = format!("({e} * {})", super::emit::lit(s.scale));
+        e = format!("({e} * {})", super::literal::lit(s.scale));
     }
     e
 }

@@ -113,7 +113,9 @@ fn corners(args: &[Iv], f: impl Fn(&[f64]) -> f64) -> Iv {
 
 /// `sin` over an interval: the ends, and the extremes ±1 where a peak lies inside.
 fn sin(a: Iv) -> Iv {
-    if !(a.1 - a.0 < std::f64::consts::TAU) {
+    // A full period or more (NaN and infinite widths included).
+    let width = a.1 - a.0;
+    if width.is_nan() || width >= std::f64::consts::TAU {
         return (-1.0, 1.0);
     }
     let (mut lo, mut hi) = hull([a.0.sin(), a.1.sin()]);

@@ -201,6 +201,7 @@ impl Checker<'_> {
         if self.prog.params.is_empty() {
             self.prog.params.push(ParamDef::time());
         }
+        // `time` is the first entry: the ones declared so far are the rest.
         if self.prog.params.len() > MAX_PARAMS {
             self.error(Diagnostic::error(
                 codes::E_PARAM_RANGE,
@@ -392,8 +393,8 @@ impl Checker<'_> {
         }
         let (lo, _) = u.hull();
         let fails = match param.check {
-            Check::Positive => !(lo > 0.0),
-            Check::NonNegative => !(lo >= 0.0),
+            Check::Positive => lo.is_nan() || lo <= 0.0,
+            Check::NonNegative => lo.is_nan() || lo < 0.0,
             _ => false,
         };
         if fails {

@@ -1,5 +1,6 @@
 //! The command line's definition and the commands.
 
+pub mod animate;
 pub mod bake;
 pub mod bench;
 pub mod check;
@@ -366,6 +367,14 @@ pub struct RenderArgs {
     /// scene's `render` item (the scene it was baked from), to compare the two renders.
     #[arg(long, value_name = "SCENE")]
     pub camera_from: Option<PathBuf>,
+    /// Render an animation of SECONDS: one frame per step of `time` (from `--time`),
+    /// one pipeline, only the parameters' block changing. The output is an animated
+    /// GIF (.gif), an animated PNG (.png), or numbered frames (frame%04d.png).
+    #[arg(long, value_name = "SECONDS")]
+    pub animate: Option<f64>,
+    /// Frames per second of `--animate`.
+    #[arg(long, default_value_t = 24.0, value_name = "F")]
+    pub fps: f64,
 }
 
 /// The atlas layouts `sdfc bake` writes.

@@ -90,6 +90,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(g) => g,
         Err(code) => return code,
     };
+    if let Some(seconds) = args.animate {
+        if !args.aov.is_empty() || args.timings {
+            eprintln!("error: --animate writes colour frames only (no --aov, no --timings)");
+            return ExitCode::from(super::exit::USAGE);
+        }
+        return super::animate::run(&args, &gpu, module, &view, seconds);
+    }
     let frame = match gpu::render(
         &gpu,
         module,

@@ -8,6 +8,7 @@ pub mod actions;
 pub mod complete;
 mod completion;
 pub mod format;
+pub mod make_param;
 mod member;
 pub mod rename;
 pub mod seed_edit;

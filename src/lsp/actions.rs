@@ -85,6 +85,25 @@ pub(super) fn code_actions(
             }));
         }
     }
+    // "Make this number a parameter" on the number under the range.
+    if let Some(edits) = crate::ide::make_param::offered(&o.doc, span_of(o, p.range)) {
+        let edits = edits
+            .iter()
+            .map(|e| lsp::TextEdit {
+                range: to_range(&o.index, &o.doc.text, e.span),
+                new_text: e.text.clone(),
+            })
+            .collect();
+        actions.push(lsp::CodeActionOrCommand::CodeAction(lsp::CodeAction {
+            title: String::from(crate::ide::make_param::TITLE),
+            kind: Some(lsp::CodeActionKind::REFACTOR_EXTRACT),
+            edit: Some(lsp::WorkspaceEdit {
+                changes: Some(HashMap::from([(uri.clone(), edits)])),
+                ..Default::default()
+            }),
+            ..Default::default()
+        }));
+    }
     Ok(Some(actions))
 }
 

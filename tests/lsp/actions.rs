@@ -133,3 +133,46 @@ fn cancelled_requests_are_not_answered_with_results() {
     );
     stop(c, handle);
 }
+
+#[test]
+fn make_this_number_a_parameter() {
+    let (mut c, handle) = Client::start();
+    let text = "let ball = sphere(radius: 0.5); // the ball\nrender ball;\n";
+    c.notify(
+        "textDocument/didOpen",
+        json!({ "textDocument": { "uri": URI, "languageId": "sdf", "version": 1, "text": text } }),
+    );
+    assert_eq!(c.diagnostics()["diagnostics"], json!([]));
+    let at = json!({ "line": 0, "character": 27 });
+    let actions = c.request(
+        "textDocument/codeAction",
+        json!({ "textDocument": { "uri": URI }, "range": { "start": at, "end": at }, "context": { "diagnostics": [] } }),
+    );
+    let list = actions.as_array().unwrap();
+    let a = list
+        .iter()
+        .find(|a| a["title"] == "Make this number a parameter")
+        .unwrap_or_else(|| panic!("{actions}"));
+    assert_eq!(a["kind"], "refactor.extract");
+    assert_eq!(
+        a["edit"]["changes"][URI],
+        json!([
+            { "range": { "start": { "line": 0, "character": 0 }, "end": { "line": 0, "character": 0 } }, "newText": "param radius = 0.5 in [0.25, 1];\n" },
+            { "range": { "start": { "line": 0, "character": 26 }, "end": { "line": 0, "character": 29 } }, "newText": "radius" }
+        ])
+    );
+    // Applied, the scene checks clean and keeps its comment.
+    let edited = "param radius = 0.5 in [0.25, 1];\nlet ball = sphere(radius: radius); // the ball\nrender ball;\n";
+    c.notify("textDocument/didChange", json!({ "textDocument": { "uri": URI, "version": 2 }, "contentChanges": [{ "text": edited }] }));
+    let d = c.diagnostics();
+    assert_eq!(d["version"], 2);
+    assert_eq!(d["diagnostics"], json!([]));
+    // Hover on the parameter shows its range and default.
+    let hover = c.request(
+        "textDocument/hover",
+        json!({ "textDocument": { "uri": URI }, "position": { "line": 1, "character": 28 } }),
+    );
+    let shown = hover["contents"]["value"].as_str().unwrap_or_default();
+    assert!(shown.contains("param radius: float = 0.5 in [0.25, 1]"), "{hover}");
+    stop(c, handle);
+}

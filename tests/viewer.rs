@@ -608,3 +608,136 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
         "s0 = {p:?} moved up, still right of the centre"
     );
 }
+
+/// Sliders in a real window: `P` selects the parameter, a right-drag moves it (a new
+/// picture, no new pipeline), `W` writes it back as the default (the comment kept).
+const DRIVE_PARAMS: &str = r#"
+set -u
+"$SDFC" view "$SCENE" 2>"$LOG" &
+pid=$!
+count() { grep -c -- "$1" "$2" 2>/dev/null || true; }
+wait_until() {
+  for i in $(seq 1 300); do
+    c=$(count "$1" "$2")
+    [ "$c" -ge "$3" ] && return 0
+    sleep 0.1
+  done
+  echo "STEP FAILED: waiting for $3 x '$1' in $2" >&2; kill $pid; exit 1
+}
+wait_until '^loaded' "$LOG" 1
+win=$(xdotool search --sync --name 'sdfc view' | head -1)
+xdotool windowfocus --sync "$win"
+xdotool mousemove --window "$win" 60 60
+sleep 0.5
+echo "step: a screenshot before"
+xdotool key s
+wait_until 'saved' "$LOG" 1
+echo "step: P selects the parameter"
+xdotool key p
+wait_until 'selected; right-drag' "$LOG" 1
+echo "step: a right-drag moves it"
+xdotool mousedown 3; sleep 0.2
+for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 60; sleep 0.05; done
+sleep 0.2; xdotool mouseup 3
+wait_until 'moved, with no new pipeline' "$LOG" 1
+sleep 0.5
+echo "step: a screenshot after"
+xdotool key s
+wait_until 'saved' "$LOG" 2
+echo "step: W writes it back"
+xdotool key w
+wait_until "set the parameters' defaults" "$LOG" 1
+wait_until '^loaded' "$LOG" 2
+xdotool key Escape
+wait $pid
+echo "exit=$?"
+"#;
+
+#[test]
+fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
+    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let has = |tool: &str| {
+        std::process::Command::new(tool)
+            .arg("--help")
+            .output()
+            .is_ok()
+    };
+    if !has("xvfb-run") || !has("xdotool") {
+        if require {
+            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run or xdotool is missing");
+        }
+        eprintln!("SKIPPED: no xvfb-run or xdotool for the viewer's slider test");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("knob.sdf");
+    let log = dir.path().join("view.log");
+    let script = dir.path().join("drive.sh");
+    std::fs::write(
+        &scene,
+        "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n",
+    )
+    .unwrap();
+    std::fs::write(&script, DRIVE_PARAMS).unwrap();
+    let out = std::process::Command::new("timeout")
+        .args([
+            "120",
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            "bash",
+        ])
+        .arg(&script)
+        .env("SDFC", env!("CARGO_BIN_EXE_sdfc"))
+        .env("SCENE", &scene)
+        .env("LOG", &log)
+        .output()
+        .unwrap();
+    let steps = String::from_utf8_lossy(&out.stdout);
+    let errors = String::from_utf8_lossy(&out.stderr);
+    let viewer = std::fs::read_to_string(&log).unwrap_or_default();
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let context = format!("steps:\n{steps}\n{errors}\nviewer:\n{viewer}\nfile:\n{text}");
+    if viewer.contains("no GPU adapter") && !require {
+        eprintln!("SKIPPED: no adapter for the viewer's window:\n{context}");
+        return;
+    }
+    assert!(steps.contains("exit=0"), "{context}");
+    // The drag built no pipeline: one, for the first load.
+    let moved = viewer
+        .lines()
+        .find(|l| l.contains("moved, with no new pipeline"))
+        .unwrap();
+    assert!(moved.contains("(1 pipelines built)"), "{context}");
+    // The picture changed: the two screenshots differ.
+    let mut shots: Vec<std::path::PathBuf> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .collect();
+    shots.sort();
+    assert_eq!(shots.len(), 2, "{context}");
+    let (a, b) = (
+        image::open(&shots[0]).unwrap().to_rgba8(),
+        image::open(&shots[1]).unwrap().to_rgba8(),
+    );
+    let (mean, _) = common::image_difference(a.as_raw(), b.as_raw());
+    assert!(
+        mean > 2.0,
+        "the drag did not change the picture: mean {mean}/255\n{context}"
+    );
+    // Written back: the new default in range, everything else as it was.
+    let line = text.lines().nth(1).unwrap();
+    let value: f64 = line
+        .strip_prefix("param radius = ")
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{context}"));
+    assert!(value > 0.55 && value <= 1.0, "{value}\n{context}");
+    assert_eq!(
+        text.replacen(&format!("{value}"), "0.5", 1),
+        "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n",
+        "{context}"
+    );
+}

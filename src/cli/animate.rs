@@ -34,7 +34,11 @@ fn sink(output: &Path) -> Result<Sink, String> {
         }
         let width = digits.parse::<usize>().unwrap_or(1).clamp(1, 12);
         let after = &rest[digits.len() + 1..];
-        return Ok(Sink::Numbered(name[..at].to_string(), after.to_string(), width));
+        return Ok(Sink::Numbered(
+            name[..at].to_string(),
+            after.to_string(),
+            width,
+        ));
     }
     match output
         .extension()
@@ -53,7 +57,9 @@ fn sink(output: &Path) -> Result<Sink, String> {
 /// The frames' times: `count` of them, `1 / fps` apart from `start`.
 fn times(seconds: f64, fps: f64, start: f64) -> Result<Vec<f64>, String> {
     if !(seconds.is_finite() && seconds > 0.0) {
-        return Err(format!("--animate {seconds}: the length is a positive number of seconds"));
+        return Err(format!(
+            "--animate {seconds}: the length is a positive number of seconds"
+        ));
     }
     if !(fps.is_finite() && fps > 0.0 && fps <= 120.0) {
         return Err(format!("--fps {fps}: frames per second lie in (0, 120]"));
@@ -64,7 +70,9 @@ fn times(seconds: f64, fps: f64, start: f64) -> Result<Vec<f64>, String> {
             "{count} frames ({seconds} s at {fps} fps); an animation has at most {MAX_FRAMES}"
         ));
     }
-    Ok((0..count as usize).map(|i| start + i as f64 / fps).collect())
+    Ok((0..count as usize)
+        .map(|i| start + i as f64 / fps)
+        .collect())
 }
 
 /// Renders and writes the animation.
@@ -103,7 +111,10 @@ pub fn run(args: &RenderArgs, gpu: &Gpu, module: &Module, view: &View, seconds: 
     bar.set_message("frames");
     let mut frames: Vec<Frame> = Vec::with_capacity(times.len());
     for (i, t) in times.iter().enumerate() {
-        renderer.set_params(gpu, &layout.bytes(&|name| (name == "time").then(|| vec![*t])));
+        renderer.set_params(
+            gpu,
+            &layout.bytes(&|name| (name == "time").then(|| vec![*t])),
+        );
         let frame = match renderer.frames(gpu, view, args.view, 0, 1) {
             Ok((f, _)) => f,
             Err(e) => {
@@ -128,7 +139,12 @@ pub fn run(args: &RenderArgs, gpu: &Gpu, module: &Module, view: &View, seconds: 
         Sink::Gif => encode_gif(&frames, args.fps),
         Sink::Apng => encode_apng(&frames, args.fps),
         Sink::Numbered(..) => {
-            eprintln!("wrote {} frames ({:.2} s at {} fps)", times.len(), seconds, args.fps);
+            eprintln!(
+                "wrote {} frames ({:.2} s at {} fps)",
+                times.len(),
+                seconds,
+                args.fps
+            );
             return ExitCode::SUCCESS;
         }
     };
@@ -155,8 +171,11 @@ fn write_png(path: &Path, frame: &Frame) -> Result<(), String> {
     let img = image::RgbaImage::from_raw(frame.width, frame.height, frame.color.clone())
         .ok_or("frame size mismatch")?;
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(|e| e.to_string())?;
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| e.to_string())?;
     write_output(path, &bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
@@ -166,7 +185,8 @@ fn encode_gif(frames: &[Frame], fps: f64) -> Result<Vec<u8>, String> {
     let mut bytes = Vec::new();
     {
         let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(Repeat::Infinite).map_err(|e| e.to_string())?;
+        enc.set_repeat(Repeat::Infinite)
+            .map_err(|e| e.to_string())?;
         let delay = image::Delay::from_numer_denom_ms(1000, fps.round().max(1.0) as u32);
         for f in frames {
             let img = image::RgbaImage::from_raw(f.width, f.height, f.color.clone())
@@ -186,7 +206,8 @@ fn encode_apng(frames: &[Frame], fps: f64) -> Result<Vec<u8>, String> {
         let mut enc = png::Encoder::new(&mut bytes, first.width, first.height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
-        enc.set_animated(frames.len() as u32, 0).map_err(|e| e.to_string())?;
+        enc.set_animated(frames.len() as u32, 0)
+            .map_err(|e| e.to_string())?;
         let (num, den) = ((1000.0 / fps).round().clamp(1.0, 65535.0) as u16, 1000u16);
         enc.set_frame_delay(num, den).map_err(|e| e.to_string())?;
         let mut w = enc.write_header().map_err(|e| e.to_string())?;

@@ -17,7 +17,9 @@ pub const TITLE: &str = "Make this number a parameter";
 fn taken(doc: &Document, name: &str) -> bool {
     doc.analysis.program.lookup(name).is_some()
         || crate::sema::builtins::lookup(name).is_some()
-        || crate::sema::builtins::CONSTANTS.iter().any(|c| c.name == name)
+        || crate::sema::builtins::CONSTANTS
+            .iter()
+            .any(|c| c.name == name)
         || crate::syntax::lexer::KEYWORDS.contains(&name)
 }
 
@@ -40,16 +42,16 @@ fn number(x: f64, unit: &str) -> String {
 /// The edits that turn the number under `range` into a parameter, if the cursor is on
 /// one where a parameter may stand.
 pub fn offered(doc: &Document, at: Span) -> Option<Vec<Edit>> {
-    let lexed = lex(&doc.text);
-    let i = lexed
-        .tokens
-        .iter()
-        .position(|(t, s)| matches!(t, Token::Number(_)) && s.start <= at.start && at.end <= s.end)?;
+    let lexed = lex(&doc.text, &mut Vec::new());
+    let i = lexed.tokens.iter().position(|(t, s)| {
+        matches!(t, Token::Number(_)) && s.start <= at.start && at.end <= s.end
+    })?;
     let (Token::Number(text), span) = lexed.tokens[i] else {
         return None;
     };
     // A negative literal takes its sign along.
-    let negative = i > 0 && matches!(lexed.tokens[i - 1].0, Token::Minus)
+    let negative = i > 0
+        && matches!(lexed.tokens[i - 1].0, Token::Minus)
         && !matches!(
             lexed.tokens.get(i.wrapping_sub(2)).map(|t| t.0),
             Some(Token::Number(_) | Token::Ident(_) | Token::RParen | Token::RBracket)
@@ -78,12 +80,21 @@ pub fn offered(doc: &Document, at: Span) -> Option<Vec<Edit>> {
         value = -value;
     }
     // The name of the argument it sets (`radius: 0.5`), else `value`.
-    let base = match (i.checked_sub(2).map(|j| lexed.tokens[j].0), lexed.tokens.get(i.wrapping_sub(1))) {
+    let base = match (
+        i.checked_sub(2).map(|j| lexed.tokens[j].0),
+        lexed.tokens.get(i.wrapping_sub(1)),
+    ) {
         (Some(Token::Ident(n)), Some((Token::Colon, _))) if !negative => n.to_string(),
         _ => String::from("value"),
     };
     let name = (1..)
-        .map(|k| if k == 1 { base.clone() } else { format!("{base}_{k}") })
+        .map(|k| {
+            if k == 1 {
+                base.clone()
+            } else {
+                format!("{base}_{k}")
+            }
+        })
         .find(|n| !taken(doc, n))?;
     let (lo, hi) = range(value);
     let decl = format!(
@@ -128,7 +139,10 @@ mod tests {
         // Units, signs and taken names.
         let src = "let radius = 1;\nrender box(radius).rotate_y(-30deg);\n";
         let out = apply(src, "30deg").unwrap();
-        assert!(out.contains("param value = -30deg in [-60deg, -15deg];"), "{out}");
+        assert!(
+            out.contains("param value = -30deg in [-60deg, -15deg];"),
+            "{out}"
+        );
         assert!(out.contains("rotate_y(value)"), "{out}");
         let src = "let s = sphere(radius: 0.5);\nrender s;\n";
         let taken = src.replace("let s", "let radius = 2;\nlet s");

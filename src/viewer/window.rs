@@ -3,6 +3,7 @@
 //! screenshots.
 
 mod input;
+mod params;
 
 use super::edit::SeedEditor;
 
@@ -85,6 +86,8 @@ enum Drag {
     Pan,
     /// Moving a seed: its atlas and name.
     Seed(String, String),
+    /// Sweeping the selected run-time parameter (right button).
+    Param,
 }
 
 struct App {
@@ -124,6 +127,8 @@ struct App {
     times: (Vec<f64>, Vec<f64>),
     screenshot_next: bool,
     error: Option<ViewError>,
+    /// The run-time parameters' values and `time` ([`params`]).
+    params: params::Params,
 }
 
 /// Opens the window and runs until it is closed (or `frames` were drawn).
@@ -177,6 +182,7 @@ pub fn run(options: Options) -> Result<(), ViewError> {
         frames_drawn: 0,
         times: (Vec::new(), Vec::new()),
         screenshot_next: false,
+        params: params::Params::default(),
         error: None,
     };
     event_loop
@@ -289,9 +295,12 @@ impl App {
             return;
         };
         let base = self.base_dir.clone();
+        let mut built = 0;
         let outcome = self.reloader.reload(text, force, |c| {
+            built += 1;
             Renderer::new(gpu, &c.module, &base).map_err(|e| e.to_string())
         });
+        self.params.pipelines += built;
         match outcome {
             Outcome::Unchanged => return,
             Outcome::Swapped => {
@@ -318,6 +327,7 @@ impl App {
                     self.orbit = self.scene_orbit();
                 }
                 self.watch_textures();
+                self.params_reloaded();
                 self.fresh = true;
                 self.merge_first = None;
             }
@@ -453,6 +463,10 @@ impl App {
             );
         }
         let targets = self.targets.as_ref().expect("made above");
+        renderer.set_params(
+            gpu,
+            &self.params.bytes(&loaded.compiled.module.manifest.params),
+        );
         let took = renderer
             .draw_into(gpu, &view, VIEWS[self.mode].0, targets)
             .map_err(ViewError::Gpu)?;
@@ -481,6 +495,9 @@ impl App {
             return Ok(());
         };
         self.frames_drawn += 1;
+        if self.params.playing() {
+            self.request_redraw();
+        }
         if let Some(shot) = shot {
             self.screenshot_next = false;
             self.save(&shot)?;
@@ -654,11 +671,15 @@ impl ApplicationHandler<Changed> for App {
                 self.cursor = (x, y);
                 let width = self.presenter.as_ref().map_or(1, |p| p.size().0) as f64;
                 let height = self.presenter.as_ref().map_or(1, |p| p.size().1) as f64;
+                if matches!(self.pressed, Some((_, _, Drag::Param))) {
+                    self.drag_param(dx, width);
+                    return;
+                }
                 if let (Some((_, _, drag)), Some(orbit)) = (&self.pressed, self.orbit.as_mut()) {
                     match drag {
                         Drag::Orbit => orbit.rotate(dx, dy, width),
                         Drag::Pan => orbit.pan(dx, dy, height),
-                        Drag::Seed(..) => return,
+                        Drag::Seed(..) | Drag::Param => return,
                     }
                     self.request_redraw();
                 }

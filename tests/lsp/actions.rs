@@ -173,6 +173,9 @@ fn make_this_number_a_parameter() {
         json!({ "textDocument": { "uri": URI }, "position": { "line": 1, "character": 28 } }),
     );
     let shown = hover["contents"]["value"].as_str().unwrap_or_default();
-    assert!(shown.contains("param radius: float = 0.5 in [0.25, 1]"), "{hover}");
+    assert!(
+        shown.contains("param radius: float = 0.5 in [0.25, 1]"),
+        "{hover}"
+    );
     stop(c, handle);
 }

@@ -71,7 +71,7 @@ impl App {
 
     /// After an edit: reload what was written at once (the watcher's echo is then the
     /// same text), or print why it was refused.
-    fn edited(&mut self, result: Result<(String, String), String>) {
+    pub(super) fn edited(&mut self, result: Result<(String, String), String>) {
         match result {
             Ok((text, what)) => {
                 eprintln!("{what}: written to {}", self.name);
@@ -105,6 +105,7 @@ impl App {
         let ctrl = self.modifiers.control_key();
         match key {
             Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Named(NamedKey::Space) => self.toggle_time(),
             Key::Character(c) => match c.as_str() {
                 "z" | "Z" if ctrl => {
                     let result = self
@@ -113,6 +114,8 @@ impl App {
                         .map(|(t, what)| (t, format!("undo `{what}`")));
                     self.edited(result);
                 }
+                "p" | "P" => self.select_next_param(),
+                "w" | "W" => self.write_params(),
                 "f" | "F" => {
                     let bounds = self.shape().map(|s| s.framing_bounds());
                     let (w, h) = self.presenter.as_ref().map_or((1, 1), |p| p.size());
@@ -149,6 +152,7 @@ impl App {
                 }
                 let drag = match button {
                     MouseButton::Middle => Drag::Pan,
+                    MouseButton::Right if self.params_selected() => Drag::Param,
                     MouseButton::Left if mods.control_key() || mods.alt_key() => Drag::Orbit,
                     MouseButton::Left => {
                         let on_seed = self.view().and_then(|view| {
@@ -179,6 +183,7 @@ impl App {
                     ((self.cursor.0 - at.0).powi(2) + (self.cursor.1 - at.1).powi(2)).sqrt();
                 match drag {
                     Drag::Seed(atlas, seed) if moved >= CLICK => self.drop_seed(&atlas, &seed),
+                    Drag::Param => self.param_dropped(),
                     _ if moved < CLICK && button == MouseButton::Left => self.seed_click(mods),
                     _ => {}
                 }

@@ -424,6 +424,42 @@ impl Checker<'_> {
         true
     }
 
+    /// Warns when an atlas's own shape depends on run-time parameters: its seeds'
+    /// projections, frames and merges are computed once, at the current values.
+    pub(crate) fn check_atlas_params(&mut self, shape: &Value, span: Span) {
+        fn depends(v: &Value, seen: &mut std::collections::HashSet<*const ()>) -> bool {
+            match v {
+                Value::Uniform(_) => true,
+                Value::Shape(n) => {
+                    if !seen.insert(Arc::as_ptr(n) as *const ()) {
+                        return false;
+                    }
+                    n.args.iter().any(|a| depends(a, seen))
+                }
+                _ => false,
+            }
+        }
+        if depends(shape, &mut std::collections::HashSet::new()) {
+            self.error(
+                Diagnostic::warning(
+                    codes::W_ATLAS_ON_PARAMS,
+                    "this atlas's shape depends on run-time parameters",
+                    span,
+                    "its seeds are placed on this shape at the parameters' current values",
+                )
+                .with_note(
+                    "the atlas's geometry (seed projections, frames, merges) is computed at \
+                     compile time: a new value moves the shape but not its atlas until the scene \
+                     is compiled again",
+                )
+                .with_help(
+                    "declare the atlas on the shape at rest and move the rendered copy (its uv then \
+                     follows the rest pose, §5.1)",
+                ),
+            );
+        }
+    }
+
     /// A setting (of `render` or `atlas`) or a seed that a run-time value cannot set.
     pub(crate) fn refuse_run_time(&mut self, what: &str, span: Span) {
         self.error(

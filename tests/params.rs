@@ -421,3 +421,118 @@ fn an_animated_twist_keeps_the_rest_pose_uv_at_every_frame() {
         assert!(worst <= 1e-5, "time {t}: the uv differ by {worst}");
     }
 }
+
+/// Every example turned parametric, number by number (up to eight numbers each,
+/// spread over the file), with the language server's "make this number a parameter":
+/// where the checker accepts the parameter, the scene set to each end of its range
+/// evaluates on the CPU as the scene with that end written in, and its WGSL is the same
+/// at both ends.
+#[test]
+fn every_example_made_parametric_equals_its_constants() {
+    use sdfc::ide::{actions, make_param, Document};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut names: Vec<_> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdf"))
+        .collect();
+    names.sort();
+    let (mut tried, mut accepted) = (0, 0);
+    for path in names {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let doc = Document::new(text.as_str(), Some(&root));
+        let lexed = sdfc::syntax::lexer::lex(&text, &mut Vec::new());
+        let numbers: Vec<sdfc::Span> = lexed
+            .tokens
+            .iter()
+            .filter(|(t, _)| matches!(t, sdfc::syntax::lexer::Token::Number(_)))
+            .map(|(_, s)| *s)
+            .collect();
+        let step = numbers.len().div_ceil(8).max(1);
+        for span in numbers.iter().step_by(step) {
+            let Some(edits) = make_param::offered(&doc, *span) else {
+                continue;
+            };
+            tried += 1;
+            let param = actions::apply(&text, &edits);
+            let decl = &edits[0].text;
+            let name = decl["param ".len()..]
+                .split(' ')
+                .next()
+                .unwrap()
+                .to_string();
+            let range = &decl[decl.find(" in [").unwrap() + 5..decl.rfind(']').unwrap()];
+            let ends: Vec<&str> = range.split(", ").collect();
+            let mut wgsl: Option<String> = None;
+            for end in ends {
+                let radians = end.ends_with("deg");
+                let x: f64 = end
+                    .trim_end_matches("deg")
+                    .trim_end_matches("rad")
+                    .parse()
+                    .unwrap();
+                let value = if radians { x.to_radians() } else { x };
+                let mut access = Access::new(Some(&root));
+                access.set_param(&name, &[value]);
+                let a = sdfc::driver::check_with(&param, &access);
+                if a.has_errors() {
+                    // Not a number a parameter may set (a setting, a seed, a period…).
+                    break;
+                }
+                let constant = actions::apply(
+                    &text,
+                    &[sdfc::diagnostic::Edit {
+                        span: edits[1].span,
+                        text: format!("({end})"),
+                    }],
+                );
+                let b = sdfc::driver::check_with(&constant, &Access::new(Some(&root)));
+                if b.has_errors() {
+                    // The range's end is not a valid constant there (a zero size).
+                    break;
+                }
+                let (Some(sa), Some(sb)) = (
+                    a.scene.as_ref().and_then(|s| s.render.clone()),
+                    b.scene.as_ref().and_then(|s| s.render.clone()),
+                ) else {
+                    break;
+                };
+                // Near the surface (far from it, a warp's field is the lower bound of
+                // its bounding ball, whose radius holds over the whole range).
+                for (x, n) in common::surface_points(b.field(&sb), 30, 7, |_| true) {
+                    for t in [-0.02, 0.0, 0.03] {
+                        let p = x + n * t;
+                        let (da, db) = (
+                            eval::distance(a.field(&sa), p),
+                            eval::distance(b.field(&sb), p),
+                        );
+                        assert!(
+                            (da - db).abs() <= 1e-5,
+                            "{}: `{name}` = {end}: at {p}, {da} against {db}",
+                            path.display()
+                        );
+                    }
+                }
+                let options = sdfc::Options {
+                    walk: sdfc::WalkForm::Loop,
+                    ..Default::default()
+                };
+                let m = sdfc::driver::compile(&a, &options).unwrap().module;
+                match &wgsl {
+                    None => {
+                        wgsl = Some(m.wgsl);
+                        accepted += 1;
+                    }
+                    Some(w) => assert!(
+                        // An atlas on the moving shape is placed at the value (W0010).
+                        w == &m.wgsl || a.diagnostics.iter().any(|d| d.code == "W0010"),
+                        "{}: the WGSL changed with `{name}`",
+                        path.display()
+                    ),
+                }
+            }
+        }
+    }
+    eprintln!("{accepted} of {tried} numbers of the examples became parameters and agreed");
+    assert!(accepted >= 40, "only {accepted} of {tried}");
+}

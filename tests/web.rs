@@ -6,7 +6,8 @@
 //! - Every example (loop walk, and `sphere.sdf` unrolled too) compiles in Tint with no
 //!   message, and every pipeline builds with one bind group layout per group from the manifest's users alone, on a
 //!   device with WebGPU's default limits.
-//! - The page `sdfc export-web` writes renders `capsule.sdf` and `normal_map.sdf`
+//! - The page `sdfc export-web` writes renders `capsule.sdf`, `normal_map.sdf`, the
+//!   displaced, shell-mapped and many-seed examples and an animated one (its first frame, `?still`)
 //!   within the reference-image tolerance of `sdfc render` at the same size.
 //!
 //! Without Chromium, Node or puppeteer-core the tests say so and skip, unless
@@ -208,14 +209,21 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         return;
     }
     let (w, h) = (160u32, 90u32);
-    for scene in ["examples/capsule.sdf", "examples/normal_map.sdf"] {
+    for scene in [
+        "examples/capsule.sdf",
+        "examples/normal_map.sdf",
+        "examples/displaced_column.sdf",
+        "examples/shell_tiles.sdf",
+        "examples/robot.sdf",
+        "examples/waving_robot.sdf",
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let site = dir.path().join("site");
         export(scene, &site);
         let base = serve(site);
         let raw = dir.path().join("frame.rgba");
         let t = std::time::Instant::now();
-        let report = page(&format!("{base}/index.html?size={w}x{h}"), Some(&raw));
+        let report = page(&format!("{base}/index.html?size={w}x{h}&still"), Some(&raw));
         eprintln!(
             "{scene}: the page rendered in Chromium in {:.1?}",
             t.elapsed()

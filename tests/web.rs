@@ -126,8 +126,14 @@ fn export_with(scene: &str, dir: &Path, walk: &str) {
 
 /// Runs the page script on `url`; its JSON line.
 fn page(url: &str, raw: Option<&Path>) -> serde_json::Value {
+    page_with(url, raw, false)
+}
+
+/// [`page`], with real mouse input on the canvas after the first frame when `input`.
+fn page_with(url: &str, raw: Option<&Path>, input: bool) -> serde_json::Value {
     let mut cmd = Command::new("node");
     cmd.arg(tool().join("page.mjs")).arg(url);
+    cmd.env("SDFC_PAGE_INPUT", if input { "1" } else { "0" });
     if let Some(raw) = raw {
         cmd.arg(raw);
     }
@@ -222,8 +228,14 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         export(scene, &site);
         let base = serve(site);
         let raw = dir.path().join("frame.rgba");
+        // The first scene also takes real mouse input: its orbit controls.
+        let input = scene == "examples/capsule.sdf";
         let t = std::time::Instant::now();
-        let report = page(&format!("{base}/index.html?size={w}x{h}&still"), Some(&raw));
+        let report = page_with(
+            &format!("{base}/index.html?size={w}x{h}&still"),
+            Some(&raw),
+            input,
+        );
         eprintln!(
             "{scene}: the page rendered in Chromium in {:.1?}",
             t.elapsed()
@@ -254,6 +266,19 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
             mean <= 1.5 && share <= 0.005,
             "{scene}: mean {mean}, share {share}"
         );
+        if input {
+            // A drag turns the camera and the wheel zooms: each frame differs from
+            // the one before.
+            let dragged = std::fs::read(dir.path().join("frame.rgba.drag")).unwrap();
+            let zoomed = std::fs::read(dir.path().join("frame.rgba.wheel")).unwrap();
+            let (turned, _) = common::image_difference(&browser, &dragged);
+            let (closer, _) = common::image_difference(&dragged, &zoomed);
+            eprintln!("{scene}: a drag changed the frame by {turned:.2}/255, the wheel by {closer:.2}/255");
+            assert!(
+                turned > 2.0 && closer > 2.0,
+                "{scene}: drag {turned}, wheel {closer}"
+            );
+        }
     }
 }
 

@@ -87,6 +87,25 @@ async function scene(page, console) {
     "[document.getElementById('scene').width, document.getElementById('scene').height]",
   );
   if (pixels && rawOut) writeFileSync(rawOut, Buffer.from(pixels, "base64"));
+  // With SDFC_PAGE_INPUT=1, real mouse input on the canvas (puppeteer's input events):
+  // a drag to turn, then the wheel to zoom; the frame after each goes to
+  // OUT.rgba.drag and OUT.rgba.wheel.
+  if (!error && rawOut && process.env.SDFC_PAGE_INPUT === "1") {
+    const box = await (await page.$("#scene")).boundingBox();
+    const [cx, cy] = [box.x + box.width / 2, box.y + box.height / 2];
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    await page.mouse.move(cx + box.width / 4, cy, { steps: 8 });
+    await page.mouse.up();
+    await new Promise((r) => setTimeout(r, 500));
+    const dragged = await page.evaluate("window.sdfcPixels(false)");
+    writeFileSync(`${rawOut}.drag`, Buffer.from(dragged, "base64"));
+    await page.mouse.move(cx, cy);
+    await page.mouse.wheel({ deltaY: -300 });
+    await new Promise((r) => setTimeout(r, 500));
+    const zoomed = await page.evaluate("window.sdfcPixels(false)");
+    writeFileSync(`${rawOut}.wheel`, Buffer.from(zoomed, "base64"));
+  }
   return { error: error || readError, messages, console, size };
 }
 

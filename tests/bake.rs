@@ -38,7 +38,12 @@ fn bake_source(
 /// Every level-0 texel of a bake with its surface point and footprint, in the bake's
 /// order (corners, edges, interiors).
 fn level0_texels(baked: &Baked) -> (Vec<[f32; 3]>, Vec<[f32; 11]>, Vec<f64>) {
-    let inputs = pipeline::sample_points(&baked.quads, &baked.table, baked.levels[0].n);
+    let inputs = pipeline::sample_points(
+        &baked.quads,
+        &baked.table,
+        baked.levels[0].n,
+        &baked.vertex_grid,
+    );
     let footprints = inputs
         .corners
         .iter()
@@ -617,4 +622,86 @@ fn baked_normals_carry_the_normal_map() {
         tilted * 10 > compared,
         "{tilted} of {compared} tilted: the normal map is not baked"
     );
+}
+
+/// What a rasterizer shows is what was baked: for every level-0 texel, the point any
+/// rasterizer interpolates at that texel's TEXCOORD_0 (linear over the exported
+/// triangle whose texture coordinates hold it, found from the exported mesh alone),
+/// projected onto the surface, is the point the texel shaded. Checked on a curved
+/// scene with 3 × 3 quads per chart and in both layouts.
+#[test]
+fn each_texel_shades_the_point_a_rasterizer_interpolates_at_its_uv() {
+    use sdfc::bake::pipeline::Style;
+    let Some(gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    // Curved everywhere (projections near a crease depend on the method, not on this).
+    let source = SMOOTH.replace(
+        "sphere(1) | box([0.6, 0.6, 0.6]).translate([0.8, 0, 0])",
+        "smooth_union(sphere(1), sphere(0.6).translate([0.9, 0.2, 0]), 0.3)",
+    );
+    let analysis = sdfc::driver::check(&source, None);
+    let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
+    let scale = sdfc::uv::atlas::scale(shape);
+    for style in [Style::Flat, Style::Packed] {
+        let m = 3;
+        let options = Options {
+            chart_quads: m,
+            style,
+            ..small(16)
+        };
+        let baked = bake_source(&gpu, &source, dir.path(), &options).expect("bakes");
+        let mesh = &baked.mesh;
+        let n = baked.levels[0].n;
+        let (per_chart, verts) = (6 * m * m, (m + 1) * (m + 1));
+        let (mut worst, mut checked) = (0.0f64, 0);
+        for c in 0..baked.table.len() {
+            let tris = &mesh.indices[c * per_chart..(c + 1) * per_chart];
+            for j in 1..n - 1 {
+                for i in 1..n - 1 {
+                    let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+                    let uv = baked.patches.texcoord(&baked.atlas, c, u, v);
+                    let uv = glam::DVec2::new(uv[0] as f64, uv[1] as f64);
+                    // The exported triangle whose texture coordinates hold the texel.
+                    let mut best: Option<(f64, DVec3)> = None;
+                    for t in tris.chunks(3) {
+                        let k = [t[0] as usize, t[1] as usize, t[2] as usize];
+                        assert!(k.iter().all(|&k| k / verts == c), "chart {c}'s triangles");
+                        let q = k.map(|k| {
+                            let x = mesh.texcoords[k];
+                            glam::DVec2::new(x[0] as f64, x[1] as f64)
+                        });
+                        let d = (q[1] - q[0]).perp_dot(q[2] - q[0]);
+                        let b1 = (uv - q[0]).perp_dot(q[2] - q[0]) / d;
+                        let b2 = (q[1] - q[0]).perp_dot(uv - q[0]) / d;
+                        let w = [1.0 - b1 - b2, b1, b2];
+                        let inside = w.iter().copied().fold(f64::INFINITY, f64::min);
+                        let p = k.iter().zip(w).fold(DVec3::ZERO, |s, (&k, w)| {
+                            let x = mesh.positions[k];
+                            s + DVec3::new(x[0] as f64, x[1] as f64, x[2] as f64) * w
+                        });
+                        if best.is_none_or(|b| inside > b.0) {
+                            best = Some((inside, p));
+                        }
+                    }
+                    let (inside, x) = best.unwrap();
+                    assert!(
+                        inside > -1e-3,
+                        "chart {c} texel ({i}, {j}) is in no triangle"
+                    );
+                    let rasterized = eval::project(shape, x, 1e-9 * scale).unwrap_or(x);
+                    let shaded = baked.points.get(&baked.table, c, i, j);
+                    let shaded = DVec3::new(shaded[0] as f64, shaded[1] as f64, shaded[2] as f64);
+                    let off = (rasterized - shaded).length() / scale;
+                    worst = worst.max(off);
+                    checked += 1;
+                }
+            }
+        }
+        eprintln!("{style:?}: {checked} texels, worst distance {worst:.2e} of the scene's size");
+        assert!(checked > 1000, "{checked}");
+        assert!(
+            worst < 2e-4,
+            "{style:?}: a texel shaded a point {worst:e} away"
+        );
+    }
 }

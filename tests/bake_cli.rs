@@ -429,7 +429,8 @@ fn the_footprint_counts_the_samples_the_bake_shades() {
             ChartLayout::Packed(PackedLayout::fit(&singles.dims, size).unwrap()),
         ] {
             let f = Footprint::of(&grid, &table, quads.vertices.len(), &atlas, m);
-            let points = sample_points(&quads, &table, atlas.cell_size() as usize);
+            let grid_points = sdfc::bake::images::vertex_grid(&quads, &table, m, &|p| p);
+            let points = sample_points(&quads, &table, atlas.cell_size() as usize, &grid_points);
             let shaded = points.corners.len() + points.edges.len() + points.interiors.len();
             assert_eq!(f.samples, shaded as u64, "{size}");
             assert_eq!(f.texels, (atlas.width() * atlas.height()) as u64);

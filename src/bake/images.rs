@@ -116,17 +116,7 @@ pub fn render_frame(
     .map(|k| base + k);
     let p = k.map(|k| DVec3::from_array(exported.positions[k].map(f64::from)));
     // The split mesh_data chose, and the barycentric weights of (s, t) in its triangle.
-    let weights = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
-        if s >= t {
-            [1.0 - s, s - t, t, 0.0]
-        } else {
-            [1.0 - t, 0.0, s, t - s]
-        }
-    } else if s + t <= 1.0 {
-        [1.0 - s - t, s, 0.0, t]
-    } else {
-        [0.0, 1.0 - t, s + t - 1.0, 1.0 - s]
-    };
+    let weights = split_weights(p, s, t);
     let mut nrm = DVec3::ZERO;
     let mut tan = DVec3::ZERO;
     let mut sign = 0.0;
@@ -283,21 +273,19 @@ pub fn stacked_level(
     img
 }
 
-/// The exported mesh. Each chart is split into `m × m` quads at the parameters
-/// (i/m, j/m), projected onto the surface (`project`); the points on a chart's sides
-/// are computed once per mesh edge, so neighbouring charts' vertices coincide and the
-/// mesh is watertight. Vertices are not shared between charts (their texture
-/// coordinates differ); each small quad is split along its shorter diagonal.
-pub fn mesh_data(
+/// The exported mesh's vertices: each chart split into `m × m` quads at the
+/// parameters (i/m, j/m), projected onto the surface (`project`); the points on a
+/// chart's sides are computed once per mesh edge, so neighbouring charts' vertices
+/// coincide and the mesh is watertight. The texels are placed through these vertices
+/// ([`on_triangles`]), as a rasterizer interpolates them.
+pub fn vertex_grid(
     mesh: &QuadMesh,
     table: &ChartTable,
-    atlas: &ChartLayout,
-    patches: &Patches,
     m: usize,
     project: &(dyn Fn(DVec3) -> DVec3 + Sync),
-) -> MeshData {
+) -> Samples<[f64; 3]> {
     let v = &mesh.vertices;
-    let points: Samples<[f64; 3]> = Samples::build(
+    Samples::build(
         table,
         v.len(),
         m + 1,
@@ -307,7 +295,70 @@ pub fn mesh_data(
             project(v[edge.a as usize].lerp(v[edge.b as usize], t)).to_array()
         },
         |c, s, t| project(bilinear(table.corners[c].map(|i| v[i as usize]), s, t)).to_array(),
+    )
+}
+
+/// The barycentric weights of `(s, t)` in the triangle that holds it, of a quad with
+/// corners `p` (in (0,0), (1,0), (1,1), (0,1) order) split along its shorter
+/// diagonal, as [`mesh_data`] splits it.
+fn split_weights(p: [DVec3; 4], s: f64, t: f64) -> [f64; 4] {
+    if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+        if s >= t {
+            [1.0 - s, s - t, t, 0.0]
+        } else {
+            [1.0 - t, 0.0, s, t - s]
+        }
+    } else if s + t <= 1.0 {
+        [1.0 - s - t, s, 0.0, t]
+    } else {
+        [0.0, 1.0 - t, s + t - 1.0, 1.0 - s]
+    }
+}
+
+/// The point of the exported mesh at chart-local `(u, v)` of chart `c`: linear over the
+/// triangle of the `m × m` vertex grid that holds it, exactly as any rasterizer
+/// interpolates a position from TEXCOORD_0 (the texel at `(u, v)` then shades the
+/// surface point nearest that one).
+pub fn on_triangles(
+    grid: &Samples<[f64; 3]>,
+    table: &ChartTable,
+    c: usize,
+    u: f64,
+    v: f64,
+) -> DVec3 {
+    let m = grid.n - 1;
+    let (a, b) = (
+        ((u * m as f64).floor() as usize).min(m - 1),
+        ((v * m as f64).floor() as usize).min(m - 1),
     );
+    let (s, t) = (u * m as f64 - a as f64, v * m as f64 - b as f64);
+    let at = |i: usize, j: usize| DVec3::from_array(grid.get(table, c, i, j));
+    let p = [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)];
+    let w = split_weights(p, s, t);
+    p[0] * w[0] + p[1] * w[1] + p[2] * w[2] + p[3] * w[3]
+}
+
+/// The point of the exported mesh on edge `e` at `t` (from `a` to `b`): linear between
+/// the edge's consecutive vertices, which both charts of the edge share.
+pub fn on_edge(grid: &Samples<[f64; 3]>, table: &ChartTable, e: usize, t: f64) -> DVec3 {
+    let m = grid.n - 1;
+    let k = ((t * m as f64).floor() as usize).min(m - 1);
+    let s = t * m as f64 - k as f64;
+    let at = |k: usize| DVec3::from_array(grid.on_edge(table, e, k));
+    at(k).lerp(at(k + 1), s)
+}
+
+/// The exported mesh over the vertex grid of [`vertex_grid`] (`m × m` quads per
+/// chart). Vertices are not shared between charts (their texture coordinates
+/// differ); each small quad is split along its shorter diagonal.
+pub fn mesh_data(
+    mesh: &QuadMesh,
+    table: &ChartTable,
+    atlas: &ChartLayout,
+    patches: &Patches,
+    points: &Samples<[f64; 3]>,
+) -> MeshData {
+    let m = points.n - 1;
     let n = m + 1;
     let tangents = corner_tangents(mesh, patches);
     let mut out = MeshData::default();

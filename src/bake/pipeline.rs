@@ -1,6 +1,6 @@
 //! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
 
-use super::charts::{bilinear, ChartTable, Samples};
+use super::charts::{ChartTable, Samples};
 use super::gpu::{BakePass, Shaded};
 use super::images;
 use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
@@ -162,6 +162,9 @@ pub struct Baked {
     pub levels: Vec<Samples<Texel<CHANNELS>>>,
     /// Level 0's projected sample points.
     pub points: Samples<[f32; 3]>,
+    /// The exported mesh's vertices by chart ([`images::vertex_grid`]): the texels'
+    /// points are placed on its triangles.
+    pub vertex_grid: Samples<[f64; 3]>,
     pub mesh: MeshData,
     pub textures: Textures,
     pub report: Report,
@@ -183,11 +186,19 @@ pub trait Progress: Sync {
 pub struct Quiet;
 impl Progress for Quiet {}
 
-/// The level-0 sample points of a chart table over a quad mesh, each computed once:
-/// corners are the mesh vertices, side samples lie on the straight edge between its
-/// vertices, interior samples on the chart's bilinear patch. Each comes with the
-/// footprint of one texel (the spacing of the samples).
-pub fn sample_points(mesh: &QuadMesh, table: &ChartTable, n: usize) -> Samples<[f32; 4]> {
+/// The level-0 sample points of a chart table over a quad mesh, each computed once,
+/// where a rasterizer of the exported mesh looks for them: corners are the mesh
+/// vertices, side samples lie on the exported mesh's edge (linear between its
+/// consecutive vertices, shared by both charts), interior samples on the exported
+/// triangles that hold them (`grid`: [`images::vertex_grid`]), linear in the texel's
+/// chart-local (u, v) as TEXCOORD_0 is. Each comes with the footprint of one texel
+/// (the spacing of the samples).
+pub fn sample_points(
+    mesh: &QuadMesh,
+    table: &ChartTable,
+    n: usize,
+    grid: &Samples<[f64; 3]>,
+) -> Samples<[f32; 4]> {
     let v = &mesh.vertices;
     let spacing = 1.0 / (n - 1) as f64;
     let pack = |p: DVec3, footprint: f64| [p.x as f32, p.y as f32, p.z as f32, footprint as f32];
@@ -199,11 +210,14 @@ pub fn sample_points(mesh: &QuadMesh, table: &ChartTable, n: usize) -> Samples<[
         |e, t| {
             let edge = &table.edges[e];
             let (a, b) = (v[edge.a as usize], v[edge.b as usize]);
-            pack(a.lerp(b, t), (b - a).length() * spacing)
+            pack(
+                images::on_edge(grid, table, e, t),
+                (b - a).length() * spacing,
+            )
         },
         |c, s, t| {
             let q = table.corners[c].map(|i| v[i as usize]);
-            let p = bilinear(q, s, t);
+            let p = images::on_triangles(grid, table, c, s, t);
             let size = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) * 0.5;
             let size = size.max(((q[3] - q[0]).length() + (q[2] - q[1]).length()) * 0.5);
             pack(p, size * spacing)
@@ -441,7 +455,11 @@ pub fn bake<'s>(
     report.levels = atlas.levels();
     lap(&mut report, "charts");
 
-    // 3 and 4. Texel points, shaded on the GPU.
+    // 3 and 4. Texel points where the exported mesh's triangles put them, shaded on
+    // the GPU.
+    let tolerance = 1e-5 * scale;
+    let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
+    let grid_points = images::vertex_grid(&quads, &table, m, &project);
     let n = atlas.cell_size() as usize;
     let (level0, points) = shade(
         gpu,
@@ -450,6 +468,7 @@ pub fn bake<'s>(
         &quads,
         &table,
         n,
+        &grid_points,
         progress,
         &mut report,
         &mut lap,
@@ -464,9 +483,7 @@ pub fn bake<'s>(
 
     // 6. Images and the mesh.
     progress.stage("images", 1);
-    let tolerance = 1e-5 * scale;
-    let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
-    let mesh = images::mesh_data(&quads, &table, &atlas, &patches, m, &project);
+    let mesh = images::mesh_data(&quads, &table, &atlas, &patches, &grid_points);
     let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
     progress.finish();
     lap(&mut report, "images");
@@ -480,6 +497,7 @@ pub fn bake<'s>(
         atlas,
         levels,
         points,
+        vertex_grid: grid_points,
         mesh,
         textures,
         report,
@@ -550,11 +568,12 @@ fn shade(
     quads: &QuadMesh,
     table: &ChartTable,
     n: usize,
+    grid: &Samples<[f64; 3]>,
     progress: &dyn Progress,
     report: &mut Report,
     lap: &mut dyn FnMut(&mut Report, &'static str),
 ) -> Result<(Samples<Texel<CHANNELS>>, Samples<[f32; 3]>), BakeError> {
-    let points = sample_points(quads, table, n);
+    let points = sample_points(quads, table, n, grid);
     let (nc, ne) = (points.corners.len(), points.edges.len());
     let mut flat = points.corners;
     flat.extend(points.edges);

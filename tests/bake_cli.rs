@@ -97,9 +97,21 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
                 report.messages
             );
         }
-        let (mesh, textures, layout) =
-            sdfc::bake::export::read_glb(&std::fs::read(&glb).unwrap()).expect("reads back");
+        let bytes = std::fs::read(&glb).unwrap();
+        let (mesh, textures, layout) = sdfc::bake::export::read_glb(&bytes).expect("reads back");
         assert!(mesh.indices.len() >= 3 * 2 * 8, "{stem}");
+        // The glTF material is named after the scene's materials, the mesh after the scene.
+        let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+        assert_eq!(doc["meshes"][0]["name"], stem.as_str());
+        let wanted = match stem.as_str() {
+            "robot" => "plating",
+            "capsule" => "painted",
+            _ => "",
+        };
+        if !wanted.is_empty() {
+            assert_eq!(doc["materials"][0]["name"], wanted, "{stem}");
+        }
         let file: ChartsFile = serde_json::from_slice(&std::fs::read(&charts).unwrap()).unwrap();
         assert_eq!(file.layout, layout, "{stem}");
         let cells = match &layout {

@@ -95,6 +95,7 @@ fn glb_round_trip() {
             &textures,
             &ChartLayout::from(layout.clone()),
             "quad and cube",
+            "material",
         )
         .unwrap();
         assert_eq!(&bytes[..4], b"glTF");
@@ -114,6 +115,7 @@ fn glb_document_structure() {
         &textures(&layout, true),
         &ChartLayout::from(layout.clone()),
         "q",
+        "material",
     )
     .unwrap();
     let (doc, _) = split(&bytes);
@@ -131,6 +133,8 @@ fn glb_document_structure() {
         json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}])
     );
     let material = &doc["materials"][0];
+    assert_eq!(material["name"], "material");
+    assert_eq!(doc["meshes"][0]["name"], "q");
     assert_eq!(material["emissiveFactor"], json!([1.0, 1.0, 1.0]));
     assert!(material["normalTexture"].is_object());
     assert!(material["pbrMetallicRoughness"]["metallicRoughnessTexture"].is_object());
@@ -149,6 +153,7 @@ fn glb_document_structure() {
         &textures(&layout, false),
         &ChartLayout::from(layout.clone()),
         "q",
+        "material",
     )
     .unwrap();
     let (doc, _) = split(&plain);
@@ -170,6 +175,7 @@ fn glb_passes_the_khronos_validator() {
             &textures(&layout, emissive),
             &ChartLayout::from(layout.clone()),
             "quad and cube",
+            "material",
         )
         .unwrap();
         let path = dir.path().join(format!("export-{emissive}.glb"));
@@ -205,7 +211,7 @@ fn glb_refuses_bad_input() {
     let tex = textures(&layout, true);
     let refused = |mesh: &MeshData, tex: &Textures, layout: &FlatLayout| {
         assert!(
-            glb(mesh, tex, &ChartLayout::from(layout.clone()), "x").is_err(),
+            glb(mesh, tex, &ChartLayout::from(layout.clone()), "x", "x").is_err(),
             "bad input accepted"
         );
     };
@@ -258,6 +264,7 @@ fn read_glb_rejects_garbage_and_truncations() {
         &textures(&layout, true),
         &ChartLayout::from(layout.clone()),
         "q",
+        "material",
     )
     .unwrap();
     for garbage in [
@@ -287,6 +294,7 @@ fn read_glb_survives_flipped_bytes() {
         &textures(&layout, true),
         &ChartLayout::from(layout.clone()),
         "q",
+        "material",
     )
     .unwrap();
     let json_end = 20 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
@@ -313,6 +321,7 @@ fn read_glb_rejects_inconsistent_documents() {
         &textures(&layout, false),
         &ChartLayout::from(layout.clone()),
         "q",
+        "material",
     )
     .unwrap();
     let (doc, bin) = split(&bytes);

@@ -219,7 +219,7 @@ fn library_quad(packed: bool) -> Vec<u8> {
         normal: image.clone(),
         emissive: (!packed).then_some(image),
     };
-    glb(&mesh, &textures, &layout, "quad").unwrap()
+    glb(&mesh, &textures, &layout, "quad", "quad").unwrap()
 }
 
 /// The bases: `sdfc bake examples/sphere.sdf` at a small size, flat (with and
@@ -2009,7 +2009,14 @@ fn chart_search(_: &Base, rng: &mut Rng, big: bool) -> Made {
         normal: image,
         emissive: None,
     };
-    let bytes = glb(&mesh, &textures, &ChartLayout::Packed(layout), "search").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures,
+        &ChartLayout::Packed(layout),
+        "search",
+        "search",
+    )
+    .unwrap();
     made(
         bytes,
         format!("{n} vertices on one packed chart (number {target} of 1024 in one 64-texel tile)"),
@@ -2044,7 +2051,14 @@ fn overdraw(_: &Base, rng: &mut Rng, big: bool) -> Made {
         normal: image,
         emissive: None,
     };
-    let bytes = glb(&mesh, &textures, &ChartLayout::Flat(layout), "overdraw").unwrap();
+    let bytes = glb(
+        &mesh,
+        &textures,
+        &ChartLayout::Flat(layout),
+        "overdraw",
+        "overdraw",
+    )
+    .unwrap();
     made(
         bytes,
         format!("{n} copies of a triangle covering half the frame"),

@@ -62,7 +62,7 @@ fn quad_glb() -> Vec<u8> {
         normal: image,
         emissive: None,
     };
-    glb(&mesh, &textures, &ChartLayout::from(layout), "quad").unwrap()
+    glb(&mesh, &textures, &ChartLayout::from(layout), "quad", "quad").unwrap()
 }
 
 fn join(doc: &Value, bin: &[u8]) -> Vec<u8> {
@@ -288,7 +288,7 @@ fn the_writer_refuses_a_json_chunk_over_the_readers_limit() {
         mesh.texcoords.push([0.0, 0.0]);
     }
     mesh.indices = vec![0, 1, 2];
-    let error = glb(&mesh, &textures, &layout, "many").unwrap_err();
+    let error = glb(&mesh, &textures, &layout, "many", "many").unwrap_err();
     assert!(
         error.contains("over the limit of 64 MiB that sdfc reads back"),
         "{error}"

@@ -159,10 +159,14 @@ fn writable(path: &std::path::Path) -> Result<(), String> {
         .map_err(|e| format!("its folder does not take new files ({e})"))
 }
 
-fn encode(args: &BakeArgs, baked: &Baked, name: &str) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+fn encode(
+    args: &BakeArgs,
+    baked: &Baked,
+    (name, material): (&str, &str),
+) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
     let mut out = vec![(
         args.output.clone(),
-        export::glb(&baked.mesh, &baked.textures, &baked.atlas, name)?,
+        export::glb(&baked.mesh, &baked.textures, &baked.atlas, name, material)?,
     )];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
@@ -282,7 +286,8 @@ pub fn run(args: BakeArgs) -> ExitCode {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let outputs = match encode(&args, &baked, &name) {
+    let material = material_name(&analysis.program, shape, &name);
+    let outputs = match encode(&args, &baked, (&name, &material)) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: cannot encode the bake: {e}");
@@ -435,4 +440,26 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         }
     }
     ExitCode::SUCCESS
+}
+
+/// The glTF material's name: the scene's materials the baked shape paints, in the
+/// order they are first painted, joined with `+` (the bake merges them into one
+/// texture set); the scene's name when it paints none.
+fn material_name(program: &sdfc::sema::Program, shape: &sdfc::ir::Shape, scene: &str) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for n in &shape.nodes {
+        if let sdfc::ir::Op::Paint { material, .. } = n.op {
+            let def = program.materials.get((material as usize).wrapping_sub(1));
+            if let Some(m) = def.map(|m| m.name.as_str()) {
+                if !names.contains(&m) {
+                    names.push(m);
+                }
+            }
+        }
+    }
+    if names.is_empty() {
+        scene.to_string()
+    } else {
+        names.join("+")
+    }
 }

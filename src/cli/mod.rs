@@ -417,7 +417,8 @@ pub struct BakeArgs {
     pub chart_quads: usize,
     /// Pad every level-0 chart with a gutter of half its size, filled from the charts
     /// across its sides, for engines that build their own mip chain of the image (its
-    /// coarse texels then average real neighbours); costs a quarter of the charts' size.
+    /// coarse texels then average real neighbours). It halves each chart's side: a
+    /// quarter of the texels are left for the picture (use a larger --size to keep them).
     #[arg(long)]
     pub gutter: bool,
     /// The atlas layout.

@@ -69,7 +69,7 @@ crate::choice::choice_enum! {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum WalkForm {
     #[default]
-    Unrolled = "unrolled": "N calls of the step, each with its constant N − i (the default).",
+    Unrolled = "unrolled": "N calls of the step, each with its constant N − i.",
     Loop = "loop": "A loop of N iterations.",
 }
 }

@@ -146,12 +146,13 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Writes `mesh` with `textures` as a binary glTF: see the module's documentation.
 /// `layout` is the atlas's (the textures must be its size); `name` names the mesh,
-/// its node, its scene and its material.
+/// its node and its scene, `material` the material (the scene's material names).
 pub fn glb(
     mesh: &MeshData,
     textures: &Textures,
     layout: &ChartLayout,
     name: &str,
+    material: &str,
 ) -> Result<Vec<u8>, String> {
     check_mesh(mesh)?;
     check_atlas(layout)?;
@@ -188,7 +189,7 @@ pub fn glb(
         None => None,
     };
     let material = doc.root.push(Material {
-        name: Some(name.to_owned()),
+        name: Some(material.to_owned()),
         pbr_metallic_roughness: PbrMetallicRoughness {
             base_color_texture: Some(info(base_color)),
             metallic_roughness_texture: Some(info(metallic_roughness)),

@@ -398,6 +398,39 @@ pub fn mesh_data(
     out
 }
 
+/// Shares the vertices whose every attribute is bitwise the same (position, normal,
+/// tangent and texture coordinates): inside a chart the cells' vertices on their common
+/// sides become one, so a chart is one connected piece; across a chart border the
+/// texture coordinates differ and the vertices stay split, as glTF needs.
+pub fn weld(mesh: MeshData) -> MeshData {
+    let mut out = MeshData::default();
+    let mut index: std::collections::HashMap<[u32; 12], u32> = std::collections::HashMap::new();
+    let mut remap = Vec::with_capacity(mesh.positions.len());
+    for k in 0..mesh.positions.len() {
+        let (p, n, t, uv) = (
+            mesh.positions[k],
+            mesh.normals[k],
+            mesh.tangents[k],
+            mesh.texcoords[k],
+        );
+        let key = [
+            p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], uv[0], uv[1],
+        ]
+        .map(f32::to_bits);
+        let next = out.positions.len() as u32;
+        let at = *index.entry(key).or_insert_with(|| {
+            out.positions.push(p);
+            out.normals.push(n);
+            out.tangents.push(t);
+            out.texcoords.push(uv);
+            next
+        });
+        remap.push(at);
+    }
+    out.indices = mesh.indices.iter().map(|&i| remap[i as usize]).collect();
+    out
+}
+
 /// The object-space normals of every level in the flat atlas, encoded `n · 0.5 + 0.5`.
 /// Unlike the tangent-space map these are the filtered samples themselves, so their
 /// border texels are identical between charts, like the colours'.

@@ -166,7 +166,15 @@ fn encode(
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
     let mut out = vec![(
         args.output.clone(),
-        export::glb(&baked.mesh, &baked.textures, &baked.atlas, name, material)?,
+        // The file shares the vertices inside each chart (the bake's own mesh is chart
+        // by chart, as its images read it).
+        export::glb(
+            &sdfc::bake::images::weld(baked.mesh.clone()),
+            &baked.textures,
+            &baked.atlas,
+            name,
+            material,
+        )?,
     )];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked

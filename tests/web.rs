@@ -229,7 +229,7 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         let base = serve(site);
         let raw = dir.path().join("frame.rgba");
         // The first scene also takes real mouse input: its orbit controls.
-        let input = scene == "examples/capsule.sdf";
+        let input = ["examples/capsule.sdf", "examples/waving_robot.sdf"].contains(&scene);
         let t = std::time::Instant::now();
         let report = page_with(
             &format!("{base}/index.html?size={w}x{h}&still"),
@@ -278,6 +278,16 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
                 turned > 2.0 && closer > 2.0,
                 "{scene}: drag {turned}, wheel {closer}"
             );
+            // A scene with parameters has a slider each: moving one redraws.
+            let slider = dir.path().join("frame.rgba.slider");
+            if scene.contains("waving_robot") {
+                let slid = std::fs::read(&slider).expect("a slider for `blend`");
+                let (moved, _) = common::image_difference(&zoomed, &slid);
+                eprintln!("{scene}: the first slider changed the frame by {moved:.2}/255");
+                assert!(moved > 0.2, "{scene}: the slider changed {moved}");
+            } else {
+                assert!(!slider.exists(), "{scene} has no parameters, so no slider");
+            }
         }
     }
 }

@@ -112,9 +112,11 @@ export class SdfcScene {
   /// must lie in each parameter's [min, max]: the step bounds hold only there.
   setParams(values) {
     if (!this.params) return;
+    // The values set so far stay (a slider and the clock set one each).
+    this.values = { ...(this.values || {}), ...values };
     const block = new Float32Array(this.manifest.params.size / 4);
     for (const f of this.manifest.params.fields) {
-      const v = values[f.name] ?? f.default;
+      const v = this.values[f.name] ?? f.default;
       block.set(Array.isArray(v) ? v : [v], f.offset / 4);
     }
     this.device.queue.writeBuffer(this.params, 0, block);

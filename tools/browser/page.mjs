@@ -105,6 +105,15 @@ async function scene(page, console) {
     await new Promise((r) => setTimeout(r, 500));
     const zoomed = await page.evaluate("window.sdfcPixels(false)");
     writeFileSync(`${rawOut}.wheel`, Buffer.from(zoomed, "base64"));
+    // The first parameter's slider, clicked near its right end.
+    const slider = await page.$("#params input[type=range]");
+    if (slider) {
+      const s = await slider.boundingBox();
+      await page.mouse.click(s.x + s.width - 3, s.y + s.height / 2);
+      await new Promise((r) => setTimeout(r, 500));
+      const slid = await page.evaluate("window.sdfcPixels(false)");
+      writeFileSync(`${rawOut}.slider`, Buffer.from(slid, "base64"));
+    }
   }
   return { error: error || readError, messages, console, size };
 }

@@ -242,6 +242,27 @@ impl Checker<'_> {
         )
     }
 
+    /// A run-time value whose current value is not a finite single-precision number
+    /// (`1 / (x - 0.5)` at x = 0.5) is an error, as such a constant is.
+    fn finite_now(&mut self, v: Value, span: Span) -> Value {
+        if super::fold::is_finite(&v) {
+            return v;
+        }
+        self.error(
+            Diagnostic::error(
+                codes::E_NON_FINITE,
+                format!(
+                    "at the parameters' current values this is not a finite single-precision number ({})",
+                    v.display()
+                ),
+                span,
+                "NaN, infinite, or beyond ±3.4e38",
+            )
+            .with_help("change the defaults (or the `--param` values), or guard the expression"),
+        );
+        Value::Error
+    }
+
     /// Marks the parameters a value read from a definition uses.
     pub(crate) fn mark_param_use(&mut self, v: &Value) {
         if let Value::Uniform(u) = v {
@@ -289,7 +310,8 @@ impl Checker<'_> {
             return Value::Error;
         };
         let value = super::fold::binary(op, &l, &r);
-        uniform(FieldExpr::Binary { op, lhs: l, rhs: r }, value, range, span)
+        let v = uniform(FieldExpr::Binary { op, lhs: l, rhs: r }, value, range, span);
+        self.finite_now(v, span)
     }
 
     /// `[a, b, …]` with a run-time component.
@@ -347,7 +369,8 @@ impl Checker<'_> {
             .collect();
         let value = super::fold::math(b, &args, n);
         let range = interval::math(m, &ranges, n);
-        uniform(FieldExpr::Call { builtin: b, args }, value, range, span)
+        let v = uniform(FieldExpr::Call { builtin: b, args }, value, range, span);
+        self.finite_now(v, span)
     }
 
     /// A builtin argument that is a run-time value: allowed where [`RUN_TIME_ARGS`]

@@ -167,24 +167,8 @@ fn warped_boxes_render_without_holes() {
     ] {
         let c = compile(src, (128, 128));
         let frame = render(&gpu, &c, ViewMode::Color);
-        let (mut reference_hits, mut holes) = (0, 0);
-        for y in 0..c.view.height {
-            for x in 0..c.view.width {
-                let dir = c.view.camera.ray(
-                    x as f64 + 0.5,
-                    y as f64 + 0.5,
-                    c.view.width as f64,
-                    c.view.height as f64,
-                );
-                // Conservative reference: half steps, four times as many.
-                if trace_cpu(&c.shape, &c.view, dir, 0.5, c.view.max_steps * 4).is_some() {
-                    reference_hits += 1;
-                    if frame.position[(y * c.view.width + x) as usize][3] < 0.0 {
-                        holes += 1;
-                    }
-                }
-            }
-        }
+        // Conservative reference: half steps, four times as many.
+        let (reference_hits, holes) = common::holes(&c.shape, &c.view, &frame, c.view.max_steps);
         eprintln!(
             "{src}: {holes} holes in {reference_hits} pixels the conservative CPU trace covers"
         );

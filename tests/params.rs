@@ -7,7 +7,7 @@ use glam::DVec3;
 use sdfc::access::Access;
 use sdfc::gpu::{self, gpu_for_tests, ViewMode};
 use sdfc::ir::eval;
-use sdfc::view::{trace_cpu, View};
+use sdfc::view::View;
 use std::path::Path;
 
 mod common;
@@ -297,20 +297,8 @@ fn no_ray_passes_through_the_surface_at_the_ends_of_a_range() {
             // them that a miss can only be an overshoot.
             view.max_steps = steps * 4;
             let frame = gpu::render(&gpu, &module(&a), &view, ViewMode::Color, root).unwrap();
-            let sb = shape(&b);
-            let (mut covered, mut holes) = (0, 0);
-            for y in 0..view.height {
-                for x in 0..view.width {
-                    let dir = view.camera.ray(x as f64 + 0.5, y as f64 + 0.5, 96.0, 96.0);
-                    // Conservative reference: half steps, four times as many.
-                    if trace_cpu(&sb, &view, dir, 0.5, steps * 4).is_some() {
-                        covered += 1;
-                        if frame.position[(y * view.width + x) as usize][3] < 0.0 {
-                            holes += 1;
-                        }
-                    }
-                }
-            }
+            // Conservative reference: half steps, four times as many.
+            let (covered, holes) = common::holes(&shape(&b), &view, &frame, steps);
             assert!(
                 covered > 300,
                 "{template} at {value}: {covered} pixels covered"

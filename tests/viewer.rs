@@ -466,6 +466,73 @@ render ball {
 }
 ";
 
+/// What a scripted viewer session left: the scene's folder, its text, the viewer's
+/// log, and all of it with the script's steps as context for failures.
+struct Driven {
+    dir: tempfile::TempDir,
+    text: String,
+    viewer: String,
+    context: String,
+}
+
+/// Runs `script` (bash, with `$SDFC`, `$SCENE` and `$LOG`) under Xvfb against a scene
+/// file written with `source` (named `file`), and checks the script ended with
+/// `exit=0`. `None` when the session is skipped: no xvfb-run or xdotool, or no adapter
+/// for the window (a failure instead with SDFC_REQUIRE_GPU=1).
+fn drive(file: &str, source: &str, script: &str, what: &str) -> Option<Driven> {
+    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let has = |tool: &str| {
+        std::process::Command::new(tool)
+            .arg("--help")
+            .output()
+            .is_ok()
+    };
+    if !has("xvfb-run") || !has("xdotool") {
+        if require {
+            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run or xdotool is missing (apt-get install xvfb xauth xdotool)");
+        }
+        eprintln!("SKIPPED: no xvfb-run or xdotool for {what}");
+        return None;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join(file);
+    let log = dir.path().join("view.log");
+    let path = dir.path().join("drive.sh");
+    std::fs::write(&scene, source).unwrap();
+    std::fs::write(&path, script).unwrap();
+    let out = std::process::Command::new("timeout")
+        .args([
+            "120",
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            "bash",
+        ])
+        .arg(&path)
+        .env("SDFC", env!("CARGO_BIN_EXE_sdfc"))
+        .env("SCENE", &scene)
+        .env("LOG", &log)
+        .output()
+        .unwrap();
+    let steps = String::from_utf8_lossy(&out.stdout);
+    let errors = String::from_utf8_lossy(&out.stderr);
+    let viewer = std::fs::read_to_string(&log).unwrap_or_default();
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let context = format!("steps:\n{steps}\n{errors}\nviewer:\n{viewer}\nfile:\n{text}");
+    if viewer.contains("no GPU adapter") && !require {
+        eprintln!("SKIPPED: no adapter for {what}:\n{context}");
+        return None;
+    }
+    assert!(steps.contains("exit=0"), "{context}");
+    Some(Driven {
+        dir,
+        text,
+        viewer,
+        context,
+    })
+}
+
 /// Drives a real viewer window with X events (xdotool, through XTEST), and edits the
 /// file behind its back (first fixing the broken file it starts on). Each step waits for its effect (at most 30 s) and says so.
 const DRIVE: &str = r#"
@@ -528,52 +595,18 @@ echo "exit=$?"
 
 #[test]
 fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
-    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
-    let has = |tool: &str| {
-        std::process::Command::new(tool)
-            .arg("--help")
-            .output()
-            .is_ok()
-    };
-    if !has("xvfb-run") || !has("xdotool") {
-        if require {
-            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run or xdotool is missing (apt-get install xvfb xauth xdotool)");
-        }
-        eprintln!("SKIPPED: no xvfb-run or xdotool for the viewer's mouse test");
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("ball.sdf");
-    let log = dir.path().join("view.log");
-    let script = dir.path().join("drive.sh");
     // Broken at first: the viewer starts, says why, and waits for the fix.
-    std::fs::write(&scene, BALL.replace("sphere(1)", "sphere(oops)")).unwrap();
-    std::fs::write(&script, DRIVE).unwrap();
-    let out = std::process::Command::new("timeout")
-        .args([
-            "120",
-            "xvfb-run",
-            "-a",
-            "-s",
-            "-screen 0 640x480x24",
-            "bash",
-        ])
-        .arg(&script)
-        .env("SDFC", env!("CARGO_BIN_EXE_sdfc"))
-        .env("SCENE", &scene)
-        .env("LOG", &log)
-        .output()
-        .unwrap();
-    let steps = String::from_utf8_lossy(&out.stdout);
-    let errors = String::from_utf8_lossy(&out.stderr);
-    let viewer = std::fs::read_to_string(&log).unwrap_or_default();
-    let text = std::fs::read_to_string(&scene).unwrap();
-    let context = format!("steps:\n{steps}\n{errors}\nviewer:\n{viewer}\nfile:\n{text}");
-    if viewer.contains("no GPU adapter") && !require {
-        eprintln!("SKIPPED: no adapter for the viewer's window:\n{context}");
+    let broken = BALL.replace("sphere(1)", "sphere(oops)");
+    let Some(Driven {
+        text,
+        viewer,
+        context,
+        ..
+    }) = drive("ball.sdf", &broken, DRIVE, "the viewer's mouse test")
+    else {
         return;
-    }
-    assert!(steps.contains("exit=0"), "{context}");
+    };
+
     for said in [
         "add seed `s0` to atlas `a`: written",
         "remove seed `s0`: written",
@@ -655,55 +688,17 @@ echo "exit=$?"
 
 #[test]
 fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
-    let require = std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1");
-    let has = |tool: &str| {
-        std::process::Command::new(tool)
-            .arg("--help")
-            .output()
-            .is_ok()
+    let source = "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n";
+    let Some(Driven {
+        dir,
+        text,
+        viewer,
+        context,
+    }) = drive("knob.sdf", source, DRIVE_PARAMS, "the viewer's slider test")
+    else {
+        return;
     };
-    if !has("xvfb-run") || !has("xdotool") {
-        if require {
-            panic!("SDFC_REQUIRE_GPU=1 but xvfb-run or xdotool is missing");
-        }
-        eprintln!("SKIPPED: no xvfb-run or xdotool for the viewer's slider test");
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("knob.sdf");
-    let log = dir.path().join("view.log");
-    let script = dir.path().join("drive.sh");
-    std::fs::write(
-        &scene,
-        "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n",
-    )
-    .unwrap();
-    std::fs::write(&script, DRIVE_PARAMS).unwrap();
-    let out = std::process::Command::new("timeout")
-        .args([
-            "120",
-            "xvfb-run",
-            "-a",
-            "-s",
-            "-screen 0 640x480x24",
-            "bash",
-        ])
-        .arg(&script)
-        .env("SDFC", env!("CARGO_BIN_EXE_sdfc"))
-        .env("SCENE", &scene)
-        .env("LOG", &log)
-        .output()
-        .unwrap();
-    let steps = String::from_utf8_lossy(&out.stdout);
-    let errors = String::from_utf8_lossy(&out.stderr);
-    let viewer = std::fs::read_to_string(&log).unwrap_or_default();
-    let text = std::fs::read_to_string(&scene).unwrap();
-    let context = format!("steps:\n{steps}\n{errors}\nviewer:\n{viewer}\nfile:\n{text}");
-    if viewer.contains("no GPU adapter") && !require {
-        eprintln!("SKIPPED: no adapter for the viewer's window:\n{context}");
-        return;
-    }
-    assert!(steps.contains("exit=0"), "{context}");
+
     // The drag built no pipeline: one, for the first load.
     let moved = viewer
         .lines()
@@ -737,7 +732,7 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
     assert!(value > 0.55 && value <= 1.0, "{value}\n{context}");
     assert_eq!(
         text.replacen(&format!("{value}"), "0.5", 1),
-        "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n",
+        source,
         "{context}"
     );
 }

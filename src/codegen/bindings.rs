@@ -94,10 +94,12 @@ pub fn table(textures: &[TextureUse], tables: bool, params: bool) -> Vec<Binding
             resource: Resource::Sampler(i),
         });
     }
-    // Every entry point that evaluates the scene may read it: the shapes' groups, and the
-    // atlases (a displacement's height reads one from `scene_map`).
-    if tables {
-        let used_by = vec![
+    // Every entry point that evaluates the scene may read these (until naga's
+    // `Module::derive_users` says which do): the tables hold the shapes' groups and the
+    // atlases (a displacement's height reads one from `scene_map`), the parameters
+    // every run-time number.
+    let scene = || {
+        vec![
             "fs_main",
             "fs_aov",
             "cs_points",
@@ -105,36 +107,30 @@ pub fn table(textures: &[TextureUse], tables: bool, params: bool) -> Vec<Binding
             "cs_atlas",
             "cs_material",
             "cs_bake",
-        ];
-        out.push(Binding {
-            group: RENDER_GROUP,
-            binding: out.len() as u32,
-            name: "tables".into(),
-            kind: Kind::StorageRead,
-            detail: "array<u32>".into(),
-            used_by,
-            resource: Resource::Tables,
-        });
-    }
-    if params {
-        out.push(Binding {
-            group: RENDER_GROUP,
-            binding: out.len() as u32,
-            name: "params".into(),
-            kind: Kind::Uniform,
-            detail: "Params".into(),
-            used_by: vec![
-                "vs_main",
-                "fs_main",
-                "fs_aov",
-                "cs_points",
-                "cs_grid",
-                "cs_atlas",
-                "cs_material",
-                "cs_bake",
-            ],
-            resource: Resource::Params,
-        });
+        ]
+    };
+    let shared = [
+        (
+            tables,
+            "tables",
+            Kind::StorageRead,
+            "array<u32>",
+            Resource::Tables,
+        ),
+        (params, "params", Kind::Uniform, "Params", Resource::Params),
+    ];
+    for (wanted, name, kind, detail, resource) in shared {
+        if wanted {
+            out.push(Binding {
+                group: RENDER_GROUP,
+                binding: out.len() as u32,
+                name: name.into(),
+                kind,
+                detail: detail.into(),
+                used_by: scene(),
+                resource,
+            });
+        }
     }
     let compute = [
         (

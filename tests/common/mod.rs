@@ -261,3 +261,28 @@ pub fn error_codes(src: &str) -> Vec<&'static str> {
     c.dedup();
     c
 }
+
+/// Holes in a GPU frame of `shape` seen through `view`: the pixels a conservative CPU
+/// trace hits (half steps, `steps × 4` of them) that the frame misses. Returns
+/// (covered, holes).
+pub fn holes(
+    shape: &sdfc::ir::Shape,
+    view: &sdfc::view::View,
+    frame: &sdfc::gpu::Frame,
+    steps: u32,
+) -> (usize, usize) {
+    let (mut covered, mut holes) = (0, 0);
+    let (w, h) = (view.width as f64, view.height as f64);
+    for y in 0..view.height {
+        for x in 0..view.width {
+            let dir = view.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            if sdfc::view::trace_cpu(shape, view, dir, 0.5, steps * 4).is_some() {
+                covered += 1;
+                if frame.position[(y * view.width + x) as usize][3] < 0.0 {
+                    holes += 1;
+                }
+            }
+        }
+    }
+    (covered, holes)
+}

@@ -72,7 +72,8 @@ codes! {
     W_TANGENT_PARALLEL = "W0007": "a seed tangent parallel to the surface normal (the default frame is used)";
     W_MIRRORED_SEED = "W0008": "a seed on the mirrored side of an atlas's `mirror` plane (never used)";
     W_NO_REST_POSE = "W0009": "an atlas whose shape the render uses through a warp without an inverse (`elongate`), or in too many places";
-    W_ATLAS_ON_PARAMS = "W0010": "an atlas on a shape that depends on run-time parameters: its geometry is computed at their current values and does not follow them";
+    // W0010 (an atlas on a shape that depends on parameters) is retired: such an
+    // atlas now follows them (codegen::moving). Its number is not reused.
     N_SEED_MOVED = "N0001": "a seed off the surface, moved onto it (the note gives the distance)";
     N_TRUNCATED = "N0002": "more diagnostics than a file may report; the rest are counted, not shown";
     N_ATLAS_ON_DISPLACED = "N0003": "an atlas on a displaced or shell-mapped shape (it works, at the cost of a walk of the base's atlas per evaluation)";

@@ -111,10 +111,12 @@ pub fn run(args: &RenderArgs, gpu: &Gpu, module: &Module, view: &View, seconds: 
     bar.set_message("frames");
     let mut frames: Vec<Frame> = Vec::with_capacity(times.len());
     for (i, t) in times.iter().enumerate() {
-        renderer.set_params(
-            gpu,
-            &layout.bytes(&|name| (name == "time").then(|| vec![*t])),
-        );
+        let time = |name: &str| (name == "time").then(|| vec![*t]);
+        if let Err(e) = renderer.set_param_values(gpu, module, &time) {
+            bar.abandon();
+            eprintln!("error: frame {i} (time {t} s): {e}");
+            return ExitCode::from(super::exit::USAGE);
+        }
         let frame = match renderer.frames(gpu, view, args.view, 0, 1) {
             Ok((f, _)) => f,
             Err(e) => {

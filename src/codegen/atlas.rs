@@ -57,6 +57,7 @@ impl SeedData {
 }
 
 use super::emit::{arg, lit, point_expr, vec3, Writer};
+use super::moving::{adjacency, reserve, SeedsAt, SEED_WORDS};
 use super::template;
 use crate::uv::grid::SeedGrid;
 use crate::uv::logmap::sharp_angle;
@@ -83,13 +84,15 @@ pub fn emit(
     options: &super::Options,
     words: &mut Vec<u32>,
     groups: &mut Vec<std::sync::Arc<crate::ir::group::Group>>,
-) -> Result<String, template::Mismatch> {
+    moving: Option<usize>,
+) -> Result<(String, Option<SeedsAt>), template::Mismatch> {
     let (form, warm) = (options.walk, !options.cold);
     let p = &atlas.params;
     let mut w = Writer::new(&format!("atlas_{k}_f"));
     w.unions_as_code = options.unions_as_code;
     w.guard_cost = options.bounds.min_cost();
-    let pruning = (options.prune && !options.constant_uv)
+    // A moving atlas's seeds move: its walks are not pruned by where they lie.
+    let pruning = (options.prune && !options.constant_uv && moving.is_none())
         .then(|| atlas.pruning())
         .flatten();
     let field_fn = field_fn(k, atlas, options, &mut w, pruning.as_ref(), words, groups);
@@ -105,6 +108,18 @@ pub fn emit(
         (DVec3::ZERO, DVec3::ONE, [1; 3])
     } else {
         (grid.min, DVec3::ONE / grid.cell, grid.dims)
+    };
+    let (tables, at) = tables(
+        k,
+        atlas,
+        grid,
+        words,
+        options.seed_data.in_buffer(atlas.seeds.len()),
+        moving,
+    );
+    let sigma = match at.and_then(|a| a.sigma) {
+        Some(_) => format!("bitcast<f32>(tables[ATLAS_{k}_SIGMA_AT])"),
+        None => lit(atlas.sigma),
     };
     let values = [
         ("name", atlas.name.clone()),
@@ -124,16 +139,7 @@ pub fn emit(
         ("fd_floor", lit(p.fd_floor)),
         ("theta0", lit(sharp_angle(p.sharp_tolerance))),
         ("cells", cells.to_string()),
-        (
-            "tables",
-            tables(
-                k,
-                atlas,
-                grid,
-                words,
-                options.seed_data.in_buffer(atlas.seeds.len()),
-            ),
-        ),
+        ("tables", tables),
         (
             "walk_form",
             String::from(match form {
@@ -155,7 +161,7 @@ pub fn emit(
                 grid_dims[0], grid_dims[1], grid_dims[2]
             ),
         ),
-        ("sigma", lit(atlas.sigma)),
+        ("sigma", sigma),
         (
             "entry",
             if options.constant_uv {
@@ -167,7 +173,7 @@ pub fn emit(
         ("warm", warm.to_string()),
         ("max_distance", lit(p.max_distance)),
     ];
-    template::fill(template::ATLAS, &values)
+    Ok((template::fill(template::ATLAS, &values)?, at))
 }
 
 /// The atlas's field function `atlas_K_f`, written with `w` (whose helpers go with it);
@@ -394,10 +400,6 @@ pub fn at(k: usize, atlas: &Atlas) -> String {
     out
 }
 
-/// Words per seed record in the `tables` buffer ([`SeedData`]): position,
-/// normal and e1 (3 each), then the offset (2).
-pub const SEED_WORDS: usize = 11;
-
 /// The atlas's constants, read by the walk through small accessors (`atlas_K_p(j)`,
 /// `_n`, `_e1`, `_offset`, `_adj_start`, `_adj`, `_adj_d`).
 ///
@@ -416,17 +418,22 @@ pub const SEED_WORDS: usize = 11;
 /// super-linearly on some drivers (Mesa's lavapipe: the robot's 1,788-entry grid took
 /// 111 s to its cs_atlas pipeline and 68 s to its render pipeline; 2.2 s and 2.8 s
 /// without it).
+///
+/// A moving atlas (`moving`: room for that many adjacency entries; [`super::moving`])
+/// has its records, and σ, in the buffer, where the host rewrites them.
 fn tables(
     k: usize,
     atlas: &Atlas,
     grid: &SeedGrid,
     words: &mut Vec<u32>,
     in_buffer: bool,
-) -> String {
-    let mut text = if in_buffer {
-        seeds_in_buffer(k, atlas, words)
+    moving: Option<usize>,
+) -> (String, Option<SeedsAt>) {
+    let (mut text, at) = if in_buffer || moving.is_some() {
+        let (text, at) = seeds_in_buffer(k, atlas, words, moving);
+        (text, Some(at))
     } else {
-        seeds_baked(k, atlas)
+        (seeds_baked(k, atlas), None)
     };
     let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
         text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
@@ -438,22 +445,7 @@ fn tables(
         "BOUND",
         &mut grid.bound.iter().map(|&v| (v as f32).to_bits()),
     );
-    text
-}
-
-/// The merge graph's adjacency as CSR: starts (one per seed, and the end), neighbours
-/// and edge lengths.
-fn adjacency(atlas: &Atlas) -> (Vec<u32>, Vec<u32>, Vec<f64>) {
-    let mut start = vec![0u32];
-    let (mut adj, mut adj_d) = (Vec::new(), Vec::new());
-    for list in &atlas.graph.neighbors {
-        for &(j, d) in list {
-            adj.push(j as u32);
-            adj_d.push(d);
-        }
-        start.push(adj.len() as u32);
-    }
-    (start, adj, adj_d)
+    (text, at)
 }
 
 /// The seeds and the adjacency as `var<private>` arrays, with their accessors.
@@ -513,28 +505,26 @@ fn seeds_baked(k: usize, atlas: &Atlas) -> String {
 }
 
 /// The seeds' records and the adjacency appended to `words` (the `tables` buffer), with
-/// their offsets and accessors.
-fn seeds_in_buffer(k: usize, atlas: &Atlas, words: &mut Vec<u32>) -> String {
+/// their offsets and accessors; a moving atlas's with room for `moving` adjacency
+/// entries and its σ.
+fn seeds_in_buffer(
+    k: usize,
+    atlas: &Atlas,
+    words: &mut Vec<u32>,
+    moving: Option<usize>,
+) -> (String, SeedsAt) {
+    let at = reserve(atlas, moving.unwrap_or(0), moving.is_some(), words);
     let mut text = String::new();
-    let mut put = |name: &str, values: &mut dyn Iterator<Item = u32>| {
-        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {}u;\n", words.len());
-        words.extend(values);
+    let mut put = |name: &str, offset: u32| {
+        text += &format!("const ATLAS_{k}_{name}_AT: u32 = {offset}u;\n");
     };
-    let f = |v: f64| (v as f32).to_bits();
-    put(
-        "SEEDS",
-        &mut atlas.seeds.iter().flat_map(|s| {
-            let (p, n, e1) = (s.seed.p, s.seed.n, s.seed.e1);
-            [
-                p.x, p.y, p.z, n.x, n.y, n.z, e1.x, e1.y, e1.z, s.offset.x, s.offset.y,
-            ]
-            .map(f)
-        }),
-    );
-    let (start, adj, adj_d) = adjacency(atlas);
-    put("ADJ_START", &mut start.into_iter());
-    put("ADJ", &mut adj.into_iter());
-    put("ADJ_D", &mut adj_d.into_iter().map(f));
+    put("SEEDS", at.seeds);
+    put("ADJ_START", at.adj_start);
+    put("ADJ", at.adj);
+    put("ADJ_D", at.adj_d);
+    if let Some(s) = at.sigma {
+        put("SIGMA", s);
+    }
     let w = SEED_WORDS;
     let word = |at: String| format!("bitcast<f32>(tables[{at}])");
     let vec3 = |at: &str| {
@@ -558,7 +548,7 @@ fn seeds_in_buffer(k: usize, atlas: &Atlas, words: &mut Vec<u32>) -> String {
             word(format!("ATLAS_{k}_ADJ_D_AT + t")),
         ],
     );
-    text
+    (text, at)
 }
 
 /// The accessors of an atlas's seeds and adjacency, given their bodies' expressions

@@ -19,6 +19,7 @@ pub mod inline_cost;
 mod literal;
 mod manifest;
 pub mod mesh;
+pub mod moving;
 pub mod params;
 pub mod shake;
 pub mod targets;
@@ -27,7 +28,7 @@ pub mod users;
 
 pub use manifest::*;
 
-pub use atlas::SEED_WORDS;
+pub use moving::{MovingAtlas, MovingError, SEED_WORDS};
 
 pub use atlas::{SeedData, SeedGridChoice, WalkForm, AUTO_BAKED_SEEDS};
 pub use bindings::Binding;
@@ -60,6 +61,9 @@ pub struct Module {
     pub manifest: Manifest,
     /// Which scene definition each generated function came from.
     pub source_map: Vec<SourceRegion>,
+    /// The atlases whose shapes depend on run-time parameters: their records in the
+    /// `tables` buffer follow the parameters ([`Module::tables_at`]).
+    pub moving: Vec<MovingAtlas>,
 }
 
 /// The scene definition a region of generated code came from.
@@ -296,6 +300,7 @@ pub fn generate(
         groups: Vec::new(),
         unions_as_code: options.unions_as_code,
         guard_cost: options.bounds.min_cost(),
+        moving: Vec::new(),
     };
     g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
@@ -346,6 +351,8 @@ struct Generator<'a> {
     unions_as_code: bool,
     /// `Options::bounds`.
     guard_cost: Option<f64>,
+    /// The atlases on moving shapes, with their records' offsets in `tables`.
+    moving: Vec<MovingAtlas>,
 }
 
 impl Generator<'_> {
@@ -487,14 +494,30 @@ impl Generator<'_> {
         for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
             let Some(a) = prepared else { continue };
             let start = self.out.len();
-            let code = atlas::emit(
+            // An atlas on a moving shape: its seeds are rewritten by the host, so it
+            // scans them without the grid, with room for every declared merge.
+            let moving = a.shape.is_dynamic().then_some(2 * def.merges.len());
+            let grid = match moving {
+                Some(_) => crate::uv::grid::SeedGrid::single(a.seeds.len()),
+                None => options.seed_grid.grid(a),
+            };
+            let (code, at) = atlas::emit(
                 k,
                 a,
-                &options.seed_grid.grid(a),
+                &grid,
                 options,
                 &mut self.tables,
                 &mut self.groups,
+                moving,
             )?;
+            if let (Some(_), Some(at)) = (moving, at) {
+                self.moving.push(MovingAtlas {
+                    index: k,
+                    def: def.clone(),
+                    atlas: a.clone(),
+                    at,
+                });
+            }
             self.out.push_str(&code);
             self.out.push_str(&atlas::at(k, a));
             self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
@@ -776,6 +799,7 @@ impl Generator<'_> {
             header,
             manifest,
             source_map,
+            moving: self.moving,
         }
     }
 }

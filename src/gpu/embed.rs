@@ -9,7 +9,6 @@
 use super::scene_group::{self, Resources, Stage};
 use crate::codegen::Module;
 use crate::ir::texture::Textures;
-use wgpu::util::DeviceExt;
 
 /// A compiled scene ready to draw on a host's device.
 pub struct SceneRenderer {
@@ -17,6 +16,8 @@ pub struct SceneRenderer {
     bind_group: wgpu::BindGroup,
     globals: wgpu::Buffer,
     params: Option<wgpu::Buffer>,
+    tables: Option<wgpu::Buffer>,
+    moving: scene_group::MovingTables,
 }
 
 impl SceneRenderer {
@@ -52,13 +53,7 @@ impl SceneRenderer {
                 ))
             })
             .collect::<Result<Vec<_>, String>>()?;
-        let tables = (!module.manifest.tables.is_empty()).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("sdfc tables"),
-                contents: bytemuck::cast_slice(&module.manifest.tables),
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        });
+        let tables = scene_group::tables_on(device, module);
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sdfc globals"),
             size: 9 * 16,
@@ -106,6 +101,8 @@ impl SceneRenderer {
             bind_group,
             globals,
             params,
+            tables,
+            moving: Default::default(),
         })
     }
 
@@ -120,6 +117,27 @@ impl SceneRenderer {
         if let Some(b) = &self.params {
             queue.write_buffer(b, 0, bytes);
         }
+    }
+
+    /// Queues the run-time parameters at `values` (by name; `None`: the module's
+    /// default): their block and, for atlases on moving shapes, their geometry
+    /// recomputed on the CPU when the values changed ([`crate::Module::tables_at`]),
+    /// written to the `tables` buffer. `module` is the one this renderer was made from.
+    /// On an error the block is written and those atlases keep their last geometry.
+    pub fn set_param_values(
+        &self,
+        queue: &wgpu::Queue,
+        module: &Module,
+        values: crate::ir::dynamic::Values,
+    ) -> Result<(), crate::codegen::MovingError> {
+        let bytes = module.manifest.params.bytes(values);
+        self.set_params(queue, &bytes);
+        if let Some((words, _)) = self.moving.update(module, &bytes, values)? {
+            if let Some(t) = &self.tables {
+                queue.write_buffer(t, 0, bytemuck::cast_slice(&words));
+            }
+        }
+        Ok(())
     }
 
     /// Records the full-screen draw into the caller's render pass (whose colour target

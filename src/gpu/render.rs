@@ -226,6 +226,8 @@ pub struct Renderer {
     tables: Option<wgpu::Buffer>,
     /// The run-time parameters' block, when the module has one ([`Renderer::set_params`]).
     params: Option<wgpu::Buffer>,
+    /// The moving atlases' last tables ([`Renderer::set_param_values`]).
+    moving: scene_group::MovingTables,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
@@ -288,6 +290,7 @@ impl Renderer {
             textures,
             tables,
             params,
+            moving: Default::default(),
             formats,
             pipeline_time: started.elapsed(),
             pipeline_cached,
@@ -301,6 +304,29 @@ impl Renderer {
         if let Some(b) = &self.params {
             gpu.queue.write_buffer(b, 0, bytes);
         }
+    }
+
+    /// Queues the run-time parameters at `values` (by name; `None`: the module's
+    /// default): their block and, when `module` (the one this renderer was made from)
+    /// has atlases on moving shapes and the values changed, those atlases' geometry
+    /// recomputed on the CPU reference and uploaded to the `tables` buffer. Returns the
+    /// recomputation's time, if one ran. On an error the block is written and the
+    /// atlases keep their last geometry.
+    pub fn set_param_values(
+        &self,
+        gpu: &Gpu,
+        module: &Module,
+        values: crate::ir::dynamic::Values,
+    ) -> Result<Option<Duration>, crate::codegen::MovingError> {
+        let bytes = module.manifest.params.bytes(values);
+        self.set_params(gpu, &bytes);
+        let Some((words, took)) = self.moving.update(module, &bytes, values)? else {
+            return Ok(None);
+        };
+        if let Some(t) = &self.tables {
+            gpu.queue.write_buffer(t, 0, bytemuck::cast_slice(&words));
+        }
+        Ok(Some(took))
     }
 
     /// The render group's bind group, built from the binding table.

@@ -101,21 +101,58 @@ pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::Bin
 }
 
 /// The `tables` storage buffer of a module, with its words; `None` when it has none.
+/// Writable: an atlas on a moving shape rewrites its records ([`MovingTables`]).
 pub fn tables(gpu: &Gpu, module: &Module) -> Result<Option<wgpu::Buffer>, GpuError> {
-    if module.manifest.tables.is_empty() {
-        return Ok(None);
-    }
-    gpu.scoped(|| {
-        use wgpu::util::DeviceExt;
-        Some(
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("tables"),
-                    contents: bytemuck::cast_slice(&module.manifest.tables),
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-        )
+    gpu.scoped(|| tables_on(&gpu.device, module))
+}
+
+/// [`tables`] on any device (no error scope).
+pub fn tables_on(d: &wgpu::Device, module: &Module) -> Option<wgpu::Buffer> {
+    use wgpu::util::DeviceExt;
+    (!module.manifest.tables.is_empty()).then(|| {
+        d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tables"),
+            contents: bytemuck::cast_slice(&module.manifest.tables),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        })
     })
+}
+
+/// The `tables` words of a module with atlases on moving shapes, as last uploaded,
+/// and the parameters' block they were computed for: new values recompute the
+/// atlases' geometry once ([`Module::write_tables_at`]), equal values nothing.
+#[derive(Debug, Default)]
+pub struct MovingTables {
+    last: std::sync::Mutex<Option<(Vec<u8>, Vec<u32>)>>,
+}
+
+impl MovingTables {
+    /// The words to upload for the parameters at `values` (whose block is `bytes`),
+    /// with the time the recomputation took; `None` when the module has no moving
+    /// atlas or the values are the last ones. On an error the last words stay.
+    pub fn update(
+        &self,
+        module: &Module,
+        bytes: &[u8],
+        values: crate::ir::dynamic::Values,
+    ) -> Result<Option<(Vec<u32>, std::time::Duration)>, crate::codegen::MovingError> {
+        if !module.has_moving_atlases() {
+            return Ok(None);
+        }
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        if last.as_ref().is_some_and(|(b, _)| b == bytes) {
+            return Ok(None);
+        }
+        let started = std::time::Instant::now();
+        let mut words = match last.take() {
+            Some((_, w)) => w,
+            None => module.manifest.tables.clone(),
+        };
+        let result = module.write_tables_at(values, &mut words);
+        let took = started.elapsed();
+        *last = Some((bytes.to_vec(), words.clone()));
+        result.map(|()| Some((words, took)))
+    }
 }
 
 /// The run-time parameters' uniform block of a module at its defaults (the values

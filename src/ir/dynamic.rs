@@ -5,9 +5,11 @@
 //! current values, which the CPU reference evaluates; its bounds and Lipschitz
 //! constant hold over the parameters' whole ranges.
 
+use super::prim::Slot as PrimSlot;
+use super::Op;
 use crate::sema::builtins::BuiltinId as B;
 use crate::sema::Value;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// A run-time number of a node: the generated code computes `value · scale`.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,6 +124,96 @@ pub fn of(builtin: B, args: &[Value], slots: usize) -> Option<Dyn> {
         }
     }
     one.or_else(|| prim.iter().any(Option::is_some).then_some(Dyn::Prim(prim)))
+}
+
+/// A parameter's value by name (`None`: its current value).
+pub type Values<'a> = &'a dyn Fn(&str) -> Option<Vec<f64>>;
+
+/// A slot's number at `values`: its value times its scale, by component; `None`
+/// when it is not a number.
+fn number(s: &Slot, values: Values) -> Option<Vec<f64>> {
+    let v = crate::sema::params::value_at(&s.value, values);
+    let c = v.components()?;
+    Some(c.iter().map(|x| x * s.scale).collect())
+}
+
+/// A vector slot's three components (a float broadcast, as the generated code does).
+fn three(c: &[f64]) -> Option<DVec3> {
+    match c.len() {
+        1 => Some(DVec3::splat(c[0])),
+        3 => Some(DVec3::from_slice(c)),
+        _ => None,
+    }
+}
+
+/// Writes the node's run-time numbers at `values` into `op`, as the generated code
+/// computes them from the parameters' block: what the CPU reference then evaluates.
+/// `None` when a number cannot be computed or does not fit the op.
+pub fn apply(d: &Dyn, op: &mut Op, values: Values) -> Option<()> {
+    match (d, op) {
+        (Dyn::Prim(slots), Op::Prim(p)) => {
+            let mut params = p.params();
+            let mut at = 0;
+            for (i, kind) in p.kind().slots.iter().enumerate() {
+                let width = match kind {
+                    PrimSlot::Float => 1,
+                    PrimSlot::Vec3 => 3,
+                };
+                if let Some(s) = slots.get(i).and_then(Option::as_ref) {
+                    let c = number(s, values)?;
+                    match kind {
+                        PrimSlot::Float => params[at] = *c.first()?,
+                        PrimSlot::Vec3 => {
+                            params[at..at + 3].copy_from_slice(&three(&c)?.to_array())
+                        }
+                    }
+                }
+                at += width;
+            }
+            *p = p.with_params(&params)?;
+        }
+        (Dyn::Rotate { axis, angle }, Op::Rotate { inverse, .. }) => {
+            let a = *number(angle, values)?.first()?;
+            *inverse = DMat3::from_axis_angle(*axis, a).transpose();
+        }
+        (Dyn::One(s), op) => {
+            let c = number(s, values)?;
+            let x = *c.first()?;
+            match op {
+                Op::Csg { k, .. } => *k = x,
+                Op::Translate { offset, .. } => *offset = three(&c)?,
+                Op::Scale { factor, .. } => *factor = three(&c)?,
+                Op::Twist { rate, .. } | Op::Bend { rate, .. } => *rate = x,
+                Op::Elongate { h, .. } => *h = three(&c)?,
+                Op::Round { r, .. } => *r = x,
+                // The generated code's number is the half thickness.
+                Op::Shell { thickness, .. } => *thickness = 2.0 * x,
+                _ => return None,
+            }
+        }
+        _ => return None,
+    }
+    Some(())
+}
+
+impl super::Shape {
+    /// The shape at other parameter values: each node's run-time numbers written at
+    /// `values` ([`apply`]); bounds and Lipschitz constants, which hold over the
+    /// parameters' whole ranges, stay. `None` when a number cannot be computed.
+    pub fn at_params(&self, values: Values) -> Option<super::Shape> {
+        let mut out = self.clone();
+        for node in &mut out.nodes {
+            if let Some(d) = node.dynamic.clone() {
+                apply(&d, &mut node.op, values)?;
+            }
+        }
+        Some(out)
+    }
+
+    /// Whether some node's numbers are set at run time.
+    pub fn is_dynamic(&self) -> bool {
+        self.nodes.iter().any(|n| n.dynamic.is_some())
+    }
 }
 
 #[cfg(test)]

@@ -181,6 +181,63 @@ impl Prim {
         }
     }
 
+    /// The primitive of the same kind with parameters `v` in [`Prim::params`]' order
+    /// (its inverse); `None` when `v` is too short.
+    pub fn with_params(&self, v: &[f64]) -> Option<Prim> {
+        let at = |i: usize| v.get(i).copied();
+        let v3 = |i: usize| Some(DVec3::new(at(i)?, at(i + 1)?, at(i + 2)?));
+        Some(match *self {
+            Prim::Sphere { .. } => Prim::Sphere { r: at(0)? },
+            Prim::Box { .. } => Prim::Box { half: v3(0)? },
+            Prim::RoundBox { .. } => Prim::RoundBox {
+                half: v3(0)?,
+                r: at(3)?,
+            },
+            Prim::BoxFrame { .. } => Prim::BoxFrame {
+                half: v3(0)?,
+                e: at(3)?,
+            },
+            Prim::Torus { .. } => Prim::Torus {
+                major: at(0)?,
+                minor: at(1)?,
+            },
+            Prim::Capsule { .. } => Prim::Capsule {
+                a: v3(0)?,
+                b: v3(3)?,
+                r: at(6)?,
+            },
+            Prim::Cylinder { .. } => Prim::Cylinder {
+                r: at(0)?,
+                half_h: at(1)?,
+            },
+            Prim::HexPrism { .. } => Prim::HexPrism {
+                r: at(0)?,
+                half_h: at(1)?,
+            },
+            Prim::TriPrism { .. } => Prim::TriPrism {
+                r: at(0)?,
+                half_h: at(1)?,
+            },
+            Prim::CappedCone { .. } => Prim::CappedCone {
+                half_h: at(0)?,
+                r1: at(1)?,
+                r2: at(2)?,
+            },
+            Prim::Plane { .. } => Prim::Plane {
+                n: v3(0)?,
+                offset: at(3)?,
+            },
+            Prim::Ellipsoid { .. } => Prim::Ellipsoid { radii: v3(0)? },
+            Prim::Octahedron { .. } => Prim::Octahedron { s: at(0)? },
+            Prim::Pyramid { .. } => Prim::Pyramid { h: at(0)? },
+            Prim::Link { .. } => Prim::Link {
+                le: at(0)?,
+                r1: at(1)?,
+                r2: at(2)?,
+            },
+        })
+    }
+
     /// The WGSL call at point expression `p`, the numbers written by `float` and
     /// `vec3` (the generator's literal forms), but slot `i`'s written by `run_time(i)`
     /// where it gives one (a run-time value's expression).

@@ -437,7 +437,6 @@ impl Checker<'_> {
     fn atlas(&mut self, name: &Ident, shape: &ast::Expr, body: &[AtlasStmt], span: Span) -> DefId {
         let shape_value = self.expr(shape);
         self.check_atlas_shape(&shape_value, shape.span);
-        self.check_atlas_params(&shape_value, shape.span);
         if !matches!(shape_value, Value::Shape(_) | Value::Error) {
             self.error(
                 Diagnostic::error(

@@ -87,6 +87,65 @@ fn uniform(expr: FieldExpr, value: Value, range: Vec<Iv>, span: Span) -> Value {
     }))
 }
 
+/// The value a run-time value takes at other parameter values: `values` gives a
+/// parameter's value by name (`None`: its current value). Constants are themselves;
+/// a [`Uniform`]'s expression is folded again by the checker's own rules
+/// ([`super::fold`]), so this agrees with a check at those values
+/// (`Access::set_param`). What is not a number is [`Value::Error`].
+pub fn value_at(v: &Value, values: &dyn Fn(&str) -> Option<Vec<f64>>) -> Value {
+    let pack = |c: Vec<f64>| {
+        if c.len() == 1 {
+            Value::Float(c[0])
+        } else {
+            Value::Vec(c)
+        }
+    };
+    let u = match v {
+        Value::Float(_) | Value::Vec(_) => return v.clone(),
+        Value::Uniform(u) => u,
+        _ => return Value::Error,
+    };
+    let at = |v: &Value| value_at(v, values);
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || match &*u.expr {
+        FieldExpr::Param(p) => pack(
+            values(&p.name)
+                .filter(|c| c.len() == u.value.len())
+                .unwrap_or_else(|| u.value.clone()),
+        ),
+        FieldExpr::Unary { op, operand } => super::fold::unary(*op, &at(operand)),
+        FieldExpr::Binary { op, lhs, rhs } => super::fold::binary(*op, &at(lhs), &at(rhs)),
+        FieldExpr::Vector(items) => {
+            let mut c = Vec::new();
+            for item in items {
+                match at(item).components() {
+                    Some(x) => c.extend_from_slice(x),
+                    None => return Value::Error,
+                }
+            }
+            pack(c)
+        }
+        FieldExpr::Swizzle { base, components } => match at(base).components() {
+            Some(b) => components
+                .iter()
+                .map(|&i| b.get(i as usize).copied())
+                .collect::<Option<Vec<f64>>>()
+                .map_or(Value::Error, pack),
+            None => Value::Error,
+        },
+        FieldExpr::Call { builtin, args } => {
+            let args: Vec<Value> = args.iter().map(at).collect();
+            // The call's vector size: its widest argument (floats widen to it).
+            let n = args
+                .iter()
+                .filter_map(|a| a.components().map(<[f64]>::len))
+                .max()
+                .unwrap_or(1);
+            super::fold::math(*builtin, &args, n)
+        }
+        FieldExpr::Input(_) | FieldExpr::Atlas { .. } => Value::Error,
+    })
+}
+
 impl Checker<'_> {
     /// The value of the built-in `time` (its current value from `Access`, else 0).
     pub(crate) fn time(&mut self, span: Span) -> Value {
@@ -445,42 +504,6 @@ impl Checker<'_> {
             return false;
         }
         true
-    }
-
-    /// Warns when an atlas's own shape depends on run-time parameters: its seeds'
-    /// projections, frames and merges are computed once, at the current values.
-    pub(crate) fn check_atlas_params(&mut self, shape: &Value, span: Span) {
-        fn depends(v: &Value, seen: &mut std::collections::HashSet<*const ()>) -> bool {
-            match v {
-                Value::Uniform(_) => true,
-                Value::Shape(n) => {
-                    if !seen.insert(Arc::as_ptr(n) as *const ()) {
-                        return false;
-                    }
-                    n.args.iter().any(|a| depends(a, seen))
-                }
-                _ => false,
-            }
-        }
-        if depends(shape, &mut std::collections::HashSet::new()) {
-            self.error(
-                Diagnostic::warning(
-                    codes::W_ATLAS_ON_PARAMS,
-                    "this atlas's shape depends on run-time parameters",
-                    span,
-                    "its seeds are placed on this shape at the parameters' current values",
-                )
-                .with_note(
-                    "the atlas's geometry (seed projections, frames, merges) is computed at \
-                     compile time: a new value moves the shape but not its atlas until the scene \
-                     is compiled again",
-                )
-                .with_help(
-                    "declare the atlas on the shape at rest and move the rendered copy (its uv then \
-                     follows the rest pose, §5.1)",
-                ),
-            );
-        }
     }
 
     /// A setting (of `render` or `atlas`) or a seed that a run-time value cannot set.

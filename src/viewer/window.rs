@@ -463,10 +463,17 @@ impl App {
             );
         }
         let targets = self.targets.as_ref().expect("made above");
-        renderer.set_params(
-            gpu,
-            &self.params.bytes(&loaded.compiled.module.manifest.params),
-        );
+        let module = &loaded.compiled.module;
+        match renderer.set_param_values(gpu, module, &|n| self.params.value(n)) {
+            Ok(Some(took)) => self.params.recomputed = Some(Ok(took)),
+            Ok(None) => {}
+            Err(e) => {
+                if self.params.recomputed.as_ref().is_none_or(|r| r.is_ok()) {
+                    self.say(&format!("warning: {e}; it keeps its last geometry"));
+                }
+                self.params.recomputed = Some(Err(e.to_string()));
+            }
+        }
         let took = renderer
             .draw_into(gpu, &view, VIEWS[self.mode].0, targets)
             .map_err(ViewError::Gpu)?;

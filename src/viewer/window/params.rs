@@ -24,19 +24,19 @@ pub(crate) struct Params {
     time: f64,
     /// Pipelines built since the viewer started (one per good reload).
     pub(crate) pipelines: usize,
+    /// The last recomputation of the atlases on moving shapes: its time, or why it
+    /// failed.
+    pub(crate) recomputed: Option<Result<std::time::Duration, String>>,
 }
 
 impl Params {
-    /// The block's bytes at the current values.
-    pub(crate) fn bytes(&self, layout: &ParamsLayout) -> Vec<u8> {
-        let time = self.now();
-        layout.bytes(&|name| {
-            if name == "time" {
-                Some(vec![time])
-            } else {
-                self.values.get(name).cloned()
-            }
-        })
+    /// A parameter's current value (`time`'s from the clock).
+    pub(crate) fn value(&self, name: &str) -> Option<Vec<f64>> {
+        if name == "time" {
+            Some(vec![self.now()])
+        } else {
+            self.values.get(name).cloned()
+        }
     }
 
     fn now(&self) -> f64 {
@@ -115,8 +115,15 @@ impl App {
         };
         let v = self.params.values.get(name).cloned().unwrap_or_default();
         let shown: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
+        let atlases = match &self.params.recomputed {
+            Some(Ok(t)) => format!(
+                "; moving atlases last recomputed in {:.2} ms",
+                t.as_secs_f64() * 1e3
+            ),
+            _ => String::new(),
+        };
         self.say(&format!(
-            "parameter `{name}` = {} in [{}, {}]: {what} ({} pipelines built)",
+            "parameter `{name}` = {} in [{}, {}]: {what} ({} pipelines built{atlases})",
             shown.join(", "),
             f.min,
             f.max.map_or(String::from("∞"), |m| m.to_string()),

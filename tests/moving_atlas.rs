@@ -154,3 +154,53 @@ fn a_slider_on_the_atlas_shape_renders_as_the_scene_compiled_at_its_value() {
         assert!(p99 <= 2e-3, "w = {w}: GPU uv against the CPU by {p99}");
     }
 }
+
+/// `sdfc render --animate` on breathing_robot.sdf (its atlas on the torso, whose depth
+/// follows `time`): each frame, from one pipeline with the atlas recomputed, equals the
+/// frame `sdfc render --time T` compiles at that time. The page exported from it says
+/// that it keeps the atlas where it lies.
+#[test]
+fn an_animation_of_a_moving_atlas_equals_each_frame_compiled_at_its_time() {
+    if gpu_for_tests().is_none() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("sdfc-moving-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/breathing_robot.sdf");
+    let pattern = dir.join("f%02d.png");
+    let common = ["--size", "60x80", "--walk", "loop"];
+    let mut args = vec!["render", scene, "--animate", "1.5", "--fps", "2"];
+    args.extend(common);
+    args.extend(["-o", pattern.to_str().unwrap()]);
+    let (code, _, err) = common::sdfc(&args);
+    assert_eq!(code, 0, "{err}");
+    for (i, t) in [0.0, 0.5, 1.0].iter().enumerate() {
+        let still = dir.join(format!("t{i}.png"));
+        let time = t.to_string();
+        let mut args = vec!["render", scene, "--time", &time];
+        args.extend(common);
+        args.extend(["-o", still.to_str().unwrap()]);
+        let (code, _, err) = common::sdfc(&args);
+        assert_eq!(code, 0, "{err}");
+        let frame = image::open(dir.join(format!("f{i:02}.png")))
+            .unwrap()
+            .to_rgba8();
+        let still = image::open(&still).unwrap().to_rgba8();
+        let (mean, share) = common::image_difference(frame.as_raw(), still.as_raw());
+        eprintln!("time {t}: frame against its own compile {mean:.3}/255");
+        assert!(mean <= 0.25 && share <= 0.002, "time {t}: {mean}, {share}");
+    }
+    let (code, _, err) = common::sdfc(&[
+        "export-web",
+        scene,
+        "-o",
+        dir.join("page").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning: atlas `skin` is on a shape that moves"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -80,6 +80,8 @@ fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
         text: &source,
         base: &base,
     };
+    let moving = super::bench_params::recompute_times(&unrolled.module);
+    let moving = super::bench_params::line(&unrolled.module, &moving);
     let forms = Forms::compile(&from, args, unrolled.module)?;
     let mut view = super::view_for(&analysis, args.shape.as_deref())?;
     (view.width, view.height) = args.size.unwrap_or((1920, 1080));
@@ -112,6 +114,9 @@ fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
         again,
     };
     report.print_rows();
+    if let Some(line) = moving {
+        println!("{line}");
+    }
     let ratios = report.ratios(rows.undisplaced, alternated, &analysis, args);
     print_ratios(&ratios);
     if let Some(path) = &args.json {

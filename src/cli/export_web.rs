@@ -49,6 +49,9 @@ pub fn run(args: ExportWebArgs) -> ExitCode {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| String::from("scene"));
+    for w in sdfc::web::warnings(&compiled.module) {
+        eprintln!("warning: {w}");
+    }
     match sdfc::web::export(&args.output, &title, &compiled.module, &textures) {
         Ok(written) => {
             println!(

@@ -3,6 +3,7 @@
 pub mod animate;
 pub mod bake;
 pub mod bench;
+mod bench_params;
 pub mod check;
 pub mod compile;
 pub mod eval;

@@ -318,7 +318,8 @@ fn moved_seeds(def: &AtlasDef, atlas: &Atlas, out: &mut Vec<Diagnostic>) {
                     fmt_vec(seed.seed.p)
                 )),
             );
-        } else if seed.moved > 1e-3 * s {
+        } else if seed.moved > 1e-3 * s && !atlas.shape.is_dynamic() {
+            // (On a moving shape the seeds move with it: where one lands is no news.)
             out.push(
                 Diagnostic::note_diag(
                     codes::N_SEED_MOVED,

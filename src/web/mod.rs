@@ -17,6 +17,23 @@ use std::path::{Path, PathBuf};
 pub const DRIVER_JS: &str = include_str!("../../web/sdfc.js");
 const INDEX_HTML: &str = include_str!("../../web/index.html");
 
+/// What the page does not do that sdfc's own runtime does: an atlas on a moving shape
+/// (whose geometry sdfc recomputes on the CPU when a parameter changes,
+/// [`crate::codegen::moving`]) keeps its geometry at the module's values in the page,
+/// which has no CPU reference. One warning per such atlas.
+pub fn warnings(module: &crate::codegen::Module) -> Vec<String> {
+    module
+        .moving
+        .iter()
+        .map(|m| {
+            format!(
+                "atlas `{}` is on a shape that moves with parameters: the page keeps its seeds where they lie at the exported values (sdfc render, view and embedding hosts recompute them)",
+                m.def.name
+            )
+        })
+        .collect()
+}
+
 /// The page, titled `title`. A `live` page (`sdfc serve`) follows the server's
 /// `/events` instead of loading the files beside it once.
 pub fn index_html(title: &str, live: bool) -> Vec<u8> {

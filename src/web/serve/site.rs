@@ -114,11 +114,14 @@ pub fn build(source: &Source) -> Result<Built, Failed> {
         .into_iter()
         .map(|(p, b)| (p.to_string_lossy().replace('\\', "/"), b))
         .collect();
-    let warnings = if analysis.diagnostics.is_empty() {
+    let mut warnings = if analysis.diagnostics.is_empty() {
         String::new()
     } else {
         diagnostic::render(&name, &text, &analysis.diagnostics, false)
     };
+    for w in super::super::warnings(&compiled.module) {
+        warnings += &format!("warning: {w}\n");
+    }
     Ok(Built {
         files,
         warnings,

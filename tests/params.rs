@@ -119,6 +119,16 @@ const CASES: &[Case] = &[
         lo: 0.05,
         hi: 0.4,
     },
+    Case {
+        template: "sphere(0.3).repeat([{P}, 8, {P}])",
+        lo: 0.9,
+        hi: 1.6,
+    },
+    Case {
+        template: "sphere(0.8).displace(0.5, scale: {P})",
+        lo: 0.05,
+        hi: 0.5,
+    },
 ];
 
 fn num(x: f64) -> String {
@@ -280,6 +290,7 @@ fn no_ray_passes_through_the_surface_at_the_ends_of_a_range() {
         ("box([0.8, 2.5, 0.8]).twist(rate: {P})", -1.8, 1.8),
         ("box([3, 0.4, 0.8]).bend(rate: {P})", -0.8, 0.8),
         ("octahedron(0.8).scale([1, {P}, 1.5])", 0.4, 1.6),
+        ("box([0.8, 1, 0.6]).displace(0.5, scale: {P})", 0.05, 0.6),
         (
             "smooth_union(box([0.4, 2, 0.4]), sphere(0.7).translate([0.6, 0, 0]), {P})",
             0.05,

@@ -338,17 +338,23 @@ impl Writer {
         if !self.heights.iter().any(|h| h.id == height.id) {
             self.heights.push(height.clone());
         }
+        // A number proportional to the scale: from the parameters' block when the
+        // scale is a run-time value.
+        let scaled = |x: f64| match &height.run_time_scale {
+            Some(v) => format!("({} * {})", super::params::expr(v), lit(x / height.scale)),
+            None => lit(x),
+        };
         let b = self.fresh("b");
         self.line(&format!("let {b} = {helper}({p});"));
-        let v = self.with_d(&b, &format!("{b}.x - {}", lit(height.hi)));
+        let v = self.with_d(&b, &format!("{b}.x - {}", scaled(height.hi)));
         self.line(&format!("var {d} = {v};"));
-        self.line(&format!("if ({b}.x < -{}) {{", lit(height.band_width())));
+        self.line(&format!("if ({b}.x < -{}) {{", scaled(height.band_width())));
         self.indent += 1;
-        self.line(&format!("{d}.x = {b}.x - {};", lit(height.lo)));
+        self.line(&format!("{d}.x = {b}.x - {};", scaled(height.lo)));
         self.indent -= 1;
         self.line(&format!(
             "}} else if ({b}.x <= {}) {{",
-            lit(height.band_width())
+            scaled(height.band_width())
         ));
         self.indent += 1;
         let (q, g) = self.projection(&helper, p, &b, height.grad_step);
@@ -588,7 +594,10 @@ pub fn point_expr(node: &Node, p: &str) -> Option<String> {
                 ),
             )
         }
-        Op::Repeat { period, .. } => format!("op_repeat({p}, {})", vec3(*period)),
+        Op::Repeat { period, .. } => format!(
+            "op_repeat({p}, {})",
+            run_time(true).unwrap_or_else(|| vec3(*period))
+        ),
         Op::Mirror { normal, .. } => format!("op_mirror({p}, {})", vec3(*normal)),
         Op::Elongate { h, .. } => format!(
             "op_elongate({p}, {})",

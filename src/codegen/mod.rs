@@ -597,7 +597,9 @@ impl Generator<'_> {
                 self.out,
                 "// {what} (level-0 texels: a zero footprint).\nfn height_{}(p: vec3<f32>, n: vec3<f32>) -> {ty} {{\n    let footprint = 0.0;\n    let tangent_u = normalize(select(cross(n, vec3<f32>(0.0, 0.0, 1.0)), cross(n, vec3<f32>(1.0, 0.0, 0.0)), abs(n.z) > 0.9));\n    let tangent_v = cross(n, tangent_u);\n{samples}{lets}    return {} * {ty}({e});\n}}\n",
                 h.id,
-                lit(h.scale)
+                h.run_time_scale
+                    .as_ref()
+                    .map_or_else(|| lit(h.scale), |v| format!("({})", params::expr(v)))
             );
         }
         if problems.is_empty() {

@@ -58,6 +58,11 @@ pub struct Height {
     /// 1 for a displacement's height; 2 for a shell map's uv (`height_ID` then returns
     /// a `vec2<f32>`).
     pub dims: u8,
+    /// A run-time scale's value ([`Value::Uniform`]): the generated code computes the
+    /// scale, and `lo`, `hi` and the band (each proportional to it) from the
+    /// parameters' block; `scale`, `lo`, `hi` and `slope` hold their current values
+    /// (the node's bounds and Lipschitz bound hold over the range).
+    pub run_time_scale: Option<Value>,
 }
 
 impl Height {
@@ -81,6 +86,7 @@ impl Height {
             id,
             grad_step,
             dims: 1,
+            run_time_scale: None,
         }
     }
 

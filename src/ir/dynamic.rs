@@ -85,6 +85,8 @@ pub const TARGETS: &[(B, &str, Target)] = &[
     (B::Elongate, "amount", Target::One(1.0)),
     (B::Round, "radius", Target::One(1.0)),
     (B::Shell, "thickness", Target::One(0.5)),
+    (B::Repeat, "period", Target::One(1.0)),
+    (B::Displace, "scale", Target::One(1.0)),
 ];
 
 /// The run-time numbers of a call of shape builtin `builtin` with `args` (some of them
@@ -188,6 +190,14 @@ pub fn apply(d: &Dyn, op: &mut Op, values: Values) -> Option<()> {
                 Op::Round { r, .. } => *r = x,
                 // The generated code's number is the half thickness.
                 Op::Shell { thickness, .. } => *thickness = 2.0 * x,
+                Op::Repeat { period, .. } => *period = three(&c)?,
+                // d = scale · height: its range and slope scale with it (the checker
+                // keeps the scale positive over its range).
+                Op::Displace { height, .. } => {
+                    let h = std::sync::Arc::make_mut(height);
+                    let r = x / h.scale;
+                    (h.lo, h.hi, h.slope, h.scale) = (h.lo * r, h.hi * r, h.slope * r, x);
+                }
                 _ => return None,
             }
         }

@@ -1,6 +1,7 @@
 //! Lowering: folded shape values of the checked program → IR nodes with bounds
 //! and Lipschitz constants.
 
+use super::dynamic::Dyn;
 use super::texture::Textures;
 use super::*;
 use crate::sema::builtins::BuiltinId as B;
@@ -655,6 +656,11 @@ impl Lowerer<'_> {
         let node = &mut self.out[id];
         node.bounds = bounds;
         node.lipschitz = lipschitz;
+        // A displacement's range of d scales with its scale: the generated code
+        // computes it from the parameters' block (the band follows the value).
+        if let (Op::Displace { height: h, .. }, Dyn::One(s)) = (&mut node.op, &d) {
+            std::sync::Arc::make_mut(h).run_time_scale = Some(s.value.clone());
+        }
         node.dynamic = Some(std::sync::Arc::new(d));
         Some(())
     }

@@ -54,6 +54,8 @@ pub const RUN_TIME_ARGS: &[(BuiltinId, &[&str])] = &[
     (BuiltinId::Elongate, &["amount"]),
     (BuiltinId::Round, &["radius"]),
     (BuiltinId::Shell, &["thickness"]),
+    (BuiltinId::Repeat, &["period"]),
+    (BuiltinId::Displace, &["scale"]),
 ];
 
 /// Whether argument `param` of shape builtin `b` may be a run-time value.

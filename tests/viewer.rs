@@ -643,7 +643,9 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
 }
 
 /// Sliders in a real window: `P` selects the parameter, a right-drag moves it (a new
-/// picture, no new pipeline), `W` writes it back as the default (the comment kept).
+/// picture, no new pipeline); `P` again selects `time`, which a right-drag scrubs
+/// (another picture); `W` writes the parameter back as the default (the comment
+/// kept).
 const DRIVE_PARAMS: &str = r#"
 set -u
 "$SDFC" view "$SCENE" 2>"$LOG" &
@@ -677,6 +679,17 @@ sleep 0.5
 echo "step: a screenshot after"
 xdotool key s
 wait_until 'saved' "$LOG" 2
+echo "step: P again selects time, and a right-drag scrubs it"
+xdotool key p
+wait_until 'parameter `time` = 0.0000' "$LOG" 1
+xdotool mousemove --window "$win" 60 60; sleep 0.2
+xdotool mousedown 3; sleep 0.2
+for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 60; sleep 0.05; done
+sleep 0.2; xdotool mouseup 3
+wait_until 'moved, with no new pipeline' "$LOG" 2
+sleep 0.5
+xdotool key s
+wait_until 'saved' "$LOG" 3
 echo "step: W writes it back"
 xdotool key w
 wait_until "set the parameters' defaults" "$LOG" 1
@@ -688,7 +701,7 @@ echo "exit=$?"
 
 #[test]
 fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
-    let source = "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n";
+    let source = "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius).translate([0.6 * sin(time), 0, 0]) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n";
     let Some(Driven {
         dir,
         text,
@@ -712,15 +725,29 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
         .filter(|p| p.extension().is_some_and(|e| e == "png"))
         .collect();
     shots.sort();
-    assert_eq!(shots.len(), 2, "{context}");
-    let (a, b) = (
-        image::open(&shots[0]).unwrap().to_rgba8(),
-        image::open(&shots[1]).unwrap().to_rgba8(),
-    );
+    assert_eq!(shots.len(), 3, "{context}");
+    let shot = |i: usize| image::open(&shots[i]).unwrap().to_rgba8();
+    let (a, b, c) = (shot(0), shot(1), shot(2));
     let (mean, _) = common::image_difference(a.as_raw(), b.as_raw());
     assert!(
         mean > 2.0,
         "the drag did not change the picture: mean {mean}/255\n{context}"
+    );
+    // Scrubbed forward by about 1.8 s of `time` (the ball moves by 0.6 sin(1.8),
+    // about 0.58), from one pipeline still.
+    let (mean, _) = common::image_difference(b.as_raw(), c.as_raw());
+    assert!(
+        mean > 2.0,
+        "the scrub did not move the ball: mean {mean}/255\n{context}"
+    );
+    let scrubbed = viewer
+        .lines()
+        .filter(|l| l.contains("moved, with no new pipeline"))
+        .nth(1)
+        .unwrap_or_else(|| panic!("{context}"));
+    assert!(
+        scrubbed.contains("parameter `time` = ") && scrubbed.contains("(1 pipelines built)"),
+        "{context}"
     );
     // Written back: the new default in range, everything else as it was.
     let line = text.lines().nth(1).unwrap();

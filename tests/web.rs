@@ -522,8 +522,9 @@ fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
     let dir = tempfile::tempdir().unwrap();
     let scene = capsule_site(&dir.path().join("site"));
     let original = std::fs::read_to_string(&scene).unwrap();
-    let edited = original.replace("let radius = 0.5;", "let radius = 0.8;");
-    let broken = edited.replace("let radius = 0.8;", "let radius = ;");
+    // The edit makes the radius a slider (at 0.8).
+    let edited = original.replace("let radius = 0.5;", "param radius = 0.8 in [0.3, 1];");
+    let broken = edited.replace("param radius = 0.8 in [0.3, 1];", "let radius = ;");
     assert!(edited != original && broken != edited);
     let refs = [
         reference(&dir.path().join("ref0"), &original, (w, h)),
@@ -583,6 +584,9 @@ fn serve_reloads_the_page_on_edits_and_keeps_the_picture_on_errors() {
     let (second, px1) = next(1);
     assert_eq!(second["generation"], 2, "{second}");
     assert!(second["overlay"].is_null(), "{second}");
+    // The new parameter has its slider on the page (the first build had none).
+    assert_eq!(first["sliders"], serde_json::json!([]), "{first}");
+    assert_eq!(second["sliders"], serde_json::json!(["radius"]), "{second}");
     close(&px1, &refs[1], "the edited build");
     // A broken edit: its diagnostics on the page, the last good picture kept.
     save(&scene, &broken);

@@ -136,6 +136,7 @@ async function follow(page, console) {
         : document.getElementById("diagnostics").textContent,
       status: document.getElementById("status").textContent,
       messages: window.sdfcMessages || [],
+      sliders: [...document.querySelectorAll("#params label")].map((l) => l.textContent),
     })`);
     process.stdout.write(JSON.stringify({ ...report, error, console, pixels: !!pixels }) + "\n");
     const next = await lines.next();

@@ -1,7 +1,7 @@
 //! The viewer's run-time parameters: `P` selects the next parameter, a right-button
-//! drag across the window sweeps it over its whole range, the space bar plays and
-//! pauses `time`, and `W` writes the current values back into the scene file as the
-//! new defaults (through the seed edits' machinery: checked, atomic, every other byte
+//! drag across the window sweeps it over its whole range (`time`: scrubs four
+//! seconds, paused), the space bar plays and pauses `time`, and `W` writes the
+//! current values back into the scene file as the new defaults (through the seed edits' machinery: checked, atomic, every other byte
 //! kept). Moving a value only rewrites the parameters' block: no pipeline is built,
 //! and the viewer says how many it has built so far.
 
@@ -11,6 +11,9 @@ use crate::diagnostic::Edit;
 use crate::syntax::ast::ItemKind;
 use std::collections::BTreeMap;
 use std::time::Instant;
+
+/// The seconds of `time` a right-drag across the whole window scrubs.
+const SCRUB_SECONDS: f64 = 4.0;
 
 /// The parameters' state of the viewer.
 #[derive(Debug, Default)]
@@ -88,9 +91,12 @@ impl App {
         self.params.selected.is_some()
     }
 
-    /// `P`: the next parameter.
+    /// `P`: the next parameter, then `time` (when the scene reads it).
     pub(super) fn select_next_param(&mut self) {
-        let names: Vec<String> = self.params.values.keys().cloned().collect();
+        let mut names: Vec<String> = self.params.values.keys().cloned().collect();
+        if self.reads_time() {
+            names.push(String::from("time"));
+        }
         if names.is_empty() {
             self.say("the scene has no parameters (declare one: `param r = 0.5 in [0.1, 1];`)");
             return;
@@ -113,7 +119,7 @@ impl App {
         let Some(f) = layout.fields.iter().find(|f| &f.name == name) else {
             return;
         };
-        let v = self.params.values.get(name).cloned().unwrap_or_default();
+        let v = self.params.value(name).unwrap_or_default();
         let shown: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
         let atlases = match &self.params.recomputed {
             Some(Ok(t)) => format!(
@@ -137,6 +143,16 @@ impl App {
         let Some(name) = self.params.selected.clone() else {
             return;
         };
+        if name == "time" {
+            // Scrubbing pauses the clock and moves it.
+            if let Some(t) = self.params.playing.take() {
+                self.params.time += t.elapsed().as_secs_f64();
+            }
+            let step = dx / width.max(1.0) * SCRUB_SECONDS;
+            self.params.time = (self.params.time + step).max(0.0);
+            self.request_redraw();
+            return;
+        }
         let Some(f) = self
             .layout()
             .and_then(|l| l.fields.iter().find(|f| f.name == name))
@@ -159,12 +175,14 @@ impl App {
         self.say_param("moved, with no new pipeline");
     }
 
+    fn reads_time(&self) -> bool {
+        self.layout()
+            .is_some_and(|l| l.fields.iter().any(|f| f.name == "time"))
+    }
+
     /// Space: plays or pauses `time`.
     pub(super) fn toggle_time(&mut self) {
-        let reads_time = self
-            .layout()
-            .is_some_and(|l| l.fields.iter().any(|f| f.name == "time"));
-        if !reads_time {
+        if !self.reads_time() {
             self.say("the scene does not read `time`");
             return;
         }

@@ -644,8 +644,8 @@ fn the_viewer_takes_mouse_and_file_edits_in_a_real_window() {
 
 /// Sliders in a real window: `P` selects the parameter, a right-drag moves it (a new
 /// picture, no new pipeline); `P` again selects `time`, which a right-drag scrubs
-/// (another picture); `W` writes the parameter back as the default (the comment
-/// kept).
+/// (another picture); the panel's own slider, left-dragged, moves the parameter to
+/// its end; `W` writes the parameter back as the default (the comment kept).
 const DRIVE_PARAMS: &str = r#"
 set -u
 "$SDFC" view "$SCENE" 2>"$LOG" &
@@ -662,7 +662,7 @@ wait_until() {
 wait_until '^loaded' "$LOG" 1
 win=$(xdotool search --sync --name 'sdfc view' | head -1)
 xdotool windowfocus --sync "$win"
-xdotool mousemove --window "$win" 60 60
+xdotool mousemove --window "$win" 60 280
 sleep 0.5
 echo "step: a screenshot before"
 xdotool key s
@@ -670,9 +670,9 @@ wait_until 'saved' "$LOG" 1
 echo "step: P selects the parameter"
 xdotool key p
 wait_until 'selected; right-drag' "$LOG" 1
-echo "step: a right-drag moves it"
+echo "step: a right-drag below the panel moves it"
 xdotool mousedown 3; sleep 0.2
-for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 60; sleep 0.05; done
+for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 280; sleep 0.05; done
 sleep 0.2; xdotool mouseup 3
 wait_until 'moved, with no new pipeline' "$LOG" 1
 sleep 0.5
@@ -682,14 +682,28 @@ wait_until 'saved' "$LOG" 2
 echo "step: P again selects time, and a right-drag scrubs it"
 xdotool key p
 wait_until 'parameter `time` = 0.0000' "$LOG" 1
-xdotool mousemove --window "$win" 60 60; sleep 0.2
+xdotool mousemove --window "$win" 60 280; sleep 0.2
 xdotool mousedown 3; sleep 0.2
-for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 60; sleep 0.05; done
+for x in 70 90 110 130 150; do xdotool mousemove --window "$win" $x 280; sleep 0.05; done
 sleep 0.2; xdotool mouseup 3
 wait_until 'moved, with no new pipeline' "$LOG" 2
 sleep 0.5
 xdotool key s
 wait_until 'saved' "$LOG" 3
+echo "step: the panel's slider, dragged to its right end with the left button"
+wait_until 'panel: slider `radius`' "$LOG" 1
+line=$(grep -m1 'panel: slider `radius`' "$LOG")
+x0=$(echo "$line" | sed -E 's/.* from ([0-9]+) to ([0-9]+) at y ([0-9]+).*/\1/')
+x1=$(echo "$line" | sed -E 's/.* from ([0-9]+) to ([0-9]+) at y ([0-9]+).*/\2/')
+y=$(echo "$line" | sed -E 's/.* from ([0-9]+) to ([0-9]+) at y ([0-9]+).*/\3/')
+xdotool mousemove --window "$win" $((x0 + 30)) "$y"; sleep 0.3
+xdotool mousedown 1; sleep 0.2
+for k in 1 2 3 4 5 6; do xdotool mousemove --window "$win" $((x0 + 30 + k * (x1 - x0) / 6)) "$y"; sleep 0.05; done
+sleep 0.2; xdotool mouseup 1
+wait_until 'moved in the panel, with no new pipeline' "$LOG" 1
+sleep 0.5
+xdotool key s
+wait_until 'saved' "$LOG" 4
 echo "step: W writes it back"
 xdotool key w
 wait_until "set the parameters' defaults" "$LOG" 1
@@ -701,7 +715,7 @@ echo "exit=$?"
 
 #[test]
 fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
-    let source = "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius).translate([0.6 * sin(time), 0, 0]) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [200, 120];\n}\n";
+    let source = "// A ball whose radius is a slider.\nparam radius = 0.5 in [0.3, 1]; // the knob\n\nrender sphere(radius).translate([0.6 * sin(time), 0, 0]) {\n    camera = orbit(target: [0, 0, 0], distance: 4, yaw: 0deg, pitch: 0deg);\n    size = [480, 320];\n}\n";
     let Some(Driven {
         dir,
         text,
@@ -725,9 +739,9 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
         .filter(|p| p.extension().is_some_and(|e| e == "png"))
         .collect();
     shots.sort();
-    assert_eq!(shots.len(), 3, "{context}");
+    assert_eq!(shots.len(), 4, "{context}");
     let shot = |i: usize| image::open(&shots[i]).unwrap().to_rgba8();
-    let (a, b, c) = (shot(0), shot(1), shot(2));
+    let (a, b, c, d) = (shot(0), shot(1), shot(2), shot(3));
     let (mean, _) = common::image_difference(a.as_raw(), b.as_raw());
     assert!(
         mean > 2.0,
@@ -749,6 +763,23 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
         scrubbed.contains("parameter `time` = ") && scrubbed.contains("(1 pipelines built)"),
         "{context}"
     );
+    // The panel's slider (egui, left-dragged): the radius grows to its end, the
+    // camera does not turn (the panel took the drag), still one pipeline.
+    let (mean, _) = common::image_difference(c.as_raw(), d.as_raw());
+    assert!(
+        mean > 2.0,
+        "the panel's slider changed nothing: mean {mean}/255\n{context}"
+    );
+    let paneled = viewer
+        .lines()
+        .find(|l| l.contains("moved in the panel, with no new pipeline"))
+        .unwrap_or_else(|| panic!("{context}"));
+    assert!(
+        paneled.contains("parameter `radius` = 0.9")
+            || paneled.contains("parameter `radius` = 1.0"),
+        "{paneled}\n{context}"
+    );
+    assert!(paneled.contains("(1 pipelines built)"), "{context}");
     // Written back: the new default in range, everything else as it was.
     let line = text.lines().nth(1).unwrap();
     let value: f64 = line

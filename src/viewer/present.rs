@@ -180,12 +180,18 @@ impl Presenter {
     /// allows copies, else from the colour target (the same pixels at full resolution).
     /// `None` when nothing could be shown this time (the surface was outdated, lost,
     /// hidden or busy); `Some(None)` when shown without a capture.
+    /// The format the picture is drawn in (the surface's sRGB view).
+    pub fn view_format(&self) -> wgpu::TextureFormat {
+        self.view_format
+    }
+
     pub fn present(
         &mut self,
         gpu: &Gpu,
         renderer: &crate::gpu::Renderer,
         targets: &Targets,
         capture: bool,
+        overlay: &mut dyn FnMut(&mut wgpu::CommandEncoder, &wgpu::TextureView, (u32, u32)),
     ) -> Result<Option<Option<Shot>>, GpuError> {
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -279,6 +285,8 @@ impl Presenter {
                 );
                 buffer
             });
+            // Drawn after the screenshot's copy: screenshots hold the scene only.
+            overlay(&mut enc, &view, (w, h));
             gpu.queue.submit([enc.finish()]);
             readback
         })?;

@@ -3,6 +3,7 @@
 //! screenshots.
 
 mod input;
+mod panel;
 mod params;
 
 use super::edit::SeedEditor;
@@ -129,6 +130,8 @@ struct App {
     error: Option<ViewError>,
     /// The run-time parameters' values and `time` ([`params`]).
     params: params::Params,
+    /// The panel of sliders drawn over the picture ([`panel`]).
+    panel: Option<panel::Panel>,
 }
 
 /// Opens the window and runs until it is closed (or `frames` were drawn).
@@ -183,6 +186,7 @@ pub fn run(options: Options) -> Result<(), ViewError> {
         times: (Vec::new(), Vec::new()),
         screenshot_next: false,
         params: params::Params::default(),
+        panel: None,
         error: None,
     };
     event_loop
@@ -439,6 +443,7 @@ impl App {
         let Some(full) = self.view() else {
             return Ok(());
         };
+        self.run_panel();
         let scripted = self.options.frames.is_some();
         let moving =
             self.moving() && (!scripted || self.options.spin.is_some()) && !self.screenshot_next;
@@ -492,8 +497,14 @@ impl App {
         }
         let capture = self.screenshot_next && self.divisor == 1;
         let presenter = self.presenter.as_mut().expect("a window");
+        let panel = &mut self.panel;
+        let mut overlay = |enc: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, size| {
+            if let Some(p) = panel.as_mut() {
+                p.paint(&gpu.device, &gpu.queue, enc, view, size);
+            }
+        };
         let Some(shot) = presenter
-            .present(gpu, renderer, targets, capture)
+            .present(gpu, renderer, targets, capture, &mut overlay)
             .map_err(ViewError::Gpu)?
         else {
             // Not shown (the surface was outdated, hidden or busy): try again shortly.
@@ -597,7 +608,10 @@ impl ApplicationHandler<Changed> for App {
         };
         let inner = window.inner_size();
         match Presenter::new(&gpu, surface, inner.width, inner.height) {
-            Ok(p) => self.presenter = Some(p),
+            Ok(p) => {
+                self.panel = Some(panel::Panel::new(&window, &gpu.device, p.view_format()));
+                self.presenter = Some(p);
+            }
             Err(e) => {
                 self.error = Some(ViewError::Gpu(e));
                 event_loop.exit();
@@ -649,6 +663,15 @@ impl ApplicationHandler<Changed> for App {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        if let (Some(panel), Some(window)) = (self.panel.as_mut(), self.window.as_ref()) {
+            let (consumed, repaint) = panel.on_event(window, &event);
+            if repaint {
+                window.request_redraw();
+            }
+            if consumed {
+                return;
+            }
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {

@@ -46,6 +46,19 @@ impl Params {
         self.time + self.playing.map_or(0.0, |t| t.elapsed().as_secs_f64())
     }
 
+    /// Sets a parameter (the panel's sliders keep values within range).
+    pub(crate) fn set(&mut self, name: &str, value: Vec<f64>) {
+        if let Some(v) = self.values.get_mut(name) {
+            *v = value;
+        }
+    }
+
+    /// Scrubs `time` to `t` seconds, paused.
+    pub(crate) fn scrub_to(&mut self, t: f64) {
+        self.playing = None;
+        self.time = t.max(0.0);
+    }
+
     /// Whether `time` runs (frames follow one another).
     pub(crate) fn playing(&self) -> bool {
         self.playing.is_some()
@@ -113,10 +126,17 @@ impl App {
     }
 
     fn say_param(&self, what: &str) {
-        let (Some(name), Some(layout)) = (&self.params.selected, self.layout()) else {
+        if let Some(name) = &self.params.selected {
+            self.say_param_named(name, what);
+        }
+    }
+
+    /// Says parameter `name`'s value, its range and `what` happened to it.
+    pub(super) fn say_param_named(&self, name: &str, what: &str) {
+        let Some(layout) = self.layout() else {
             return;
         };
-        let Some(f) = layout.fields.iter().find(|f| &f.name == name) else {
+        let Some(f) = layout.fields.iter().find(|f| f.name == name) else {
             return;
         };
         let v = self.params.value(name).unwrap_or_default();

@@ -400,7 +400,6 @@ pub fn compile_shape(
     options: &codegen::Options,
 ) -> Result<Compiled, CompileError> {
     let module = generate_shape(analysis, shape, options)?;
-    #[cfg(feature = "test-hooks")]
     let module = test_hooks::corrupt(module);
     match codegen::validate(&module.wgsl) {
         Ok(validated) => {
@@ -563,11 +562,11 @@ pub fn pick_atlas<'a>(
     }
 }
 
-/// The injection point of the internal-compiler-error tests, compiled only with the
-/// `test-hooks` feature (which the test build turns on and release builds never have):
+/// The injection point of the internal-compiler-error tests:
 /// `SDFC_TEST_CORRUPT_WGSL=material` breaks the first material's code, any other value
 /// appends a broken function, so the E0900 path runs end to end through the real binary.
-#[cfg(feature = "test-hooks")]
+/// Without the variable it does nothing. (It is in every build, not behind a cargo
+/// feature: a feature the tests turn on would compile the library a second time in CI.)
 pub mod test_hooks {
     use crate::codegen::Module;
 

@@ -215,10 +215,9 @@ fn process_alive(pid: u32) -> bool {
     }
 }
 
-/// Writes `bytes`; with the `test-hooks` feature and `SDFC_TEST_PAUSE_WRITE` set, writes
+/// Writes `bytes`; with `SDFC_TEST_PAUSE_WRITE` set (the atomic-write tests), writes
 /// half, says so on stderr and sleeps, so a test can kill the process mid-write.
 fn write_pausable(file: &mut std::fs::File, bytes: &[u8]) -> std::io::Result<()> {
-    #[cfg(feature = "test-hooks")]
     if std::env::var_os("SDFC_TEST_PAUSE_WRITE").is_some() {
         let half = bytes.len() / 2;
         file.write_all(&bytes[..half])?;

@@ -482,8 +482,8 @@ fn the_normal_map_decodes_to_the_object_space_normal() {
     );
 }
 
-/// The gutter (`--gutter`): each level-0 chart is padded with half a chart of texels
-/// from the charts across its sides. A generic engine's own mip chain (a 2 × 2 box
+/// The gutter (`--gutter 2`): each level-0 chart is padded with 2 texels from the charts
+/// across its sides (enough for a generic chain's level 1, whose texels span 2). A generic engine's own mip chain (a 2 × 2 box
 /// filter of the whole image) then averages each chart's border with its real
 /// neighbour's texels: at that chain's level 1, the two sides of every chart border
 /// agree far better than without the gutter, where they average unrelated charts.
@@ -491,7 +491,7 @@ fn the_normal_map_decodes_to_the_object_space_normal() {
 fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
     let Some(gpu) = gpu_for_tests() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let seam = |gutter: bool, size: u32| -> (f64, Baked) {
+    let seam = |gutter: u32, size: u32| -> (f64, Baked) {
         let options = Options {
             gutter,
             size,
@@ -545,8 +545,8 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
         }
         (worst, baked)
     };
-    let (with, baked) = seam(true, 256);
-    let (without, _) = seam(false, 256);
+    let (with, baked) = seam(2, 256);
+    let (without, _) = seam(0, 256);
     eprintln!("largest step across borders at a generic chain's level 1: {with:.1} with the gutter, {without:.1} without (of 255)");
     assert!(
         with * 4.0 < without,
@@ -559,12 +559,12 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
         sdfc::bake::ChartLayout::Flat(l) => l.clone(),
         sdfc::bake::ChartLayout::Packed(_) => panic!("a flat bake"),
     };
-    assert_eq!(flat(&baked).gutter, flat(&baked).chart_size / 2);
+    assert_eq!(flat(&baked).gutter, 2);
     assert_borders_identical(&baked.textures.base_color, &file, "with a gutter");
     // sdfc's own renderer reads inside the charts only: with and without a gutter
-    // (the same chart size: twice the width for the gutter's), the renders agree.
-    let (_, baked) = seam(true, 512);
-    let (_, plain) = seam(false, 256);
+    // (the same chart size: twice the width for the gutter's room), the renders agree.
+    let (_, baked) = seam(2, 512);
+    let (_, plain) = seam(0, 256);
     assert_eq!(flat(&plain).chart_size, flat(&baked).chart_size);
     let analysis = sdfc::driver::check(SMOOTH, None);
     let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();

@@ -112,16 +112,18 @@ impl FlatLayout {
     /// height) and the smaller levels (below it, side by side) fit. The image is `size`
     /// wide and only as tall as the charts need. `None` when even 2-texel charts do not fit.
     pub fn fit(charts: usize, size: u32) -> Option<FlatLayout> {
-        FlatLayout::fit_with(charts, size, false)
+        FlatLayout::fit_with(charts, size, 0)
     }
 
-    /// [`FlatLayout::fit`], with a gutter of half a chart around each level-0 chart
-    /// when `gutter` is set (its cells are then twice the chart's size, a power of two).
-    pub fn fit_with(charts: usize, size: u32, gutter: bool) -> Option<FlatLayout> {
+    /// [`FlatLayout::fit`], with a gutter of `gutter` texels around each level-0 chart
+    /// (a chart at least as large as its gutter). A generic mip chain's level k stays
+    /// within a chart and its gutter while 2^k − 1 ≤ `gutter`: 1 texel keeps level 1,
+    /// 2 (the command line's default) keep level 1, 3 or 4 keep levels 1 and 2.
+    pub fn fit_with(charts: usize, size: u32, gutter: u32) -> Option<FlatLayout> {
         // Chart sizes are powers of two (each level halves them, down to 2).
         let mut n = if size >= 2 { 1 << size.ilog2() } else { 0 };
-        while n >= 2 {
-            let g = if gutter { n / 2 } else { 0 };
+        while n >= 2 && n >= gutter {
+            let g = gutter;
             let stride = n + 2 * g;
             let columns = size / stride;
             let rows = (2 * size / 3) / stride;

@@ -61,9 +61,9 @@ pub struct Options {
     /// Mesh quads along a chart's side: charts come from a grid this many times
     /// coarser than the mesh's, and each is split into `chart_quads²` mesh quads.
     pub chart_quads: usize,
-    /// A gutter of half a chart around each level-0 chart, filled from its neighbours
-    /// (for engines that build their own mip chains; see [`FlatLayout::gutter`]).
-    pub gutter: bool,
+    /// Texels of gutter around each level-0 chart, filled from its neighbours (for
+    /// engines that build their own mip chains; see [`FlatLayout::gutter`]); 0: none.
+    pub gutter: u32,
     pub style: Style,
     /// The longest side of a grown chart, in cells (packed only).
     pub max_chart: usize,
@@ -76,7 +76,7 @@ impl Default for Options {
             resolution: Resolution::Cells(DEFAULT_GRID),
             bounds: None,
             chart_quads: DEFAULT_CHART_QUADS,
-            gutter: false,
+            gutter: 0,
             style: Style::Flat,
             max_chart: DEFAULT_MAX_CHART,
         }

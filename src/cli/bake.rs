@@ -91,7 +91,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         super::Layout::Packed => pipeline::Style::Packed,
     };
     if style == pipeline::Style::Packed {
-        if args.gutter {
+        if args.gutter > 0 {
             return Err("--gutter pads the flat layout's charts; the packed layout has none (its charts are fewer and larger, so a generic mip chain crosses fewer borders)".into());
         }
         if args.ktx2.is_some() {

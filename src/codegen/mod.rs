@@ -11,6 +11,7 @@
 //! documents the bind groups; [`Manifest`] describes them as JSON.
 
 mod atlas;
+mod atlases;
 pub mod bindings;
 mod emit;
 mod field;
@@ -483,46 +484,6 @@ impl Generator<'_> {
         for m in masks {
             self.out.push_str(&group::walker(m));
         }
-    }
-
-    /// Every prepared atlas's code, from the atlas template.
-    fn atlases(
-        &mut self,
-        atlases: &[Option<Atlas>],
-        options: &Options,
-    ) -> Result<(), template::Mismatch> {
-        for (k, (prepared, def)) in atlases.iter().zip(&self.program.atlases).enumerate() {
-            let Some(a) = prepared else { continue };
-            let start = self.out.len();
-            // An atlas on a moving shape: its seeds are rewritten by the host, so it
-            // scans them without the grid, with room for every declared merge.
-            let moving = a.shape.is_dynamic().then_some(2 * def.merges.len());
-            let grid = match moving {
-                Some(_) => crate::uv::grid::SeedGrid::single(a.seeds.len()),
-                None => options.seed_grid.grid(a),
-            };
-            let (code, at) = atlas::emit(
-                k,
-                a,
-                &grid,
-                options,
-                &mut self.tables,
-                &mut self.groups,
-                moving,
-            )?;
-            if let (Some(_), Some(at)) = (moving, at) {
-                self.moving.push(MovingAtlas {
-                    index: k,
-                    def: def.clone(),
-                    atlas: a.clone(),
-                    at,
-                });
-            }
-            self.out.push_str(&code);
-            self.out.push_str(&atlas::at(k, a));
-            self.region(start, Some(def.span), Definition::Atlas(def.name.clone()));
-        }
-        Ok(())
     }
 
     /// `scene_atlas` and `scene_atlas_merged`: the atlas of the atlas views and

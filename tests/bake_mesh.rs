@@ -1,0 +1,177 @@
+//! The baked mesh against the zero set it stands for, on every example: creases and
+//! rims without fins, spikes or teeth (the share of triangles whose face normal turns
+//! more than 45° from the field's gradient at their centroid), and the Hausdorff
+//! distance between the mesh and the zero set, both ways, under half a cell.
+//!
+//! Ignored until the mesher meets it (issue 40): today's figures are in
+//! docs/baking.md ("The mesh against the zero set"). Run it with
+//! `cargo test --release --test bake_mesh -- --ignored --nocapture`.
+
+mod common;
+
+use glam::DVec3;
+use sdfc::bake::pipeline::{self, Options, Quiet};
+use sdfc::gpu::gpu_for_tests;
+use sdfc::ir::eval;
+
+/// What the test measures of one baked mesh.
+struct Quality {
+    triangles: usize,
+    /// Triangles whose normal is more than 45° off the gradient at their centroid.
+    turned: usize,
+    /// The largest distance from a point of the mesh to the zero set, and from a point
+    /// of the zero set to the mesh.
+    mesh_to_surface: f64,
+    surface_to_mesh: f64,
+    cell: f64,
+}
+
+/// The distance from `p` to triangle `abc`.
+fn to_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let n = (b - a).cross(c - a);
+    let area2 = n.length();
+    if area2 > 1e-18 {
+        let n = n / area2;
+        let q = p - n * n.dot(p - a);
+        // Inside when the three sub-triangles turn the same way.
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(u, v)| (v - u).cross(q - u).dot(n) >= 0.0);
+        if inside {
+            return (p - q).length();
+        }
+    }
+    let seg = |u: DVec3, v: DVec3| {
+        let d = v - u;
+        let t = ((p - u).dot(d) / d.length_squared().max(1e-30)).clamp(0.0, 1.0);
+        (p - (u + d * t)).length()
+    };
+    seg(a, b).min(seg(b, c)).min(seg(c, a))
+}
+
+fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let base = path.parent().unwrap();
+    let analysis = sdfc::driver::check(&text, Some(base));
+    if analysis.has_errors() {
+        return None;
+    }
+    let scene = analysis.scene.as_ref()?;
+    let shape = sdfc::driver::pick_shape(scene, None).ok()?;
+    if !pipeline::has_material(shape) {
+        return None;
+    }
+    let options = sdfc::codegen::Options {
+        walk: sdfc::codegen::WalkForm::Loop,
+        ..Default::default()
+    };
+    let module = sdfc::driver::compile(&analysis, &options).ok()?.module;
+    let bake = Options {
+        size: 256,
+        ..Options::default()
+    };
+    let baked = pipeline::bake(gpu, &module, base, shape, &bake, &Quiet).ok()?;
+    let field = analysis.field(shape);
+    let m = &baked.mesh;
+    let p = |i: u32| DVec3::from_array(m.positions[i as usize].map(f64::from));
+    let tris: Vec<[DVec3; 3]> = m
+        .indices
+        .chunks_exact(3)
+        .map(|t| [p(t[0]), p(t[1]), p(t[2])])
+        .collect();
+    let mut turned = 0;
+    let mut mesh_to_surface = 0.0f64;
+    for [a, b, c] in &tris {
+        let centroid = (*a + *b + *c) / 3.0;
+        let n = (*b - *a).cross(*c - *a).normalize_or_zero();
+        let g = eval::gradient(field, centroid).normalize_or_zero();
+        if n != DVec3::ZERO && g != DVec3::ZERO && n.dot(g) < 45f64.to_radians().cos() {
+            turned += 1;
+        }
+        // The distance to the zero set: |f| (a lower bound for a Lipschitz-1 field)
+        // through the projection onto it.
+        for q in [centroid, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
+            if let Some(on) = eval::project(field, q, 1e-9) {
+                mesh_to_surface = mesh_to_surface.max((on - q).length());
+            }
+        }
+    }
+    // Surface points against the mesh, through a coarse bucket grid of triangles.
+    let cell = baked.quads.cell;
+    let key = |x: DVec3| (x / (2.0 * cell)).floor().as_ivec3();
+    let mut buckets: std::collections::HashMap<glam::IVec3, Vec<usize>> = Default::default();
+    for (i, [a, b, c]) in tris.iter().enumerate() {
+        let (lo, hi) = (key(a.min(*b).min(*c)), key(a.max(*b).max(*c)));
+        for x in lo.x..=hi.x {
+            for y in lo.y..=hi.y {
+                for z in lo.z..=hi.z {
+                    buckets
+                        .entry(glam::IVec3::new(x, y, z))
+                        .or_default()
+                        .push(i);
+                }
+            }
+        }
+    }
+    let mut surface_to_mesh = 0.0f64;
+    for (x, _) in common::surface_points(field, 400, 11, |_| true) {
+        let k = key(x);
+        let mut best = f64::INFINITY;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &i in buckets
+                        .get(&(k + glam::IVec3::new(dx, dy, dz)))
+                        .into_iter()
+                        .flatten()
+                    {
+                        let [a, b, c] = tris[i];
+                        best = best.min(to_triangle(x, a, b, c));
+                    }
+                }
+            }
+        }
+        // Nothing within two buckets is farther than 2 cells: say so.
+        surface_to_mesh = surface_to_mesh.max(best.min(4.0 * cell));
+    }
+    Some(Quality {
+        triangles: tris.len(),
+        turned,
+        mesh_to_surface,
+        surface_to_mesh,
+        cell,
+    })
+}
+
+#[test]
+#[ignore = "the mesher does not meet it yet (issue 40; figures in docs/baking.md)"]
+fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let mut measured = 0;
+    let mut failures = Vec::new();
+    let examples = common::scene_files()
+        .into_iter()
+        .filter(|p| p.parent().is_some_and(|d| d.ends_with("examples")));
+    for path in examples {
+        let Some(q) = measure(&path, &gpu) else {
+            continue;
+        };
+        measured += 1;
+        let share = q.turned as f64 / q.triangles as f64;
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        eprintln!(
+            "{name}: {} triangles, {} turned over 45° ({:.3} %), mesh → surface {:.3} cells, surface → mesh {:.3} cells",
+            q.triangles,
+            q.turned,
+            100.0 * share,
+            q.mesh_to_surface / q.cell,
+            q.surface_to_mesh / q.cell
+        );
+        if share >= 0.001 || q.mesh_to_surface >= 0.5 * q.cell || q.surface_to_mesh >= 0.5 * q.cell
+        {
+            failures.push(name);
+        }
+    }
+    assert!(measured >= 8, "only {measured} examples baked");
+    assert!(failures.is_empty(), "{failures:?}");
+}

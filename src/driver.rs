@@ -565,7 +565,7 @@ pub fn pick_atlas<'a>(
 /// The injection point of the internal-compiler-error tests:
 /// `SDFC_TEST_CORRUPT_WGSL=material` breaks the first material's code, any other value
 /// appends a broken function, so the E0900 path runs end to end through the real binary.
-/// Without the variable it does nothing. (It is in every build, not behind a cargo
+/// Without the variable (or with it empty) it does nothing. (It is in every build, not behind a cargo
 /// feature: a feature the tests turn on would compile the library a second time in CI.)
 pub mod test_hooks {
     use crate::codegen::Module;
@@ -573,8 +573,8 @@ pub mod test_hooks {
     pub fn corrupt(mut module: Module) -> Module {
         match std::env::var("SDFC_TEST_CORRUPT_WGSL").as_deref() {
             Ok("material") => corrupt_first_material(&mut module),
+            Ok("") | Err(_) => {}
             Ok(_) => module.wgsl.push_str("\nfn corrupted( {\n"),
-            Err(_) => {}
         }
         module
     }

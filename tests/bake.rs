@@ -562,7 +562,7 @@ fn the_gutter_keeps_generic_mip_chains_close_across_borders() {
     assert_eq!(flat(&baked).gutter, 2);
     assert_borders_identical(&baked.textures.base_color, &file, "with a gutter");
     // sdfc's own renderer reads inside the charts only: with and without a gutter
-    // (the same chart size: twice the width for the gutter's room), the renders agree.
+    // (at sizes where the chart size is the same, asserted below), the renders agree.
     let (_, baked) = seam(2, 512);
     let (_, plain) = seam(0, 256);
     assert_eq!(flat(&plain).chart_size, flat(&baked).chart_size);

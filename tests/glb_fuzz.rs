@@ -230,7 +230,7 @@ fn bases(dir: &Path) -> Vec<Base> {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
     let bakes: [(&str, &[&str]); 3] = [
         ("sphere-flat", &[]),
-        ("sphere-gutter", &["--gutter", "1"]),
+        ("sphere-gutter", &["--gutter=1"]),
         ("sphere-packed", &["--layout", "packed"]),
     ];
     for (name, extra) in bakes {

@@ -51,6 +51,16 @@ fn module(a: &sdfc::driver::Analysis) -> sdfc::Module {
 fn the_recomputed_atlas_equals_the_atlas_compiled_at_the_value() {
     let base = module(&analyze(None));
     assert_eq!(base.moving.len(), 1, "the atlas's shape moves");
+    // The key of recomputation reads the parameters the shape reads, nothing else.
+    let key = |w: Option<f64>, t: Option<f64>| {
+        base.moving_key(&|n| match n {
+            "w" => w.map(|w| vec![w]),
+            "time" => t.map(|t| vec![t]),
+            _ => None,
+        })
+    };
+    assert_eq!(key(None, None), key(None, Some(3.0)));
+    assert_ne!(key(None, None), key(Some(0.8), None));
     for w in ENDS {
         let at = analyze(Some(w));
         let compiled = at.atlases[0].as_ref().unwrap();

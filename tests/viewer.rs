@@ -747,8 +747,8 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
         mean > 2.0,
         "the drag did not change the picture: mean {mean}/255\n{context}"
     );
-    // Scrubbed forward by about 1.8 s of `time` (the ball moves by 0.6 sin(1.8),
-    // about 0.58), from one pipeline still.
+    // Scrubbed forward by 90 of the window's 480 pixels: 0.75 s of `time` (the ball
+    // moves by 0.6 sin(0.75), about 0.41), from one pipeline still.
     let (mean, _) = common::image_difference(b.as_raw(), c.as_raw());
     assert!(
         mean > 2.0,
@@ -763,8 +763,8 @@ fn the_viewer_sliders_move_a_parameter_without_a_new_pipeline() {
         scrubbed.contains("parameter `time` = ") && scrubbed.contains("(1 pipelines built)"),
         "{context}"
     );
-    // The panel's slider (egui, left-dragged): the radius grows to its end, the
-    // camera does not turn (the panel took the drag), still one pipeline.
+    // The panel's slider (egui, left-dragged): the radius grows to its end (a left
+    // drag on the scene would turn the camera instead), still one pipeline.
     let (mean, _) = common::image_difference(c.as_raw(), d.as_raw());
     assert!(
         mean > 2.0,

@@ -542,8 +542,13 @@ fn lay_out_charts(
         Style::Packed => PackedLayout::fit(&patches.dims, size).map(ChartLayout::Packed),
     }
     .ok_or_else(|| {
+        let gutter = match options.gutter {
+            0 => String::new(),
+            g => format!(" with a gutter of {g} texels (a chart at least as large as its gutter)"),
+        };
         BakeError::Resource(format!(
-            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell: use a coarser --grid or a larger --size"
+            "{charts} charts do not fit a {size}×{size} atlas even at 2×2 texels a cell{gutter}: use a coarser --grid, a larger --size{}",
+            if options.gutter > 0 { " or a narrower --gutter" } else { "" }
         ))
     })?;
     check_memory(&Footprint::of(

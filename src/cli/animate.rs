@@ -113,9 +113,10 @@ pub fn run(args: &RenderArgs, gpu: &Gpu, module: &Module, view: &View, seconds: 
     for (i, t) in times.iter().enumerate() {
         let time = |name: &str| (name == "time").then(|| vec![*t]);
         if let Err(e) = renderer.set_param_values(gpu, module, &time) {
-            bar.abandon();
-            eprintln!("error: frame {i} (time {t} s): {e}");
-            return ExitCode::from(super::exit::USAGE);
+            // The atlas keeps its last geometry, as in the viewer.
+            bar.suspend(|| {
+                eprintln!("warning: frame {i} (time {t} s): {e}; it keeps its last geometry")
+            });
         }
         let frame = match renderer.frames(gpu, view, args.view, 0, 1) {
             Ok((f, _)) => f,

@@ -416,14 +416,14 @@ pub struct BakeArgs {
     /// border overhead); each chart is split into M × M quads projected onto the surface.
     #[arg(long, value_name = "M", default_value = "1")]
     pub chart_quads: usize,
-    /// Pad every level-0 chart with a gutter of TEXELS texels (2 when the flag is
-    /// given alone), filled from the charts across its sides, for engines that build
+    /// Pad every level-0 chart with a gutter of TEXELS texels (`--gutter=4`; 2 when
+    /// the flag is given alone), filled from the charts across its sides, for engines that build
     /// their own mip chain of the image: its levels up to log2(TEXELS + 1) then average
     /// real neighbours (2 texels: level 1; 3 or 4: levels 1 and 2). Each chart's cell
     /// grows by twice the gutter, so fewer texels are left for the picture at a given
     /// --size (the robot at --size 1024: 8² texels a chart either way, 43 % of the
     /// image used with 2 texels, 85 % without).
-    #[arg(long, value_name = "TEXELS", num_args = 0..=1, default_value = "0", default_missing_value = "2")]
+    #[arg(long, value_name = "TEXELS", num_args = 0..=1, require_equals = true, default_value = "0", default_missing_value = "2")]
     pub gutter: u32,
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]

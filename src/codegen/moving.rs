@@ -192,9 +192,33 @@ impl Module {
         Ok(words)
     }
 
+    /// What the moving atlases' geometry depends on at `values`: the values of the
+    /// parameters their shapes read (by name, in order; `None`: the default). Equal
+    /// keys give equal tables, so a host recomputes only when the key changes (not at
+    /// every frame of `time` when no moving shape reads it).
+    pub fn moving_key(&self, values: Values) -> Vec<u8> {
+        let names: std::collections::BTreeSet<String> = self
+            .moving
+            .iter()
+            .flat_map(|m| m.atlas.shape.param_names())
+            .collect();
+        let mut key = Vec::new();
+        for name in names {
+            key.extend_from_slice(name.as_bytes());
+            key.push(0);
+            for x in values(&name).unwrap_or_default() {
+                key.extend_from_slice(&x.to_bits().to_le_bytes());
+            }
+            key.push(0xff);
+        }
+        key
+    }
+
     /// [`Module::tables_at`] into `words` (the manifest's words, or an earlier
     /// result): only the moving atlases' records are written. Nothing is written
-    /// when one atlas fails.
+    /// when one atlas cannot be prepared at `values` (every atlas is prepared before
+    /// any is written; writing fails only on a layout that does not fit, which the
+    /// generator rules out).
     pub fn write_tables_at(&self, values: Values, words: &mut [u32]) -> Result<(), MovingError> {
         let atlases = self
             .moving

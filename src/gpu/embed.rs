@@ -132,7 +132,7 @@ impl SceneRenderer {
     ) -> Result<(), crate::codegen::MovingError> {
         let bytes = module.manifest.params.bytes(values);
         self.set_params(queue, &bytes);
-        if let Some((words, _)) = self.moving.update(module, &bytes, values)? {
+        if let Some((words, _)) = self.moving.update(module, values)? {
             if let Some(t) = &self.tables {
                 queue.write_buffer(t, 0, bytemuck::cast_slice(&words));
             }

@@ -320,7 +320,7 @@ impl Renderer {
     ) -> Result<Option<Duration>, crate::codegen::MovingError> {
         let bytes = module.manifest.params.bytes(values);
         self.set_params(gpu, &bytes);
-        let Some((words, took)) = self.moving.update(module, &bytes, values)? else {
+        let Some((words, took)) = self.moving.update(module, values)? else {
             return Ok(None);
         };
         if let Some(t) = &self.tables {

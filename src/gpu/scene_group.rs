@@ -119,28 +119,30 @@ pub fn tables_on(d: &wgpu::Device, module: &Module) -> Option<wgpu::Buffer> {
 }
 
 /// The `tables` words of a module with atlases on moving shapes, as last uploaded,
-/// and the parameters' block they were computed for: new values recompute the
-/// atlases' geometry once ([`Module::write_tables_at`]), equal values nothing.
+/// and the key of the values they were computed at ([`Module::moving_key`]): new
+/// values recompute the atlases' geometry once ([`Module::write_tables_at`]), equal
+/// values nothing.
 #[derive(Debug, Default)]
 pub struct MovingTables {
     last: std::sync::Mutex<Option<(Vec<u8>, Vec<u32>)>>,
 }
 
 impl MovingTables {
-    /// The words to upload for the parameters at `values` (whose block is `bytes`),
-    /// with the time the recomputation took; `None` when the module has no moving
-    /// atlas or the values are the last ones. On an error the last words stay.
+    /// The words to upload for the parameters at `values`, with the time the
+    /// recomputation took; `None` when the module has no moving atlas or the values
+    /// their shapes read are the last ones ([`Module::moving_key`]). On an error the
+    /// last words stay.
     pub fn update(
         &self,
         module: &Module,
-        bytes: &[u8],
         values: crate::ir::dynamic::Values,
     ) -> Result<Option<(Vec<u32>, std::time::Duration)>, crate::codegen::MovingError> {
         if !module.has_moving_atlases() {
             return Ok(None);
         }
+        let key = module.moving_key(values);
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        if last.as_ref().is_some_and(|(b, _)| b == bytes) {
+        if last.as_ref().is_some_and(|(k, _)| *k == key) {
             return Ok(None);
         }
         let started = std::time::Instant::now();
@@ -150,7 +152,7 @@ impl MovingTables {
         };
         let result = module.write_tables_at(values, &mut words);
         let took = started.elapsed();
-        *last = Some((bytes.to_vec(), words.clone()));
+        *last = Some((key, words.clone()));
         result.map(|()| Some((words, took)))
     }
 }

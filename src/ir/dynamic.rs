@@ -220,6 +220,22 @@ impl super::Shape {
         Some(out)
     }
 
+    /// The names of the parameters the shape's run-time numbers read.
+    pub fn param_names(&self) -> std::collections::BTreeSet<String> {
+        let mut out = std::collections::BTreeSet::new();
+        for d in self.nodes.iter().filter_map(|n| n.dynamic.as_deref()) {
+            let slots: Vec<&Slot> = match d {
+                Dyn::Prim(slots) => slots.iter().flatten().collect(),
+                Dyn::One(s) => vec![s],
+                Dyn::Rotate { angle, .. } => vec![angle],
+            };
+            for s in slots {
+                crate::sema::params::param_names(&s.value, &mut out);
+            }
+        }
+        out
+    }
+
     /// Whether some node's numbers are set at run time.
     pub fn is_dynamic(&self) -> bool {
         self.nodes.iter().any(|n| n.dynamic.is_some())

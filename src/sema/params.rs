@@ -89,11 +89,33 @@ fn uniform(expr: FieldExpr, value: Value, range: Vec<Iv>, span: Span) -> Value {
     }))
 }
 
+/// The names of the parameters a run-time value reads (none for a constant).
+pub fn param_names(v: &Value, out: &mut std::collections::BTreeSet<String>) {
+    let Value::Uniform(u) = v else { return };
+    stacker::maybe_grow(64 * 1024, 1024 * 1024, || match &*u.expr {
+        FieldExpr::Param(p) => {
+            out.insert(p.name.to_string());
+        }
+        FieldExpr::Unary { operand, .. } => param_names(operand, out),
+        FieldExpr::Binary { lhs, rhs, .. } => {
+            param_names(lhs, out);
+            param_names(rhs, out);
+        }
+        FieldExpr::Vector(items) | FieldExpr::Call { args: items, .. } => {
+            items.iter().for_each(|i| param_names(i, out))
+        }
+        FieldExpr::Swizzle { base, .. } => param_names(base, out),
+        FieldExpr::Input(_) | FieldExpr::Atlas { .. } => {}
+    })
+}
+
 /// The value a run-time value takes at other parameter values: `values` gives a
 /// parameter's value by name (`None`: its current value). Constants are themselves;
 /// a [`Uniform`]'s expression is folded again by the checker's own rules
 /// ([`super::fold`]), so this agrees with a check at those values
-/// (`Access::set_param`). What is not a number is [`Value::Error`].
+/// (`Access::set_param`) where they lie in their ranges (a host keeps them there; a
+/// value of the wrong size counts as absent). What is not a number is
+/// [`Value::Error`].
 pub fn value_at(v: &Value, values: &dyn Fn(&str) -> Option<Vec<f64>>) -> Value {
     let pack = |c: Vec<f64>| {
         if c.len() == 1 {

@@ -175,16 +175,17 @@ impl Presenter {
         gpu.scoped(|| self.surface.configure(&gpu.device, &self.config))
     }
 
-    /// Shows `targets`' colour (stretched, smoothly when it is at a reduced resolution)
-    /// and, with `capture`, returns what was shown: read from the surface where it
-    /// allows copies, else from the colour target (the same pixels at full resolution).
-    /// `None` when nothing could be shown this time (the surface was outdated, lost,
-    /// hidden or busy); `Some(None)` when shown without a capture.
     /// The format the picture is drawn in (the surface's sRGB view).
     pub fn view_format(&self) -> wgpu::TextureFormat {
         self.view_format
     }
 
+    /// Shows `targets`' colour (stretched, smoothly when it is at a reduced resolution),
+    /// then `overlay` over it (the panel), and, with `capture`, returns what was shown
+    /// before the overlay: read from the surface where it allows copies, else from the
+    /// colour target (the same pixels at full resolution). `None` when nothing could be
+    /// shown this time (the surface was outdated, lost, hidden or busy); `Some(None)`
+    /// when shown without a capture.
     pub fn present(
         &mut self,
         gpu: &Gpu,

@@ -24,6 +24,9 @@ pub(crate) struct Panel {
     frame: Option<(Vec<egui::ClippedPrimitive>, egui::TexturesDelta, f32)>,
     /// Whether the sliders' places were said (tests drive them with real input).
     said: bool,
+    /// Whether the last frame showed the panel (a scene without parameters has none:
+    /// then egui takes no events).
+    shown: bool,
 }
 
 /// What the panel was used for in one frame.
@@ -70,12 +73,16 @@ impl Panel {
             renderer,
             frame: None,
             said: false,
+            shown: false,
         }
     }
 
     /// Gives egui the event: whether the viewer should ignore it (a pointer event over
     /// the panel; keys always reach the viewer's shortcuts too), and whether to redraw.
     pub(crate) fn on_event(&mut self, window: &Window, event: &WindowEvent) -> (bool, bool) {
+        if !self.shown {
+            return (false, false);
+        }
         let r = self.state.on_window_event(window, event);
         let pointer = matches!(
             event,
@@ -102,7 +109,14 @@ impl Panel {
         self.state
             .handle_platform_output(window, output.platform_output);
         let jobs = self.ctx.tessellate(output.shapes, output.pixels_per_point);
-        self.frame = Some((jobs, output.textures_delta, output.pixels_per_point));
+        // Texture changes of a frame that was never painted (the surface was lost)
+        // still have to reach the renderer: the font atlas is uploaded once.
+        let mut textures = match self.frame.take() {
+            Some((_, unpainted, _)) => unpainted,
+            None => Default::default(),
+        };
+        textures.append(output.textures_delta);
+        self.frame = Some((jobs, textures, output.pixels_per_point));
         if !self.said && !places.is_empty() {
             self.said = true;
             // Where each slider's rail lies, in window pixels (its left end, its right
@@ -239,9 +253,13 @@ impl App {
             return;
         };
         let layout = loaded.compiled.module.manifest.params.clone();
-        let Some(panel) = self.panel.as_mut().filter(|_| !layout.fields.is_empty()) else {
+        let Some(panel) = self.panel.as_mut() else {
             return;
         };
+        panel.shown = !layout.fields.is_empty();
+        if !panel.shown {
+            return;
+        }
         let atlases = match &self.params.recomputed {
             Some(Ok(t)) => format!(
                 "; moving atlases recomputed in {:.2} ms",

@@ -89,11 +89,14 @@ impl App {
             values.insert(f.name.clone(), v);
         }
         self.params.values = values;
+        // A new build has not recomputed anything yet.
+        self.params.recomputed = None;
+        let reads_time = self.reads_time();
         if self
             .params
             .selected
             .as_ref()
-            .is_some_and(|s| !self.params.values.contains_key(s))
+            .is_some_and(|s| !self.params.values.contains_key(s) && !(s == "time" && reads_time))
         {
             self.params.selected = None;
         }

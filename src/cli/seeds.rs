@@ -19,9 +19,10 @@ pub struct SeedsArgs {
     #[arg(long, default_value = "0.995")]
     pub target_coverage: f64,
     /// The most seeds to place.
-    #[arg(long, default_value = "128")]
+    #[arg(long, default_value_t = sdfc::uv::seeds::PlaceOptions::default().max_seeds)]
     pub max_seeds: usize,
-    /// Surface samples: a dual-contouring grid of this many cells along the longest side.
+    /// Surface samples: drawn uniformly by area on a grid of this many cells along the
+    /// longest side (about two per cell-sized area).
     #[arg(long, default_value = "40")]
     pub grid: usize,
     /// Replace the atlas's seeds and merges in the file (atomically; the file is
@@ -32,14 +33,20 @@ pub struct SeedsArgs {
     /// the surface is still uncovered.
     #[arg(long)]
     pub keep: bool,
+    /// The largest local stretch max(s1, 1/s2) wanted: where the placed atlas
+    /// stretches more, seeds are added nearer (`inf`: place for coverage only).
+    #[arg(long, default_value_t = sdfc::uv::seeds::DEFAULT_MAX_STRETCH)]
+    pub max_stretch: f64,
 }
 
-/// "stretch (mean / 95th percentile): as written …, placed …" for the atlas `name`.
+/// "stretch (mean / 95th percentile): as written …, placed …" for the atlas `name`,
+/// with a warning where the placed atlas misses the stretch target.
 fn distortion(
     doc: &sdfc::ide::Document,
     name: &str,
     placement: &sdfc::uv::seeds::Placement,
     grid: usize,
+    max_stretch: f64,
 ) -> Option<String> {
     let def = doc
         .analysis
@@ -48,22 +55,31 @@ fn distortion(
         .iter()
         .find(|a| a.name == name)?;
     let shape = sdfc::ir::lower_shape(&def.shape)?;
-    let samples = sdfc::reference::mesh::surface_samples(&shape, grid).ok()?;
+    let samples = sdfc::reference::surface::surface_samples(&shape, grid).ok()?;
     let measure = |d: &sdfc::sema::AtlasDef| {
         let atlas = sdfc::uv::Atlas::prepare(d, &shape).ok()?;
         let (mean, p95, n) = sdfc::uv::seeds::stretch(&atlas, &samples);
-        (n > 0).then(|| format!("{mean:.3} / {p95:.3} over {n} samples"))
+        (n > 0).then(|| (format!("{mean:.3} / {p95:.3} over {n} samples"), p95))
     };
     let placed = sdfc::uv::seeds::with_seeds(def, &placement.seeds, &placement.merges);
     let written = if def.seeds.is_empty() {
         String::from("no seeds")
     } else {
-        measure(def).unwrap_or_else(|| String::from("not measurable"))
+        measure(def).map_or_else(|| String::from("not measurable"), |m| m.0)
     };
-    Some(format!(
+    let placed = measure(&placed);
+    let mut out = format!(
         "stretch max(s1, 1/s2) (mean / 95th percentile): as written {written}; placed {}",
-        measure(&placed).unwrap_or_else(|| String::from("not measurable"))
-    ))
+        placed
+            .as_ref()
+            .map_or_else(|| String::from("not measurable"), |m| m.0.clone())
+    );
+    if let Some((_, p95)) = placed.filter(|m| m.1 > max_stretch) {
+        out.push_str(&format!(
+            "\nwarning: the stretch target {max_stretch} is not reached (95th percentile {p95:.3}); try --max-seeds, or a larger --max-stretch"
+        ));
+    }
+    Some(out)
 }
 
 pub fn run(args: SeedsArgs) -> ExitCode {
@@ -82,6 +98,12 @@ pub fn run(args: SeedsArgs) -> ExitCode {
             "--max-seeds {} is not between 1 and {}",
             args.max_seeds,
             sdfc::sema::MAX_SEEDS
+        ));
+    }
+    if args.max_stretch.is_nan() || args.max_stretch <= 1.0 {
+        return usage(format!(
+            "--max-stretch {} is not above 1 (1 is an isometry; `inf` turns it off)",
+            args.max_stretch
         ));
     }
     if !(4..=256).contains(&args.grid) {
@@ -126,6 +148,7 @@ pub fn run(args: SeedsArgs) -> ExitCode {
         max_seeds: args.max_seeds,
         spacing: None,
         keep: args.keep,
+        max_stretch: args.max_stretch.is_finite().then_some(args.max_stretch),
     };
     let doc = sdfc::ide::Document {
         text: source.clone(),
@@ -138,7 +161,7 @@ pub fn run(args: SeedsArgs) -> ExitCode {
     let took = started.elapsed();
     let (kept_seeds, kept_merges) = placement.kept;
     eprintln!(
-        "atlas `{atlas}`: {} seeds ({kept_seeds} kept), {} merges ({kept_merges} kept), coverage {:.2} % of the surface by area ({} failing samples), in {:.2} s",
+        "atlas `{atlas}`: {} seeds ({kept_seeds} kept), {} merges ({kept_merges} kept), coverage {:.2} % of the surface by area (measured on samples drawn apart from placement's; {} failing), in {:.2} s",
         placement.seeds.len(),
         placement.merges.len(),
         100.0 * placement.coverage,
@@ -157,7 +180,7 @@ pub fn run(args: SeedsArgs) -> ExitCode {
     }
     // The local stretch (`--view distortion`'s measure) of the atlas as written and as
     // placed, on the same samples.
-    if let Some(report) = distortion(&doc, &atlas, &placement, args.grid) {
+    if let Some(report) = distortion(&doc, &atlas, &placement, args.grid, args.max_stretch) {
         eprintln!("{report}");
     }
     if !args.write {
@@ -178,7 +201,13 @@ pub fn run(args: SeedsArgs) -> ExitCode {
     );
     let formatted = sdfc::ide::format::format(&edited).unwrap_or(edited);
     let check = sdfc::driver::check(&formatted, Some(&base));
-    if check.diagnostics.iter().any(|d| d.is_error()) {
+    // Other atlases may still be waiting for their seeds (E0115), as they
+    // were before; this atlas now has some.
+    if check
+        .diagnostics
+        .iter()
+        .any(|d| d.is_error() && d.code != sdfc::codes::E_NO_SEEDS)
+    {
         eprint!(
             "{}",
             sdfc::diagnostic::render(&name, &formatted, &check.diagnostics, false)

@@ -6,6 +6,7 @@
 
 pub mod material;
 pub mod mesh;
+pub mod surface;
 
 use crate::ir::texture::Textures;
 use crate::ir::{Height, Heights};

@@ -1,8 +1,9 @@
 //! Automatic seed placement and merge graphs (the paper's §7 future work): seeds and
 //! merges for an atlas, chosen so that Alg. 2 succeeds at a target share of the surface.
 //!
-//! The input is a dense, area-weighted sample of the surface (the caller meshes it:
-//! `sdfc seeds` uses the bake's dual contouring), with each sample's neighbours.
+//! The input is a dense, area-weighted sample of the surface (`sdfc seeds` draws it
+//! uniformly by area from a thin shell around the surface,
+//! [`crate::reference::surface`], so slits, grooves and the insides of holes are in it).
 //!
 //! **Placement: farthest-point sampling by coverage.** A sample is *covered* when some
 //! seed's walk (Alg. 1, with the atlas's own N, tolerances and D) reaches it with status
@@ -31,6 +32,17 @@
 //! chart has no seam where the forest left one; around a sphere's cap they do not. Each merge group has one fixed tangent
 //! (its first seed's, the world x axis projected), and the optimal-frame solve (Eq. 45)
 //! turns the others.
+//!
+//! **Stretch** (`PlaceOptions::max_stretch`): a log map stretches with the distance
+//! from its seed where the surface curves (on a sphere of radius R by r / (R sin(r/R))
+//! across, at distance r), so seeds spaced for coverage alone stretch the texture
+//! around curved parts (a seed per flat face of the robot, whose walks reach around the
+//! head and arms). Once the target share is covered, the local stretch of the merged
+//! atlas is measured at every sample ([`local_stretch`]); where it exceeds the target,
+//! that sample's reach (the walk distance within which a seed covers it) shrinks to
+//! what the target allows, and farthest-point placement goes on among those samples.
+//! A few such rounds bring the seeds closer where the surface curves and leave flat
+//! faces alone.
 //!
 //! **Coverage** at the end is Alg. 2 itself (`Atlas::sample`) at every sample,
 //! weighted by area: what the renderer will do.
@@ -72,6 +84,10 @@ pub struct PlaceOptions {
     pub spacing: Option<f64>,
     /// Keep the atlas's own seeds and merges and add to them (see the module docs).
     pub keep: bool,
+    /// The largest local stretch max(s1, 1/s2) wanted at a sample (see [`stretch`]):
+    /// where the placed atlas stretches more, seeds are added nearer (module docs).
+    /// `None` places for coverage only.
+    pub max_stretch: Option<f64>,
 }
 
 impl Default for PlaceOptions {
@@ -81,6 +97,7 @@ impl Default for PlaceOptions {
             max_seeds: 256,
             spacing: None,
             keep: false,
+            max_stretch: Some(DEFAULT_MAX_STRETCH),
         }
     }
 }
@@ -103,6 +120,30 @@ pub struct Placement {
     /// Samples eligible as seeds (their normal agrees with their neighbours').
     pub eligible: usize,
 }
+
+/// The default stretch target of [`PlaceOptions::max_stretch`].
+pub const DEFAULT_MAX_STRETCH: f64 = 1.5;
+
+/// While placing, a seed covers a sample where its own log map stretches no more
+/// than 1 + COVER_SLACK · (target − 1): the target itself is for the 95th percentile of
+/// the merged atlas ([`tighten`]). Held at the target everywhere, a round box's
+/// fillets (a few percent of its area) each needed seeds of their own, and those
+/// became the nearest seeds of the flat faces' edges and stretched them.
+const COVER_SLACK: f64 = 2.0;
+
+/// How much farthest-point sampling prefers flat samples for seeds: a sample's
+/// distance to the seeds counts times smooth^FLATNESS (a fillet whose normal turns 15°
+/// within a third of a cell counts half as far as a flat face; a sphere spanning 40
+/// cells, 0.97 as far). A seed on a tight curve stretches every walk that leaves it,
+/// and Alg. 2 gives each point its nearest seed, good map or not.
+const FLATNESS: i32 = 20;
+
+/// Seeds closer than this, relative to the shape's size, count as one point (the
+/// atlas's W0004 limit is 1e-3).
+const COINCIDENT: f64 = 2e-3;
+
+/// The most rounds of placement that tighten the reach for stretch.
+const STRETCH_ROUNDS: usize = 6;
 
 /// The cosine of the largest angle between a seed candidate's normal and its
 /// neighbours' (20°): sharper samples lie on creases.
@@ -139,6 +180,13 @@ pub fn with_seeds(
     out
 }
 
+/// A position or tangent rounded to the six decimals the scene text gets
+/// ([`crate::ide::seeds`]): placement prepares the atlas the file will have (on a
+/// pyramid's base a seed 1e-7 off projected, and its written position did not).
+fn as_written(v: DVec3) -> DVec3 {
+    (v * 1e6).round() / 1e6
+}
+
 /// The world x axis in the tangent plane (z where x is nearly normal).
 fn tangent(n: DVec3) -> DVec3 {
     super::atlas::frame(n, None).0
@@ -162,26 +210,17 @@ pub fn place(
         .map(|n| DVec3::from_array(n).normalize_or_zero());
     let mirrored = |k: usize| mirror.is_some_and(|n| samples[k].p.dot(n) < 0.0);
     let reach = def.params.max_distance;
+    let scale = super::atlas::scale(shape);
+
     let spacing = options.spacing.unwrap_or(0.5 * reach).min(reach);
-    let mut seeds: Vec<(DVec3, Option<DVec3>)> = Vec::new();
     // Per sample: the two nearest seeds whose walks reach it, (distance, seed).
     let mut best: Vec<[(f64, usize); 2]> = vec![[(f64::INFINITY, usize::MAX); 2]; samples.len()];
     // The atlas's own seeds (projected, with their tangents) and merges, kept.
-    let mut kept_merges: Vec<(usize, usize)> = Vec::new();
-    if options.keep && !def.seeds.is_empty() {
-        if let Ok(atlas) = Atlas::prepare(def, shape) {
-            seeds = def
-                .seeds
-                .iter()
-                .zip(&atlas.seeds)
-                .map(|(sd, ps)| (ps.seed.p, sd.tangent.map(DVec3::from_array)))
-                .collect();
-            kept_merges = def.merges.iter().map(|m| (m.a, m.b)).collect();
-            for i in 0..seeds.len() {
-                cover(&atlas, i, samples, reach, &mut best, &mut None);
-            }
-        }
-    }
+    let (mut seeds, kept_merges) = if options.keep {
+        own_seeds(def, shape, samples, (reach, options.max_stretch), &mut best)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let kept = (seeds.len(), kept_merges.len());
     // Seeds to place until coverage is reached, with the final Alg. 2 check between
     // rounds (it can differ from the walks' union where a nearer seed's walk fails).
@@ -194,79 +233,78 @@ pub fn place(
     let mut rejected: Vec<bool> = (0..samples.len()).map(mirrored).collect();
     // The seeds at the end of the last round: a round that adds none ends placement.
     let mut last_round: Option<usize> = None;
+    // Per sample, the walk distance within which a seed covers it: the spacing, less
+    // where the placed atlas stretched too much there.
+    let mut limit = vec![spacing; samples.len()];
+    let mut stretch_rounds = 0;
     loop {
         fn covered(
             k: usize,
             best: &[[(f64, usize); 2]],
             alg2: &Option<Vec<bool>>,
-            spacing: f64,
+            limit: &[f64],
         ) -> bool {
-            best[k][0].0 <= spacing && alg2.as_ref().is_none_or(|c| c[k])
+            best[k][0].0 <= limit[k] && alg2.as_ref().is_none_or(|c| c[k])
         }
         let share = |best: &[[(f64, usize); 2]], alg2: &Option<Vec<bool>>| {
             (0..samples.len())
-                .filter(|&k| covered(k, best, alg2, spacing))
+                .filter(|&k| covered(k, best, alg2, &limit))
                 .map(|k| samples[k].area)
                 .sum::<f64>()
                 / total
         };
-        while seeds.len() < options.max_seeds && share(&best, &covered_by_alg2) < options.target {
-            // The uncovered eligible sample farthest from every seed.
-            let next = (0..samples.len())
-                .filter(|&k| !rejected[k] && !covered(k, &best, &covered_by_alg2, spacing))
-                .map(|k| {
-                    let d = seeds
-                        .iter()
-                        .map(|(p, _)| (samples[k].p - *p).length())
-                        .fold(f64::INFINITY, f64::min);
-                    // Smooth samples first; on an island with none, the smoothest.
-                    (
-                        eligible[k],
-                        if eligible[k] { d } else { samples[k].smooth },
-                        k,
-                    )
-                })
-                .max_by(|a, b| {
-                    (a.0.cmp(&b.0))
-                        .then(a.1.total_cmp(&b.1))
-                        .then(b.2.cmp(&a.2))
-                })
-                .map(|(_, d, k)| (d, k));
-            let Some((_, k)) = next else { break };
-            let s = &samples[k];
-            rejected[k] = true;
-            seeds.push((s.p, Some(tangent(s.n))));
-            let i = seeds.len() - 1;
-            let Ok(atlas) = Atlas::prepare(&with_seeds(def, &seeds, &[]), shape) else {
-                // The seed cannot be prepared there (its projection does not converge,
-                // as at a pyramid's apex): drop it and never pick that sample again.
-                seeds.pop();
-                rejected[k] = true;
-                continue;
+        // A sample whose reach was tightened for stretch and is not yet covered within it.
+        let wanted =
+            |k: usize, best: &[[(f64, usize); 2]], alg2: &Option<Vec<bool>>, rejected: &[bool]| {
+                limit[k] < spacing && !rejected[k] && !covered(k, best, alg2, &limit)
             };
-            cover(&atlas, i, samples, reach, &mut best, &mut covered_by_alg2);
-            // The new seed's own sample is covered by construction (a walk of length 0).
-            if best[k][0].0 > 0.0 {
-                best[k][1] = best[k][0];
-                best[k][0] = (0.0, i);
+        loop {
+            let short = share(&best, &covered_by_alg2) < options.target;
+            let for_stretch =
+                !short && (0..samples.len()).any(|k| wanted(k, &best, &covered_by_alg2, &rejected));
+            if seeds.len() >= options.max_seeds || !(short || for_stretch) {
+                break;
             }
-            if let Some(c) = covered_by_alg2.as_mut() {
-                c[k] = true;
+            // The uncovered sample farthest from every seed (once the share is covered,
+            // among the samples whose reach was tightened for stretch).
+            let next = farthest(
+                samples,
+                &seeds,
+                &eligible,
+                (0..samples.len())
+                    .filter(|&k| !rejected[k] && !covered(k, &best, &covered_by_alg2, &limit))
+                    .filter(|&k| !for_stretch || wanted(k, &best, &covered_by_alg2, &rejected)),
+            );
+            let Some((d, k)) = next else { break };
+            rejected[k] = true;
+            // Samples that project onto an existing seed (a crease's wedge of the
+            // shell, two draws at one point) would make coincident seeds (W0004).
+            if eligible[k] && d < COINCIDENT * scale {
+                continue;
             }
+            // Where the seed cannot be prepared (its projection does not converge, as
+            // at a pyramid's apex), none is added; that sample is never picked again.
+            add_seed(
+                (def, shape, samples),
+                k,
+                (reach, options.max_stretch),
+                &mut seeds,
+                &mut best,
+                &mut covered_by_alg2,
+            );
         }
         // Merges, then Alg. 2 over every sample.
-        let (placed, merges) = merge_forest(def, shape, &seeds, &best, kept, &kept_merges);
+        let (placed, merges) = merge_forest(
+            def,
+            shape,
+            (&seeds, &best, samples),
+            kept,
+            &kept_merges,
+            options.max_stretch,
+        );
         let atlas = Atlas::prepare(&with_seeds(def, &placed, &merges), shape).ok();
-        let statuses: Vec<Status> = match &atlas {
-            Some(a) => samples.par_iter().map(|s| a.sample(s.p).status).collect(),
-            None => vec![Status::TooFar; samples.len()],
-        };
+        let (statuses, coverage) = alg2(atlas.as_ref(), samples);
         let ok: Vec<bool> = statuses.iter().map(|s| *s == Status::Ok).collect();
-        let coverage = (0..samples.len())
-            .filter(|&k| ok[k])
-            .map(|k| samples[k].area)
-            .sum::<f64>()
-            / total;
         let progressed = last_round != Some(seeds.len());
         last_round = Some(seeds.len());
         let more = coverage < options.target
@@ -274,7 +312,19 @@ pub fn place(
             && seeds.len() < options.max_seeds
             && covered_by_alg2.as_ref() != Some(&ok)
             && (0..samples.len()).any(|k| eligible[k] && !ok[k] && !rejected[k]);
-        if !more {
+        // Covered: where the atlas stretches more than wanted, tighten the reach.
+        let tightened = !more
+            && progressed
+            && seeds.len() < options.max_seeds
+            && stretch_rounds < STRETCH_ROUNDS
+            && match (options.max_stretch, &atlas) {
+                (Some(target), Some(a)) => tighten(a, samples, &best, target, &mut limit),
+                _ => false,
+            };
+        if tightened {
+            stretch_rounds += 1;
+        }
+        if !more && !tightened {
             return Placement {
                 kept,
                 seeds: placed,
@@ -291,24 +341,216 @@ pub fn place(
     }
 }
 
-/// Walks from seed `i` of `atlas` to every sample within `reach`, and records it among
+/// While the 95th percentile of `atlas`'s local stretch ([`local_stretch`]) over the
+/// samples exceeds `target`: at every sample that stretches more than `target`, the
+/// walk distance within which a seed covers it shrinks toward what the target allows
+/// (on a surface of curvature K a log map stretches by about 1 + K r²/6 at distance r,
+/// so the reach scales by √((target − 1)/(stretch − 1)), kept within 0.6 and 0.85 a
+/// round). Returns whether any sample's reach shrank.
+fn tighten(
+    atlas: &Atlas,
+    samples: &[SurfaceSample],
+    best: &[[(f64, usize); 2]],
+    target: f64,
+    limit: &mut [f64],
+) -> bool {
+    let stretch: Vec<Option<f64>> = samples
+        .par_iter()
+        .map(|s| local_stretch(atlas, s))
+        .collect();
+    let mut measured: Vec<f64> = stretch.iter().flatten().copied().collect();
+    if measured.is_empty() {
+        return false;
+    }
+    measured.sort_by(f64::total_cmp);
+    if measured[((measured.len() as f64 * 0.95) as usize).min(measured.len() - 1)] <= target {
+        return false;
+    }
+    let mut any = false;
+    for (k, s) in stretch.iter().enumerate() {
+        let Some(s) = *s else { continue };
+        let d = best[k][0].0;
+        if s <= target || !d.is_finite() || d <= 0.0 {
+            continue;
+        }
+        let shrink = ((target - 1.0) / (s - 1.0)).sqrt().clamp(0.6, 0.85);
+        let reach = (d * shrink).min(limit[k]);
+        if reach < limit[k] {
+            limit[k] = reach;
+            any = true;
+        }
+    }
+    any
+}
+
+/// The area share of `samples` where the placed atlas's Alg. 2 succeeds, and the
+/// samples where it fails with their status: the coverage of a placement measured on
+/// samples it was not placed on (a placement covers its own samples by construction;
+/// `sdfc seeds` reports this on a second, independent draw).
+pub fn coverage_on(
+    def: &AtlasDef,
+    shape: &Shape,
+    placement: &Placement,
+    samples: &[SurfaceSample],
+) -> (f64, Vec<(DVec3, Status)>) {
+    let atlas = Atlas::prepare(&with_seeds(def, &placement.seeds, &placement.merges), shape).ok();
+    let (statuses, coverage) = alg2(atlas.as_ref(), samples);
+    let failing = (0..samples.len())
+        .filter(|&k| statuses[k] != Status::Ok)
+        .map(|k| (samples[k].p, statuses[k]))
+        .collect();
+    (coverage, failing)
+}
+
+/// Adds a seed at sample `k` (as written, with the world x axis as its tangent) and
+/// records the samples it covers; leaves `seeds` as it was where the seed cannot be
+/// prepared.
+#[allow(clippy::type_complexity)]
+fn add_seed(
+    (def, shape, samples): (&AtlasDef, &Shape, &[SurfaceSample]),
+    k: usize,
+    reach: (f64, Option<f64>),
+    seeds: &mut Vec<(DVec3, Option<DVec3>)>,
+    best: &mut [[(f64, usize); 2]],
+    covered_by_alg2: &mut Option<Vec<bool>>,
+) {
+    let s = &samples[k];
+    seeds.push((as_written(s.p), Some(as_written(tangent(s.n)))));
+    let i = seeds.len() - 1;
+    let Ok(atlas) = Atlas::prepare(&with_seeds(def, seeds, &[]), shape) else {
+        seeds.pop();
+        return;
+    };
+    cover(&atlas, i, samples, reach, best, covered_by_alg2);
+    // The new seed's own sample is covered by construction (a walk of length 0, or
+    // nearly: the seed sits at the sample rounded as written).
+    let b = &mut best[k];
+    if b[0].1 == i {
+        b[0].0 = 0.0;
+    } else {
+        *b = [(0.0, i), b[0]];
+    }
+    if let Some(c) = covered_by_alg2.as_mut() {
+        c[k] = true;
+    }
+}
+
+/// Alg. 2's status at every sample and the area share where it succeeds (none
+/// without an atlas).
+fn alg2(atlas: Option<&Atlas>, samples: &[SurfaceSample]) -> (Vec<Status>, f64) {
+    let statuses: Vec<Status> = match atlas {
+        Some(a) => samples.par_iter().map(|s| a.sample(s.p).status).collect(),
+        None => vec![Status::TooFar; samples.len()],
+    };
+    let total: f64 = samples.iter().map(|s| s.area).sum::<f64>().max(1e-300);
+    let ok: f64 = (0..samples.len())
+        .filter(|&k| statuses[k] == Status::Ok)
+        .map(|k| samples[k].area)
+        .sum();
+    (statuses, ok / total)
+}
+
+/// The atlas's own seeds (projected, with their tangents) and merges, for
+/// [`PlaceOptions::keep`], with the samples they cover recorded in `best`.
+#[allow(clippy::type_complexity)]
+fn own_seeds(
+    def: &AtlasDef,
+    shape: &Shape,
+    samples: &[SurfaceSample],
+    reach: (f64, Option<f64>),
+    best: &mut [[(f64, usize); 2]],
+) -> (Vec<(DVec3, Option<DVec3>)>, Vec<(usize, usize)>) {
+    let Some(atlas) = (!def.seeds.is_empty())
+        .then(|| Atlas::prepare(def, shape).ok())
+        .flatten()
+    else {
+        return (Vec::new(), Vec::new());
+    };
+    let seeds: Vec<(DVec3, Option<DVec3>)> = def
+        .seeds
+        .iter()
+        .zip(&atlas.seeds)
+        .map(|(sd, ps)| (ps.seed.p, sd.tangent.map(DVec3::from_array)))
+        .collect();
+    for i in 0..seeds.len() {
+        cover(&atlas, i, samples, reach, best, &mut None);
+    }
+    (seeds, def.merges.iter().map(|m| (m.a, m.b)).collect())
+}
+
+/// Among `candidates`, the next seed's sample: the eligible one farthest from every
+/// seed (Euclidean), with the distance counting less where the surface curves (see
+/// [`FLATNESS`]: seeds go to flat faces before fillets); on an island with no eligible
+/// sample, the smoothest. Ties go to the lower index. Returns (distance, sample).
+fn farthest(
+    samples: &[SurfaceSample],
+    seeds: &[(DVec3, Option<DVec3>)],
+    eligible: &[bool],
+    candidates: impl Iterator<Item = usize>,
+) -> Option<(f64, usize)> {
+    candidates
+        .map(|k| {
+            let d = seeds
+                .iter()
+                .map(|(p, _)| (samples[k].p - *p).length())
+                .fold(f64::INFINITY, f64::min);
+            let key = if eligible[k] {
+                d * samples[k].smooth.max(0.0).powi(FLATNESS)
+            } else {
+                samples[k].smooth
+            };
+            (eligible[k], key, k, d)
+        })
+        .max_by(|a, b| {
+            (a.0.cmp(&b.0))
+                .then(a.1.total_cmp(&b.1))
+                .then(b.2.cmp(&a.2))
+        })
+        .map(|(_, _, k, d)| (d, k))
+}
+
+/// Walks from seed `i` of `atlas`/// Walks from seed `i` of `atlas` to every sample within `reach` and, with a stretch
+/// target, where the seed's own log map stretches no more than that at the sample
+/// (two more walks a tangent step away), records it among
 /// the two nearest covering seeds of the samples it reaches (and, optimistically until
 /// the next Alg. 2 check, as covering them).
 fn cover(
     atlas: &Atlas,
     i: usize,
     samples: &[SurfaceSample],
-    reach: f64,
+    (reach, max_stretch): (f64, Option<f64>),
     best: &mut [[(f64, usize); 2]],
     covered_by_alg2: &mut Option<Vec<bool>>,
 ) {
     let p = atlas.seeds[i].seed.p;
+    let h = 1e-3 * super::atlas::scale(&atlas.shape);
     let walks: Vec<(usize, f64)> = (0..samples.len())
         .into_par_iter()
         .filter(|&j| (samples[j].p - p).length() < reach)
         .filter_map(|j| {
-            let m = atlas.walk(samples[j].p, i, reach);
-            (m.status == Status::Ok).then_some((j, m.distance))
+            let s = &samples[j];
+            let m = atlas.walk(s.p, i, reach);
+            if m.status != Status::Ok {
+                return None;
+            }
+            if let Some(target) = max_stretch.map(|s| 1.0 + COVER_SLACK * (s - 1.0)) {
+                let (t1, t2) = (tangent(s.n), s.n.cross(tangent(s.n)));
+                // Within a step of a crease the map is not measured (as in
+                // [`local_stretch`]).
+                let off = |x: DVec3| crate::ir::eval::distance(atlas.field(), x).abs() > 0.05 * h;
+                if off(s.p + t1 * h) || off(s.p + t2 * h) {
+                    return Some((j, m.distance));
+                }
+                let b = atlas.walk(s.p + t1 * h, i, reach);
+                let c = atlas.walk(s.p + t2 * h, i, reach);
+                if b.status != Status::Ok || c.status != Status::Ok {
+                    return None;
+                }
+                if stretch_of((b.uv - m.uv) / h, (c.uv - m.uv) / h) > target {
+                    return None;
+                }
+            }
+            Some((j, m.distance))
         })
         .collect();
     for (j, d) in walks {
@@ -329,21 +571,53 @@ fn cover(
 /// the first seed of each group only. The first `kept.0` seeds and `kept_merges` are the
 /// atlas's own: their merges stay, their tangents stay as written, and only pairs with a
 /// new seed are candidates.
+#[allow(clippy::type_complexity)]
 fn merge_forest(
     def: &AtlasDef,
     shape: &Shape,
-    seeds: &[(DVec3, Option<DVec3>)],
-    best: &[[(f64, usize); 2]],
+    (seeds, best, samples): (
+        &[(DVec3, Option<DVec3>)],
+        &[[(f64, usize); 2]],
+        &[SurfaceSample],
+    ),
     kept: (usize, usize),
     kept_merges: &[(usize, usize)],
+    max_stretch: Option<f64>,
 ) -> (Vec<(DVec3, Option<DVec3>)>, Vec<(usize, usize)>) {
+    // A merge is kept only where the atlas stays free of diagnostics and, with a
+    // stretch target, where the blend it brings does not stretch more than that: the
+    // samples whose two nearest covering seeds are the pair (its blend band) stretch
+    // beyond the target at no more than a tenth of them. Across a fold the two walks'
+    // uv disagree a little, and a blend band squeezes the difference into its width.
+    let keeps = |trial: &AtlasDef, (a, b): (usize, usize)| {
+        let Ok(atlas) = Atlas::prepare(trial, shape) else {
+            return false;
+        };
+        if !super::diagnose::diagnostics(trial, &atlas).is_empty() {
+            return false;
+        }
+        let Some(target) = max_stretch else {
+            return true;
+        };
+        let band: Vec<usize> = (0..samples.len())
+            .filter(|&k| {
+                let (x, y) = (best[k][0].1, best[k][1].1);
+                (x, y) == (a, b) || (x, y) == (b, a)
+            })
+            .collect();
+        let over = band
+            .par_iter()
+            .filter(|&&k| local_stretch(&atlas, &samples[k]).is_some_and(|s| s > target))
+            .count();
+        over * 10 <= band.len()
+    };
     let n = seeds.len();
     let fixed = kept.0;
     let mut pairs: Vec<(usize, usize)> = best
         .iter()
         .filter(|b| b[0].1 != usize::MAX && b[1].1 != usize::MAX)
         .map(|b| (b[0].1.min(b[1].1), b[0].1.max(b[1].1)))
-        .filter(|&(_, b)| b >= fixed)
+        .filter(|&(a, b)| b >= fixed && a != b)
         .collect();
     pairs.sort_unstable();
     pairs.dedup();
@@ -406,10 +680,7 @@ fn merge_forest(
         merges.push((a, b));
         let placed = with_tangents(&mut trial_parent);
         let trial = with_seeds(def, &placed, &merges);
-        let clean = Atlas::prepare(&trial, shape)
-            .map(|atlas| super::diagnose::diagnostics(&trial, &atlas).is_empty())
-            .unwrap_or(false);
-        if clean {
+        if keeps(&trial, (a, b)) {
             parent = trial_parent;
         } else {
             merges.pop();
@@ -427,10 +698,7 @@ fn merge_forest(
         }
         merges.push((a, b));
         let trial = with_seeds(def, &placed, &merges);
-        let clean = Atlas::prepare(&trial, shape)
-            .map(|atlas| super::diagnose::diagnostics(&trial, &atlas).is_empty())
-            .unwrap_or(false);
-        if !clean {
+        if !keeps(&trial, (a, b)) {
             merges.pop();
         }
     }
@@ -441,30 +709,12 @@ fn merge_forest(
 /// measures it: the uv Jacobian from two tangent offsets of 1e-3 of the shape's size,
 /// its singular values s1 ≥ s2, and the stretch max(s1, 1/s2) (1 for an isometry).
 /// Samples whose three Alg. 2 queries do not all succeed with the same seed (edges of
-/// charts, frontiers) are left out. Returns (mean, 95th percentile, samples measured).
+/// charts, frontiers), or whose offsets leave the surface (within a step of a crease),
+/// are left out. Returns (mean, 95th percentile, samples measured).
 pub fn stretch(atlas: &Atlas, samples: &[SurfaceSample]) -> (f64, f64, usize) {
-    let h = 1e-3 * super::atlas::scale(&atlas.shape);
     let mut values: Vec<f64> = samples
         .par_iter()
-        .filter_map(|s| {
-            let (t1, t2) = (tangent(s.n), s.n.cross(tangent(s.n)));
-            let a = atlas.sample(s.p);
-            let b = atlas.sample(s.p + t1 * h);
-            let c = atlas.sample(s.p + t2 * h);
-            let ok = [&a, &b, &c]
-                .iter()
-                .all(|x| x.status == Status::Ok && x.seed == a.seed);
-            if !ok {
-                return None;
-            }
-            let (ju, jv) = ((b.uv - a.uv) / h, (c.uv - a.uv) / h);
-            let ss = ju.length_squared() + jv.length_squared();
-            let det = (ju.x * jv.y - ju.y * jv.x).abs();
-            let root = (ss * ss - 4.0 * det * det).max(0.0).sqrt();
-            let s1 = (0.5 * (ss + root)).sqrt();
-            let s2 = (0.5 * (ss - root)).max(1e-24).sqrt();
-            Some(s1.max(1.0 / s2))
-        })
+        .filter_map(|s| local_stretch(atlas, s))
         .collect();
     if values.is_empty() {
         return (f64::NAN, f64::NAN, 0);
@@ -473,4 +723,38 @@ pub fn stretch(atlas: &Atlas, samples: &[SurfaceSample]) -> (f64, f64, usize) {
     let mean = values.iter().sum::<f64>() / values.len() as f64;
     let p95 = values[((values.len() as f64 * 0.95) as usize).min(values.len() - 1)];
     (mean, p95, values.len())
+}
+
+/// The local stretch at one sample (see [`stretch`]); `None` where it is not measured.
+pub fn local_stretch(atlas: &Atlas, s: &SurfaceSample) -> Option<f64> {
+    let h = 1e-3 * super::atlas::scale(&atlas.shape);
+    let (t1, t2) = (tangent(s.n), s.n.cross(tangent(s.n)));
+    // Both offsets stay on the surface (within a twentieth of the step): within a step
+    // of a crease one lies off it, Alg. 2 sees its projection, and the Jacobian would
+    // measure the crease rather than the map.
+    let off = |x: DVec3| crate::ir::eval::distance(atlas.field(), x).abs() > 0.05 * h;
+    if off(s.p + t1 * h) || off(s.p + t2 * h) {
+        return None;
+    }
+    let a = atlas.sample(s.p);
+    let b = atlas.sample(s.p + t1 * h);
+    let c = atlas.sample(s.p + t2 * h);
+    let ok = [&a, &b, &c]
+        .iter()
+        .all(|x| x.status == Status::Ok && x.seed == a.seed);
+    if !ok {
+        return None;
+    }
+    Some(stretch_of((b.uv - a.uv) / h, (c.uv - a.uv) / h))
+}
+
+/// max(s1, 1/s2) of the 2 × 2 Jacobian with columns `ju` and `jv` (singular values
+/// s1 ≥ s2).
+fn stretch_of(ju: glam::DVec2, jv: glam::DVec2) -> f64 {
+    let ss = ju.length_squared() + jv.length_squared();
+    let det = (ju.x * jv.y - ju.y * jv.x).abs();
+    let root = (ss * ss - 4.0 * det * det).max(0.0).sqrt();
+    let s1 = (0.5 * (ss + root)).sqrt();
+    let s2 = (0.5 * (ss - root)).max(1e-24).sqrt();
+    s1.max(1.0 / s2)
 }

@@ -587,10 +587,12 @@ fn assert_none(found: &[Found]) {
     );
 }
 
-/// The in-suite run: 1,500 cases (13 to 25 s in release on two busy cores).
+/// The in-suite run: 750 cases (about 25 s in release on two busy cores; seed
+/// placement with its stretch target costs about three times what coverage alone did,
+/// so the in-suite count was halved from 1,500 to keep CI under its 15 minutes).
 #[test]
 fn mutated_examples_check_format_and_place_seeds() {
-    let found = sweep(0, 1500, 10, None);
+    let found = sweep(0, 750, 10, None);
     assert_none(&found);
 }
 

@@ -1,5 +1,4 @@
-//! A quad mesh of the zero set by dual contouring (the bake's stage 1, and the surface
-//! samples of seed placement and coverage).
+//! A quad mesh of the zero set by dual contouring (the bake's stage 1).
 //!
 //! The distance is sampled (CPU reference, f64) at the corners of a regular grid. Every
 //! grid edge whose ends have opposite signs gets one quad, joining the vertices of the

@@ -1,5 +1,6 @@
 //! The CPU reference layer above the UV math: the f64 interpreter of material fields
-//! ([`material`]), the mesher of zero sets and its surface samples ([`mesh`]), and the
+//! ([`material`]), the mesher of zero sets ([`mesh`]), samples of a zero set drawn
+//! uniformly by area ([`surface`]), and the
 //! environment that evaluates displacement heights and
 //! shell-map uv from a scene's prepared atlases and decoded textures ([`Env`]), which
 //! the IR's evaluator takes as an argument ([`crate::ir::Heights`]).

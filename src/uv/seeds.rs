@@ -143,7 +143,7 @@ const FLATNESS: i32 = 20;
 const COINCIDENT: f64 = 2e-3;
 
 /// The most rounds of placement that tighten the reach for stretch.
-const STRETCH_ROUNDS: usize = 6;
+const STRETCH_ROUNDS: usize = 3;
 
 /// The cosine of the largest angle between a seed candidate's normal and its
 /// neighbours' (20°): sharper samples lie on creases.
@@ -217,7 +217,13 @@ pub fn place(
     let mut best: Vec<[(f64, usize); 2]> = vec![[(f64::INFINITY, usize::MAX); 2]; samples.len()];
     // The atlas's own seeds (projected, with their tangents) and merges, kept.
     let (mut seeds, kept_merges) = if options.keep {
-        own_seeds(def, shape, samples, (reach, options.max_stretch), &mut best)
+        own_seeds(
+            def,
+            shape,
+            samples,
+            (spacing, options.max_stretch),
+            &mut best,
+        )
     } else {
         (Vec::new(), Vec::new())
     };
@@ -287,7 +293,7 @@ pub fn place(
             add_seed(
                 (def, shape, samples),
                 k,
-                (reach, options.max_stretch),
+                (spacing, options.max_stretch),
                 &mut seeds,
                 &mut best,
                 &mut covered_by_alg2,
@@ -509,7 +515,8 @@ fn farthest(
         .map(|(_, _, k, d)| (d, k))
 }
 
-/// Walks from seed `i` of `atlas`/// Walks from seed `i` of `atlas` to every sample within `reach` and, with a stretch
+/// Walks from seed `i` of `atlas`/// Walks from seed `i` of `atlas` to every sample within `reach` (the spacing: a walk
+/// longer than that covers nothing, and regions that touch meet within it) and, with a stretch
 /// target, where the seed's own log map stretches no more than that at the sample
 /// (two more walks a tangent step away), records it among
 /// the two nearest covering seeds of the samples it reaches (and, optimistically until

@@ -40,12 +40,13 @@ const ROUND_BOXES: [&str; 3] = [
 ];
 const ROUND_BOX_EXCESS: f64 = 0.035;
 
-/// The robot's coverage: 99.40 % by this measure (99.41 % reported). What fails lies
+/// The robot's coverage: 99.33 % by this measure (99.40 % with 4,000 points; 99.41 %
+/// reported). What fails lies
 /// within the gradient's finite-difference step (1e-3 of the size) of the boxes'
 /// creases, where Alg. 1's last normal straddles the crease (SharpFeature) whatever
 /// the seeds: 2 × 0.0033 × the creases' length over the area is about half a
 /// percent. Left open in issue 42 (it needs the walk, not placement).
-const ROBOT_COVERAGE: f64 = 0.993;
+const ROBOT_COVERAGE: f64 = 0.992;
 
 /// `n` points of the zero set of `shape`, uniform by area, as weighted samples.
 fn area_uniform(shape: &Shape, n: usize, seed: u64) -> Vec<SurfaceSample> {
@@ -69,10 +70,14 @@ fn area_uniform(shape: &Shape, n: usize, seed: u64) -> Vec<SurfaceSample> {
             }
         }
     }
+    assert!(!candidates.is_empty(), "no cell reaches the surface");
     let mut rng = Rng(seed);
     let mut out = Vec::new();
+    let mut rounds = 0;
     // Whole rounds over every candidate cell keep the draw uniform over them.
     while out.len() < n {
+        rounds += 1;
+        assert!(rounds < 100_000, "the shell has almost no volume");
         for lo in &candidates {
             let x = *lo + DVec3::new(rng.unit(), rng.unit(), rng.unit()) * h;
             if eval::distance(shape, x).abs() >= eps {
@@ -172,7 +177,7 @@ fn place(path: &std::path::Path, extra: &[&str]) -> (f64, String) {
     (reported / 100.0, err)
 }
 
-/// The scene with its first atlas's seed and merge lines removed.
+/// The scene with every atlas's seed and merge lines removed.
 fn without_seeds(text: &str) -> String {
     text.lines()
         .filter(|l| {
@@ -286,6 +291,8 @@ fn automatic_seeds_cover_every_example_by_area_and_stretch_no_more_than_by_hand(
             .iter()
             .map(|h| {
                 let p95 = summary(h.stretch.iter().flatten().copied().collect()).1;
+                // (No hand-placed sample measured: the default.)
+                let p95 = if p95.is_nan() { 1.5 } else { p95 };
                 format!(
                     "{:.3}",
                     p95.clamp(1.05, sdfc::uv::seeds::DEFAULT_MAX_STRETCH)
@@ -296,7 +303,19 @@ fn automatic_seeds_cover_every_example_by_area_and_stretch_no_more_than_by_hand(
         let mut took = Vec::new();
         for (name, target) in names.iter().zip(&targets) {
             let started = std::time::Instant::now();
-            reported.push(place(&path, &["--atlas", name, "--max-stretch", target]).0);
+            // (At most 128 seeds, for CI's time: the round boxes held to 1.05 fill
+            // 256 otherwise, for a 95th percentile a few thousandths lower. The 8 × 8
+            // plate's thin sides need about 200 at its D.)
+            let most = if example == "plate.sdf" { "256" } else { "128" };
+            let args = [
+                "--atlas",
+                name,
+                "--max-stretch",
+                target,
+                "--max-seeds",
+                most,
+            ];
+            reported.push(place(&path, &args).0);
             took.push(started.elapsed().as_secs_f64());
         }
         let written = std::fs::read_to_string(&path).unwrap();

@@ -12,7 +12,7 @@
 //! (Euclidean) from every seed so far, among the samples where the surface is smooth
 //! (a seed on a crease has no well-defined frame and its walks fail on both sides; on an
 //! island with no smooth sample, the smoothest), then walks from the new seed to every
-//! sample within D. Farthest-point sampling spreads the
+//! sample within the spacing. Farthest-point sampling spreads the
 //! seeds evenly, and because a walk stops at a sharp feature (the ε2 test), the
 //! samples behind one stay uncovered until a seed lands among them: every island the
 //! sharp features cut out gets its own seed, largest gaps first. A variational
@@ -134,7 +134,7 @@ const COVER_SLACK: f64 = 2.0;
 /// How much farthest-point sampling prefers flat samples for seeds: a sample's
 /// distance to the seeds counts times smooth^FLATNESS (a fillet whose normal turns 15°
 /// within a third of a cell counts half as far as a flat face; a sphere spanning 40
-/// cells, 0.97 as far). A seed on a tight curve stretches every walk that leaves it,
+/// cells, 0.997 as far). A seed on a tight curve stretches every walk that leaves it,
 /// and Alg. 2 gives each point its nearest seed, good map or not.
 const FLATNESS: i32 = 20;
 
@@ -204,15 +204,12 @@ pub fn place(
     let eligible: Vec<bool> = samples.iter().map(|s| s.smooth >= SMOOTH_COS).collect();
     // With a `mirror` plane, the mirrored side takes the uv of its reflection: a seed
     // there is never used (W0008), so none is placed there.
-    let mirror = def
-        .params
-        .mirror
-        .map(|n| DVec3::from_array(n).normalize_or_zero());
+    let mirror = def.params.mirror.map(DVec3::from_array);
     let mirrored = |k: usize| mirror.is_some_and(|n| samples[k].p.dot(n) < 0.0);
     let reach = def.params.max_distance;
     let scale = super::atlas::scale(shape);
-
     let spacing = options.spacing.unwrap_or(0.5 * reach).min(reach);
+    let options = finite_target(options);
     // Per sample: the two nearest seeds whose walks reach it, (distance, seed).
     let mut best: Vec<[(f64, usize); 2]> = vec![[(f64::INFINITY, usize::MAX); 2]; samples.len()];
     // The atlas's own seeds (projected, with their tangents) and merges, kept.
@@ -231,11 +228,9 @@ pub fn place(
     // Seeds to place until coverage is reached, with the final Alg. 2 check between
     // rounds (it can differ from the walks' union where a nearer seed's walk fails).
     let mut covered_by_alg2: Option<Vec<bool>> = None;
-    // Samples where a seed could not be prepared: never picked again, so every round
-    // either adds a seed or retires a sample (placement always ends).
-    // A sample that already has a seed is never given another one: where its own seed
-    // does not make Alg. 2 succeed (a mirrored side whose reflection is off the
-    // surface), another seed at the same point would not either.
+    // Samples once picked (with or without a seed prepared there) are never picked
+    // again, so every round adds a seed or retires a sample and placement ends; where
+    // a sample's own seed does not make Alg. 2 succeed, another there would not either.
     let mut rejected: Vec<bool> = (0..samples.len()).map(mirrored).collect();
     // The seeds at the end of the last round: a round that adds none ends placement.
     let mut last_round: Option<usize> = None;
@@ -285,7 +280,7 @@ pub fn place(
             rejected[k] = true;
             // Samples that project onto an existing seed (a crease's wedge of the
             // shell, two draws at one point) would make coincident seeds (W0004).
-            if eligible[k] && d < COINCIDENT * scale {
+            if d < COINCIDENT * scale {
                 continue;
             }
             // Where the seed cannot be prepared (its projection does not converge, as
@@ -456,6 +451,15 @@ fn alg2(atlas: Option<&Atlas>, samples: &[SurfaceSample]) -> (Vec<Status>, f64) 
     (statuses, ok / total)
 }
 
+/// `options` with a stretch target beyond any stretch (`inf`) taken as none: it would
+/// cost the stretch measurements and change nothing.
+fn finite_target(options: PlaceOptions) -> PlaceOptions {
+    PlaceOptions {
+        max_stretch: options.max_stretch.filter(|s| s.is_finite()),
+        ..options
+    }
+}
+
 /// The atlas's own seeds (projected, with their tangents) and merges, for
 /// [`PlaceOptions::keep`], with the samples they cover recorded in `best`.
 #[allow(clippy::type_complexity)]
@@ -515,7 +519,7 @@ fn farthest(
         .map(|(_, _, k, d)| (d, k))
 }
 
-/// Walks from seed `i` of `atlas`/// Walks from seed `i` of `atlas` to every sample within `reach` (the spacing: a walk
+/// Walks from seed `i` of `atlas` to every sample within `reach` (the spacing: a walk
 /// longer than that covers nothing, and regions that touch meet within it) and, with a stretch
 /// target, where the seed's own log map stretches no more than that at the sample
 /// (two more walks a tangent step away), records it among

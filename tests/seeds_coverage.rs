@@ -292,7 +292,11 @@ fn automatic_seeds_cover_every_example_by_area_and_stretch_no_more_than_by_hand(
             .map(|h| {
                 let p95 = summary(h.stretch.iter().flatten().copied().collect()).1;
                 // (No hand-placed sample measured: the default.)
-                let p95 = if p95.is_nan() { 1.5 } else { p95 };
+                let p95 = if p95.is_nan() {
+                    sdfc::uv::seeds::DEFAULT_MAX_STRETCH
+                } else {
+                    p95
+                };
                 format!(
                     "{:.3}",
                     p95.clamp(1.05, sdfc::uv::seeds::DEFAULT_MAX_STRETCH)

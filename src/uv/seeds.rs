@@ -37,12 +37,16 @@
 //! from its seed where the surface curves (on a sphere of radius R by r / (R sin(r/R))
 //! across, at distance r), so seeds spaced for coverage alone stretch the texture
 //! around curved parts (a seed per flat face of the robot, whose walks reach around the
-//! head and arms). Once the target share is covered, the local stretch of the merged
-//! atlas is measured at every sample ([`local_stretch`]); where it exceeds the target,
-//! that sample's reach (the walk distance within which a seed covers it) shrinks to
-//! what the target allows, and farthest-point placement goes on among those samples.
-//! A few such rounds bring the seeds closer where the surface curves and leave flat
-//! faces alone.
+//! head and arms). With a target S, four things change. A seed covers a sample only
+//! where its own map stretches at most 1 + 2(S − 1) there (two more walks a tangent
+//! step away, `COVER_SLACK`). Farthest-point sampling prefers flat samples
+//! (`FLATNESS`), so seeds go to faces before fillets. A merge is kept only where its
+//! blend band does not stretch beyond S. And once the target share is covered, the
+//! local stretch of the merged atlas is measured at every sample ([`local_stretch`]);
+//! while its 95th percentile exceeds S, the reach of each sample that stretches more
+//! (the walk distance within which a seed covers it) shrinks toward what S allows, and
+//! farthest-point placement goes on among those samples, for up to
+//! `STRETCH_ROUNDS` rounds.
 //!
 //! **Coverage** at the end is Alg. 2 itself (`Atlas::sample`) at every sample,
 //! weighted by area: what the renderer will do.

@@ -206,6 +206,40 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             ]);
             assert_eq!(code, 2, "{err}");
             assert!(err.contains("--camera-from is for"), "{err}");
+            // As a generic glTF viewer reads it: the same picture, within filtering.
+            let standard = dir.path().join("sphere-standard.png");
+            let (code, _, err) = sdfc(&[
+                "render",
+                glb.to_str().unwrap(),
+                "--camera-from",
+                example.to_str().unwrap(),
+                "--size",
+                "64x48",
+                "--filter",
+                "standard",
+                "-o",
+                standard.to_str().unwrap(),
+            ]);
+            assert_eq!(code, 0, "{err}");
+            let (a, b) = (
+                image::open(&png).unwrap().to_rgb8(),
+                image::open(&standard).unwrap().to_rgb8(),
+            );
+            let mean = a
+                .as_raw()
+                .iter()
+                .zip(b.as_raw())
+                .map(|(x, y)| (*x as f64 - *y as f64).abs())
+                .sum::<f64>()
+                / a.as_raw().len() as f64;
+            assert!(
+                a != b && mean < 4.0,
+                "standard against atlas filter: mean {mean:.2}/255"
+            );
+            let (code, _, err) =
+                sdfc(&["render", example.to_str().unwrap(), "--filter", "standard"]);
+            assert_eq!(code, 2, "{err}");
+            assert!(err.contains("--filter is for"), "{err}");
         }
         // The KTX2 file holds one level per atlas level.
         if !packed {

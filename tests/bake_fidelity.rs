@@ -4,7 +4,7 @@
 //! GPU tests skip loudly without an adapter unless SDFC_REQUIRE_GPU=1.
 
 use sdfc::bake::pipeline::{self, Options, Quiet, Resolution, Style};
-use sdfc::gpu::{gpu_for_tests, Frame, MeshRenderer, ViewMode};
+use sdfc::gpu::{gpu_for_tests, Frame, MeshFilter, MeshRenderer, ViewMode};
 use std::path::Path;
 
 fn psnr(a: &Frame, b: &Frame) -> f64 {
@@ -59,9 +59,32 @@ fn compare_source(
     mode: ViewMode,
     style: Style,
 ) -> f64 {
-    let Some(gpu) = gpu_for_tests() else {
-        return f64::INFINITY;
-    };
+    compare_frames(
+        example,
+        source,
+        base,
+        (size, grid, chart_quads),
+        (w, h),
+        mode,
+        style,
+        MeshFilter::Atlas,
+    )
+    .map_or(f64::INFINITY, |(implicit, drawn)| psnr(&implicit, &drawn))
+}
+
+/// The implicit render and the baked mesh's (read with `filter`), or None without a GPU.
+#[allow(clippy::too_many_arguments)]
+fn compare_frames(
+    example: &str,
+    source: &str,
+    base: &Path,
+    (size, grid, chart_quads): (u32, usize, usize),
+    (w, h): (u32, u32),
+    mode: ViewMode,
+    style: Style,
+    filter: MeshFilter,
+) -> Option<(Frame, Frame)> {
+    let gpu = gpu_for_tests()?;
     let analysis = sdfc::driver::check(source, Some(base));
     assert!(!analysis.has_errors());
     let compiled = sdfc::driver::compile(
@@ -87,23 +110,47 @@ fn compare_source(
     view.width = w;
     view.height = h;
     let implicit = sdfc::gpu::render(&gpu, &compiled.module, &view, mode, base).unwrap();
-    let mesh = MeshRenderer::new(&gpu, &baked.mesh, &baked.textures, &baked.atlas).unwrap();
+    let mesh = MeshRenderer::with_filter(&gpu, &baked.mesh, &baked.textures, &baked.atlas, filter)
+        .unwrap();
     let drawn = mesh.render(&gpu, &view, mode).unwrap();
     let p = psnr(&implicit, &drawn);
     if let Ok(dir) = std::env::var("SDFC_FIDELITY_DIR") {
         for (name, f) in [("implicit", &implicit), ("mesh", &drawn)] {
             let img = image::RgbaImage::from_raw(f.width, f.height, f.color.clone()).unwrap();
-            img.save(format!("{dir}/{example}-{mode:?}-{name}.png"))
+            img.save(format!("{dir}/{example}-{mode:?}-{filter}-{name}.png"))
                 .unwrap();
         }
     }
     eprintln!(
-        "{example}: {size}-wide {style:?} atlas, grid {grid}, {} charts of {} cells, {}² texels a cell ({chart_quads}² quads each): {mode:?} at {w}×{h}: PSNR {p:.2} dB",
+        "{example}: {size}-wide {style:?} atlas, grid {grid}, {} charts of {} cells, {}² texels a cell ({chart_quads}² quads each), {filter} filter: {mode:?} at {w}×{h}: PSNR {p:.2} dB, worst 8 × 8 block {:.1}/255",
         baked.patches.len(),
         baked.table.len(),
-        baked.atlas.cell_size()
+        baked.atlas.cell_size(),
+        worst_block(&implicit, &drawn)
     );
-    p
+    Some((implicit, drawn))
+}
+
+/// The largest mean absolute difference (over RGB) of an 8 × 8 block of pixels, in
+/// 8-bit steps.
+fn worst_block(a: &Frame, b: &Frame) -> f64 {
+    let (w, h) = (a.width as usize, a.height as usize);
+    let mut worst = 0.0f64;
+    for by in 0..h / 8 {
+        for bx in 0..w / 8 {
+            let mut sum = 0.0;
+            for y in by * 8..by * 8 + 8 {
+                for x in bx * 8..bx * 8 + 8 {
+                    let i = 4 * (y * w + x);
+                    for k in 0..3 {
+                        sum += (a.color[i + k] as f64 - b.color[i + k] as f64).abs();
+                    }
+                }
+            }
+            worst = worst.max(sum / (64.0 * 3.0));
+        }
+    }
+    worst
 }
 
 /// A scene whose material varies smoothly (no texture, no hard edge): the bake's
@@ -189,14 +236,22 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
     assert!(p >= 32.0, "robot albedo PSNR {p:.2} dB");
 }
 
-/// Close-ups on curved parts (the red team's reproducer, at a 2048 atlas): texels are
-/// placed where a rasterizer interpolates TEXCOORD_0, linearly over each exported
-/// triangle. Measured albedo PSNR through the bilinear patches before, and on the
-/// triangles now: normal_map 27.20 → 27.37 dB, capsule 25.08 → 25.72 dB. The rest of
-/// the gap is the mesh renderer's filtering (its per-fragment level is coarser than the
-/// implicit render's footprint) and the mesh's own geometry, not texel placement
-/// (`tests/bake.rs` checks that to 1e-6 of the scene's size); the floors below keep
-/// what was gained.
+/// Close-ups on curved parts (the red team's reproducer camera for normal_map.sdf, a
+/// close-up of the capsule's drilled side, one of the robot's head and shoulder), at a
+/// 2048 atlas with 2 × 2 quads a chart, drawn as any glTF viewer draws them: TEXCOORD_0
+/// interpolated over each triangle and hardware trilinear filtering on a generic mip
+/// chain (`MeshFilter::Standard`), against the implicit render's albedo.
+///
+/// Texels are placed where a rasterizer interpolates TEXCOORD_0 (`tests/bake.rs` checks
+/// that to 1e-6 of the scene's size), so the two readers of the file, sdfc's §6 lookup
+/// and the standard one, show the same picture (asserted below). What separates them
+/// from the implicit render is the mesh's chord error (a pixel of the mesh shows the
+/// texel of the surface point nearest it, not the one its ray meets: a shift of a
+/// fraction of a pixel at every mortar line) and resampling a texture twice. Measured
+/// (lavapipe, 2-core machine), standard filter, 480 × 320: normal_map 29.80 dB,
+/// capsule 26.32 dB, robot 31.45 dB; at a 4096 atlas, grid 96 and 640 × 640: 33.88,
+/// 29.84 and 36.52 dB. The 35 dB at every close-up is not met; the floors
+/// keep what is measured.
 #[test]
 fn close_ups_on_curved_parts_match_the_implicit_render() {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
@@ -204,27 +259,49 @@ fn close_ups_on_curved_parts_match_the_implicit_render() {
         (
             "normal_map.sdf",
             "orbit(target: [0.35, 0, 0.9], distance: 1.0, yaw: 35deg, pitch: 15deg)",
-            27.0,
+            29.3,
         ),
         (
             "capsule.sdf",
             "orbit(target: [0.3, -0.3, 0.3], distance: 1.4, yaw: 40deg, pitch: 10deg)",
-            25.4,
+            25.8,
+        ),
+        (
+            "robot.sdf",
+            "orbit(target: [0.55, 0.35, 0.2], distance: 1.3, yaw: 30deg, pitch: 10deg)",
+            30.9,
         ),
     ] {
         let source = std::fs::read_to_string(base.join(example)).unwrap();
         let start = source.find("camera = ").unwrap();
         let end = start + source[start..].find(";\n").unwrap();
         let close = format!("{}camera = {camera}{}", &source[..start], &source[end..]);
-        let p = compare_source(
-            &format!("{example}-close"),
-            &close,
-            &base,
-            (2048, 48, 2),
-            (240, 160),
-            ViewMode::Albedo,
-            Style::Flat,
+        let frames = |filter| {
+            compare_frames(
+                &format!("{example}-close"),
+                &close,
+                &base,
+                (2048, 48, 2),
+                (480, 320),
+                ViewMode::Albedo,
+                Style::Flat,
+                filter,
+            )
+        };
+        let Some((implicit, standard)) = frames(MeshFilter::Standard) else {
+            return;
+        };
+        let p = psnr(&implicit, &standard);
+        assert!(
+            p >= floor,
+            "{example} close-up, standard filter: albedo PSNR {p:.2} dB"
         );
-        assert!(p >= floor, "{example} close-up: albedo PSNR {p:.2} dB");
+        // The two readers of the same file agree: sdfc's lookup and a generic viewer's.
+        let (_, atlas) = frames(MeshFilter::Atlas).unwrap();
+        let both = psnr(&atlas, &standard);
+        assert!(
+            both >= 36.0,
+            "{example} close-up: the standard and atlas filters differ, PSNR {both:.2} dB"
+        );
     }
 }

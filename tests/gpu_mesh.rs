@@ -204,6 +204,15 @@ fn the_mesh_module_validates_for_several_layouts() {
         if let Err(e) = sdfc::codegen::validate(&wgsl) {
             panic!("{layout:?}:\n{e}");
         }
+        let standard = sdfc::codegen::mesh::mesh_wgsl_with(
+            &layout.clone().into(),
+            sdfc::gpu::MeshFilter::Standard,
+        )
+        .unwrap();
+        assert!(standard.contains("const STANDARD: bool = true;"));
+        if let Err(e) = sdfc::codegen::validate(&standard) {
+            panic!("{layout:?}, standard filter:\n{e}");
+        }
         let origins = layout
             .level_origins
             .iter()
@@ -450,4 +459,40 @@ fn the_mesh_and_the_implicit_scene_agree_in_the_albedo_and_colour_views() {
             );
         }
     }
+}
+
+/// The standard filter's mip chain (`generic_mips`), against a box filter worked by
+/// hand: sizes halve (rounded down, at least 1) down to 1 × 1; a texel is the mean of
+/// the 2 × 2 below it, in linear light for sRGB colour (black and white average to
+/// 188, sRGB of 0.5) and as stored for alpha and non-colour data; an odd last column
+/// repeats.
+#[test]
+fn the_generic_mip_chain_is_a_box_filter_in_linear_light() {
+    let image = image::RgbaImage::from_fn(5, 2, |x, _| {
+        let v = if x % 2 == 0 { 0 } else { 255 };
+        image::Rgba([v, v, 40 * x as u8, 100])
+    });
+    let srgb = sdfc::gpu::generic_mips(&image, true);
+    let sizes: Vec<_> = srgb.iter().map(|l| l.dimensions()).collect();
+    assert_eq!(sizes, [(2, 1), (1, 1)]);
+    // Level 1, texel 0: columns 0 and 1 (black, white) → 0.5 linear → 188 encoded.
+    let t = srgb[0].get_pixel(0, 0);
+    assert_eq!(t[0], sdfc::asset::srgb8(0.5));
+    assert_eq!(t[0], 188);
+    assert_eq!(t[3], 100, "alpha is averaged as stored");
+    // Blue holds 0 and 40 (sRGB-encoded): their mean in linear light.
+    let lin = |v: u8| sdfc::ir::texture::srgb_to_linear(v as f64 / 255.0) as f32;
+    assert_eq!(t[2], sdfc::asset::srgb8((lin(0) + lin(40)) / 2.0));
+    let linear = sdfc::gpu::generic_mips(&image, false);
+    let t = linear[0].get_pixel(1, 0);
+    // Columns 2 and 3: 0 and 255 → 127.5 → 128; blue 80 and 120 → 100.
+    assert_eq!((t[0], t[2]), (128, 100));
+    // 1 × 1: the mean of level 1's two texels.
+    let top = linear[1].get_pixel(0, 0);
+    let below = [linear[0].get_pixel(0, 0)[2], linear[0].get_pixel(1, 0)[2]];
+    assert_eq!(
+        top[2],
+        ((below[0] as f32 + below[1] as f32) / 2.0).round() as u8
+    );
+    assert!(sdfc::gpu::generic_mips(&image::RgbaImage::new(1, 1), true).is_empty());
 }

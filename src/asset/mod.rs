@@ -10,6 +10,22 @@ pub use packed::{PackedChart, PackedLayout};
 
 use serde::{Deserialize, Serialize};
 
+/// Linear → sRGB-encoded 8-bit.
+pub fn srgb8(x: f32) -> u8 {
+    let x = x.clamp(0.0, 1.0);
+    let s = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
+}
+
+/// Linear [0, 1] → 8-bit.
+pub fn unorm8(x: f32) -> u8 {
+    (x.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
 /// A triangle mesh ready for export: every vertex has all four attributes.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {

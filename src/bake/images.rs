@@ -7,21 +7,7 @@ use super::{ChartLayout, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
 
-/// Linear → sRGB-encoded 8-bit.
-pub fn srgb8(x: f32) -> u8 {
-    let x = x.clamp(0.0, 1.0);
-    let s = if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0).round() as u8
-}
-
-/// Linear [0, 1] → 8-bit.
-pub fn unorm8(x: f32) -> u8 {
-    (x.clamp(0.0, 1.0) * 255.0).round() as u8
-}
+pub use crate::asset::{srgb8, unorm8};
 
 /// Each cell's tangents along +u at its four corners: at every vertex of a chart's
 /// grid, the mean of the u-edges (bottom or top side) of the chart's cells there. For a

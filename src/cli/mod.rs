@@ -368,6 +368,11 @@ pub struct RenderArgs {
     /// scene's `render` item (the scene it was baked from), to compare the two renders.
     #[arg(long, value_name = "SCENE")]
     pub camera_from: Option<PathBuf>,
+    /// For a baked mesh (.glb): how to read its atlas. `atlas` (the default) is sdfc's
+    /// seamless lookup; `standard` shows what any glTF viewer shows (TEXCOORD_0 over
+    /// each triangle, hardware trilinear filtering on a generic mip chain).
+    #[arg(long, value_parser = choice::<sdfc::gpu::MeshFilter>())]
+    pub filter: Option<sdfc::gpu::MeshFilter>,
     /// Render an animation of SECONDS: one frame per step of `time` (from `--time`),
     /// one pipeline, only the parameters' block changing. The output is an animated
     /// GIF (.gif), an animated PNG (.png), or numbered frames (frame%04d.png).

@@ -50,6 +50,10 @@ pub fn run(args: RenderArgs) -> ExitCode {
         );
         return ExitCode::from(super::exit::USAGE);
     }
+    if args.filter.is_some() {
+        eprintln!("error: --filter is for rendering a baked mesh (.glb): a scene has no atlas image to filter");
+        return ExitCode::from(super::exit::USAGE);
+    }
     if !args.view.for_scene() {
         eprintln!(
             "error: a scene has no {} view (it is a baked mesh's: render a .glb)",

@@ -65,7 +65,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
             ExitCode::from(super::exit::gpu(&e))
         }
     };
-    let renderer = match MeshRenderer::new(&gpu, &mesh, &textures, &layout) {
+    let filter = args.filter.unwrap_or_default();
+    let renderer = match MeshRenderer::with_filter(&gpu, &mesh, &textures, &layout, filter) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };

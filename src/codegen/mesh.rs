@@ -8,9 +8,28 @@ use super::emit::lit;
 use super::targets::{validate, NagaError, Validated};
 use super::{template, RENDER_LIBRARY};
 use crate::asset::{ChartLayout, FlatLayout};
+use crate::choice::choice_enum;
 
-/// The WGSL of the mesh module for `layout` (not yet validated).
+choice_enum! {
+    /// How the mesh renderer reads the atlas.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub enum MeshFilter {
+        #[default]
+        Atlas = "atlas": "sdfc's lookup (the seamless-atlas paper's §6): the chart and level per fragment (Eq. 1–2), trilinear between the atlas's own boundary-symmetric levels",
+        Standard = "standard": "what any glTF viewer does: TEXCOORD_0 interpolated over each triangle, hardware trilinear filtering on a generic mip chain of the whole image",
+    }
+}
+
+/// The WGSL of the mesh module for `layout` with the atlas lookup (not yet validated).
 pub fn mesh_wgsl(atlas: &ChartLayout) -> Result<String, template::Mismatch> {
+    mesh_wgsl_with(atlas, MeshFilter::Atlas)
+}
+
+/// The WGSL of the mesh module for `layout`, reading it with `filter`.
+pub fn mesh_wgsl_with(
+    atlas: &ChartLayout,
+    filter: MeshFilter,
+) -> Result<String, template::Mismatch> {
     let f = |x: u32| lit(x as f64);
     // A packed atlas fills the flat layout's constants with a one-cell grid (unused).
     let packed_as_flat;
@@ -43,6 +62,7 @@ pub fn mesh_wgsl(atlas: &ChartLayout) -> Result<String, template::Mismatch> {
         ("rows", f(layout.rows)),
         ("levels", layout.levels().to_string()),
         ("packed", packed.to_string()),
+        ("standard", (filter == MeshFilter::Standard).to_string()),
         ("level_origins", origins.join(", ")),
     ];
     let body = template::fill(template::MESH, &values)?;
@@ -72,8 +92,11 @@ impl std::fmt::Display for MeshIce {
 
 /// The mesh module for `layout`, validated by naga. The layout must be well formed
 /// (`crate::gpu::MeshRenderer::new` checks it): at least one level.
-pub fn mesh_module(layout: &ChartLayout) -> Result<(String, Validated), MeshIce> {
-    let wgsl = mesh_wgsl(layout).map_err(|e| MeshIce {
+pub fn mesh_module(
+    layout: &ChartLayout,
+    filter: MeshFilter,
+) -> Result<(String, Validated), MeshIce> {
+    let wgsl = mesh_wgsl_with(layout, filter).map_err(|e| MeshIce {
         message: e.to_string(),
         wgsl: String::new(),
     })?;

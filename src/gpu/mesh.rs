@@ -2,7 +2,10 @@
 //! the generated module of `shaders/mesh.wgsl.in`, whose fragment shader reads the flat
 //! seamless atlas as §6 of the paper says (the chart and chart-local (u, v) from the
 //! level-0 texture coordinate, the level by Eq. 1–2, two bilinear lookups at the
-//! half-texel-inset coordinates of the levels around it, blended).
+//! half-texel-inset coordinates of the levels around it, blended). Or, with
+//! [`MeshFilter::Standard`], as any glTF viewer reads it: TEXCOORD_0 interpolated over
+//! each triangle and sampled with hardware trilinear filtering on a generic mip chain
+//! of the whole image ([`generic_mips`]), to see what other tools show.
 //!
 //! The frame is the implicit renderer's [`Frame`] from the same [`View`], so the two
 //! can be compared pixel for pixel: the same projection (`camera_ray` inverted), the
@@ -17,6 +20,7 @@
 use super::render::{self, Frame, Targets, Timings, ViewMode};
 use super::{Gpu, GpuError};
 use crate::asset::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
+pub use crate::codegen::mesh::MeshFilter;
 use crate::codegen::mesh::{mesh_module, MeshIce};
 use crate::ir::Aabb;
 use crate::view::View;
@@ -276,12 +280,24 @@ fn check_input(mesh: &MeshData, textures: &Textures, atlas: &ChartLayout) -> Res
 
 impl MeshRenderer {
     /// Uploads the mesh and its atlas and creates the pipeline of the mesh module
-    /// generated for `layout` (validated by naga first).
+    /// generated for `layout` (validated by naga first), reading the atlas with sdfc's
+    /// own lookup ([`MeshFilter::Atlas`]).
     pub fn new(
         gpu: &Gpu,
         mesh: &MeshData,
         textures: &Textures,
         layout: &ChartLayout,
+    ) -> Result<MeshRenderer, MeshError> {
+        Self::with_filter(gpu, mesh, textures, layout, MeshFilter::Atlas)
+    }
+
+    /// As [`MeshRenderer::new`], reading the atlas with `filter`.
+    pub fn with_filter(
+        gpu: &Gpu,
+        mesh: &MeshData,
+        textures: &Textures,
+        layout: &ChartLayout,
+        filter: MeshFilter,
     ) -> Result<MeshRenderer, MeshError> {
         check_input(mesh, textures, layout).map_err(MeshError::Input)?;
         let side = gpu.device.limits().max_texture_dimension_2d;
@@ -296,7 +312,7 @@ impl MeshRenderer {
             ChartLayout::Flat(_) => Vec::new(),
             ChartLayout::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
         };
-        let (wgsl, _) = mesh_module(layout).map_err(MeshError::Internal)?;
+        let (wgsl, _) = mesh_module(layout, filter).map_err(MeshError::Internal)?;
         let formats = render::formats(gpu);
         let d = &gpu.device;
         let black = image::RgbaImage::from_pixel(1, 1, image::Rgba([0, 0, 0, 255]));
@@ -317,8 +333,9 @@ impl MeshRenderer {
             .collect();
         let started = Instant::now();
         let made = gpu.scoped(|| {
+            let standard = filter == MeshFilter::Standard;
             let upload = |image: &image::RgbaImage, srgb: bool| {
-                upload_image(gpu, image, srgb).create_view(&Default::default())
+                upload_image(gpu, image, srgb, standard).create_view(&Default::default())
             };
             let textures = [
                 upload(&textures.base_color, true),
@@ -332,7 +349,11 @@ impl MeshRenderer {
                 address_mode_v: wgpu::AddressMode::ClampToEdge,
                 mag_filter: wgpu::FilterMode::Linear,
                 min_filter: wgpu::FilterMode::Linear,
-                mipmap_filter: wgpu::MipmapFilterMode::Nearest,
+                mipmap_filter: if standard {
+                    wgpu::MipmapFilterMode::Linear
+                } else {
+                    wgpu::MipmapFilterMode::Nearest
+                },
                 ..Default::default()
             });
             // wgpu rejects empty buffers with a binding; a zero-length draw reads nothing.
@@ -688,14 +709,24 @@ fn tonemap(c: DVec3) -> [f64; 3] {
 }
 
 /// One image as a texture of one level.
-fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool) -> wgpu::Texture {
+/// One image as a texture: level 0 alone, or with `chain` its generic mip chain too.
+fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool, chain: bool) -> wgpu::Texture {
     let (w, h) = image.dimensions();
+    let levels = if chain {
+        generic_mips(image, srgb)
+    } else {
+        Vec::new()
+    };
+    let mut data = image.as_raw().clone();
+    for level in &levels {
+        data.extend_from_slice(level.as_raw());
+    }
     gpu.device.create_texture_with_data(
         &gpu.queue,
         &wgpu::TextureDescriptor {
             label: Some("atlas"),
             size: render::extent(w, h),
-            mip_level_count: 1,
+            mip_level_count: 1 + levels.len() as u32,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: if srgb {
@@ -707,8 +738,54 @@ fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool) -> wgpu::Textur
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::LayerMajor,
-        image.as_raw(),
+        &data,
     )
+}
+
+/// The mip chain a generic engine builds for `image` knowing nothing of its charts
+/// (glGenerateMipmap's box filter): each level halves the last (sizes rounded down, at
+/// least 1), a texel the mean of the 2 × 2 texels below it (of the last row or column
+/// alone where a size was odd), in linear light for an sRGB image, down to 1 × 1.
+/// Level 0 (the image) is not included.
+pub fn generic_mips(image: &image::RgbaImage, srgb: bool) -> Vec<image::RgbaImage> {
+    let decode = |x: u8, channel: usize| {
+        let v = f32::from(x) / 255.0;
+        if srgb && channel < 3 {
+            crate::ir::texture::srgb_to_linear(f64::from(v)) as f32
+        } else {
+            v
+        }
+    };
+    let encode = |v: f32, channel: usize| {
+        if srgb && channel < 3 {
+            crate::asset::srgb8(v)
+        } else {
+            crate::asset::unorm8(v)
+        }
+    };
+    let mut out: Vec<image::RgbaImage> = Vec::new();
+    let (mut w, mut h) = image.dimensions();
+    while w > 1 || h > 1 {
+        let above = out.last().unwrap_or(image);
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let level = image::RgbaImage::from_fn(nw, nh, |x, y| {
+            let xs = [(2 * x).min(w - 1), (2 * x + 1).min(w - 1)];
+            let ys = [(2 * y).min(h - 1), (2 * y + 1).min(h - 1)];
+            let mut texel = [0u8; 4];
+            for (c, t) in texel.iter_mut().enumerate() {
+                let sum: f32 = ys
+                    .iter()
+                    .flat_map(|&yy| xs.iter().map(move |&xx| (xx, yy)))
+                    .map(|(xx, yy)| decode(above.get_pixel(xx, yy)[c], c))
+                    .sum();
+                *t = encode(sum / 4.0, c);
+            }
+            image::Rgba(texel)
+        });
+        out.push(level);
+        (w, h) = (nw, nh);
+    }
+    out
 }
 
 /// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA;

@@ -14,7 +14,7 @@ pub mod texture;
 pub use compute::{
     eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
 };
-pub use mesh::{check_layout, mesh_bounds, MeshError, MeshRenderer};
+pub use mesh::{check_layout, generic_mips, mesh_bounds, MeshError, MeshFilter, MeshRenderer};
 pub use render::{
     eval_stats, globals, render, render_timed, scene_values, Frame, Renderer, Targets, Timings,
     ViewMode,

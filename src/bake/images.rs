@@ -284,11 +284,42 @@ pub fn vertex_grid(
     )
 }
 
+/// Whether a quad with corners `p` (in (0,0), (1,0), (1,1), (0,1) order) is split along
+/// its diagonal 0–2 (else 1–3): along the shorter one, unless that folds a triangle
+/// over, turning it more than 60° from the quad's own normal (its area vector, the
+/// cross product of the diagonals) while the other diagonal keeps both nearer; then
+/// along the one whose worse triangle turns less. Near a crease or a rim a dual
+/// contouring quad can be far from flat, and the shorter diagonal then makes a sliver
+/// facing away from the surface. [`mesh_data`] and [`split_weights`] both read it, so
+/// texels lie on the triangles that are exported.
+pub fn split_along_02(p: [DVec3; 4]) -> bool {
+    let shorter = (p[2] - p[0]).length() <= (p[3] - p[1]).length();
+    let normal = (p[2] - p[0]).cross(p[3] - p[1]).normalize_or_zero();
+    let facing = |a: usize, b: usize, c: usize| {
+        let n = (p[b] - p[a]).cross(p[c] - p[a]).normalize_or_zero();
+        if n == DVec3::ZERO {
+            // A degenerate triangle turns nowhere.
+            1.0
+        } else {
+            n.dot(normal)
+        }
+    };
+    let along_02 = facing(0, 1, 2).min(facing(0, 2, 3));
+    let along_13 = facing(0, 1, 3).min(facing(1, 2, 3));
+    const FOLDED: f64 = 0.5;
+    match (shorter, along_02 < FOLDED, along_13 < FOLDED) {
+        (true, true, false) => false,
+        (false, false, true) => true,
+        (_, true, true) => along_02 >= along_13,
+        _ => shorter,
+    }
+}
+
 /// The barycentric weights of `(s, t)` in the triangle that holds it, of a quad with
-/// corners `p` (in (0,0), (1,0), (1,1), (0,1) order) split along its shorter
-/// diagonal, as [`mesh_data`] splits it.
+/// corners `p` (in (0,0), (1,0), (1,1), (0,1) order) split as [`split_along_02`] says,
+/// as [`mesh_data`] splits it.
 fn split_weights(p: [DVec3; 4], s: f64, t: f64) -> [f64; 4] {
-    if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+    if split_along_02(p) {
         if s >= t {
             [1.0 - s, s - t, t, 0.0]
         } else {
@@ -336,7 +367,7 @@ pub fn on_edge(grid: &Samples<[f64; 3]>, table: &ChartTable, e: usize, t: f64) -
 
 /// The exported mesh over the vertex grid of [`vertex_grid`] (`m × m` quads per
 /// chart). Vertices are not shared between charts (their texture coordinates
-/// differ); each small quad is split along its shorter diagonal.
+/// differ); each small quad is split as [`split_along_02`] says.
 pub fn mesh_data(
     mesh: &QuadMesh,
     table: &ChartTable,
@@ -372,7 +403,7 @@ pub fn mesh_data(
                     (j + 1) * n + i,
                 ];
                 let p = k.map(|k| DVec3::from_array(grid[k]));
-                let tris = if (p[2] - p[0]).length() <= (p[3] - p[1]).length() {
+                let tris = if split_along_02(p) {
                     [0, 1, 2, 0, 2, 3]
                 } else {
                     [0, 1, 3, 1, 2, 3]

@@ -184,18 +184,24 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         assert_borders_identical(&normals, &file, &stem);
         // The bake renders from the scene's own camera, at the scene's size or --size.
         if stem == "sphere" {
+            // The bake drawn from the scene's camera at 64 × 48, with `extra` flags.
+            let render_glb = |out: &std::path::Path, extra: &[&str]| {
+                let mut args = vec![
+                    "render",
+                    glb.to_str().unwrap(),
+                    "--camera-from",
+                    example.to_str().unwrap(),
+                    "--size",
+                    "64x48",
+                    "-o",
+                    out.to_str().unwrap(),
+                ];
+                args.extend_from_slice(extra);
+                let (code, _, err) = sdfc(&args);
+                assert_eq!(code, 0, "{err}");
+            };
             let png = dir.path().join("sphere-mesh.png");
-            let (code, _, err) = sdfc(&[
-                "render",
-                glb.to_str().unwrap(),
-                "--camera-from",
-                example.to_str().unwrap(),
-                "--size",
-                "64x48",
-                "-o",
-                png.to_str().unwrap(),
-            ]);
-            assert_eq!(code, 0, "{err}");
+            render_glb(&png, &[]);
             let img = image::open(&png).unwrap();
             assert_eq!((img.width(), img.height()), (64, 48));
             let (code, _, err) = sdfc(&[
@@ -208,19 +214,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             assert!(err.contains("--camera-from is for"), "{err}");
             // As a generic glTF viewer reads it: the same picture, within filtering.
             let standard = dir.path().join("sphere-standard.png");
-            let (code, _, err) = sdfc(&[
-                "render",
-                glb.to_str().unwrap(),
-                "--camera-from",
-                example.to_str().unwrap(),
-                "--size",
-                "64x48",
-                "--filter",
-                "standard",
-                "-o",
-                standard.to_str().unwrap(),
-            ]);
-            assert_eq!(code, 0, "{err}");
+            render_glb(&standard, &["--filter", "standard"]);
             let (a, b) = (
                 image::open(&png).unwrap().to_rgb8(),
                 image::open(&standard).unwrap().to_rgb8(),

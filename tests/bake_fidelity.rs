@@ -54,22 +54,14 @@ fn compare_source(
     example: &str,
     source: &str,
     base: &Path,
-    (size, grid, chart_quads): (u32, usize, usize),
-    (w, h): (u32, u32),
+    settings: (u32, usize, usize),
+    size: (u32, u32),
     mode: ViewMode,
     style: Style,
 ) -> f64 {
-    compare_frames(
-        example,
-        source,
-        base,
-        (size, grid, chart_quads),
-        (w, h),
-        mode,
-        style,
-        MeshFilter::Atlas,
-    )
-    .map_or(f64::INFINITY, |(implicit, drawn)| psnr(&implicit, &drawn))
+    let filter = MeshFilter::Atlas;
+    compare_frames(example, source, base, settings, size, mode, style, filter)
+        .map_or(f64::INFINITY, |(implicit, drawn)| psnr(&implicit, &drawn))
 }
 
 /// The implicit render and the baked mesh's (read with `filter`), or None without a GPU.

@@ -335,7 +335,13 @@ fn flat_layouts_fit_without_overlap() {
             let [x, y] = l.chart_origin(charts - 1, 0);
             let n = l.chart_size as f32;
             assert!((tc[0] * l.width as f32 - (x as f32 + n - 0.5)).abs() < 1e-3);
-            assert!((tc[1] * l.height as f32 - (y as f32 + n - 0.5)).abs() < 1e-3);
+            assert!((tc[1] * l.image_height() as f32 - (y as f32 + n - 0.5)).abs() < 1e-3);
+            // Level 0 is the image's top rows, the levels below it.
+            assert!(l
+                .level_origins
+                .iter()
+                .skip(1)
+                .all(|o| o[1] >= l.image_height()));
         }
     }
 }

@@ -162,7 +162,17 @@ fn glb_document_structure() {
         doc["materials"][0]["emissiveFactor"],
         json!([0.0, 0.0, 0.0])
     );
-    assert_eq!(doc["images"].as_array().unwrap().len(), 3);
+    // Three textures' level 0, then the three images of their smaller levels.
+    let images = doc["images"].as_array().unwrap();
+    assert_eq!(images.len(), 6);
+    assert_eq!(doc["extras"]["sdfc_levels"], json!([3, 4, 5]));
+    for (i, name) in ["base_color", "metallic_roughness", "normal"]
+        .iter()
+        .enumerate()
+    {
+        assert_eq!(images[i]["name"], *name);
+        assert_eq!(images[i + 3]["name"], format!("{name}_levels"));
+    }
 }
 
 #[test]
@@ -193,13 +203,26 @@ fn glb_passes_the_khronos_validator() {
             "{:#?}",
             report.messages
         );
-        // The one note allowed: the flat atlas is as tall as its charts need, which is
+        // The notes allowed: the flat atlas is as tall as its charts need, which is
         // rarely a power of two (only WebGL 1 cares, and only for mipmaps or repeat
-        // wrapping, which the atlas's sampler does not ask for).
+        // wrapping, which the atlas's sampler does not ask for); and the images of the
+        // levels below level 0, which only sdfc reads (listed in extras.sdfc_levels),
+        // are used by no texture.
+        let (doc, _) = split(&bytes);
+        let levels: Vec<String> = doc["extras"]["sdfc_levels"]
+            .as_array()
+            .expect("the levels' images are listed")
+            .iter()
+            .map(|i| format!("/images/{i}"))
+            .collect();
+        assert_eq!(levels.len(), if emissive { 4 } else { 3 });
         let other: Vec<_> = report
             .messages
             .iter()
             .filter(|m| m["code"] != "IMAGE_NPOT_DIMENSIONS")
+            .filter(|m| {
+                m["code"] != "UNUSED_OBJECT" || !levels.iter().any(|l| m["pointer"] == l.as_str())
+            })
             .collect();
         assert!(other.is_empty(), "{other:#?}");
     }

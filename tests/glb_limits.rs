@@ -71,9 +71,12 @@ fn join(doc: &Value, bin: &[u8]) -> Vec<u8> {
 
 /// The quad's .glb with every image replaced by `png` (one buffer view for all) and,
 /// when given, the layout's width and height replaced: a flat layout of one chart
-/// fitted to `width`, `height` tall.
+/// fitted to `width`, `height` tall. Without `extras.sdfc_levels`, as files were
+/// before the levels below level 0 had images of their own: each texture's image is
+/// then the whole atlas.
 fn hostile(png: &[u8], size: Option<(u32, u32)>) -> Vec<u8> {
     let (mut doc, mut bin) = split(&quad_glb());
+    doc["extras"].as_object_mut().unwrap().remove("sdfc_levels");
     bin.resize(bin.len().next_multiple_of(4), 0);
     let offset = bin.len();
     bin.extend(png);
@@ -135,6 +138,40 @@ fn the_png_builder_makes_real_pngs() {
     assert_eq!((big.width(), big.height()), (1000, 3));
 }
 
+/// A file from before the levels had images of their own (the whole atlas in each
+/// texture, TEXCOORD_0 over the whole height) still reads: the same atlas, and texture
+/// coordinates over level 0's rows as the renderer now reads them.
+#[test]
+fn a_file_with_the_whole_atlas_in_each_texture_still_reads() {
+    let (doc, _) = split(&quad_glb());
+    let layout: FlatLayout = serde_json::from_value(doc["extras"]["sdfc_atlas"].clone()).unwrap();
+    let (w, h, top) = (layout.width, layout.height, layout.image_height());
+    assert!(
+        top < h,
+        "{layout:?}: the quad's atlas has levels below level 0"
+    );
+    assert_eq!(doc["images"].as_array().unwrap().len(), 6);
+    let (mesh, textures, _) = read_glb(&hostile(&solid_png(w, h), None)).expect("reads");
+    assert_eq!(textures.base_color.dimensions(), (w, h));
+    let (new, _, _) = read_glb(&quad_glb()).unwrap();
+    for (old, new) in mesh.texcoords.iter().zip(&new.texcoords) {
+        // Written over level 0's rows, read as if over the whole image: scaled by h/top.
+        let expected = new[1] as f64 * h as f64 / top as f64;
+        assert!((old[1] as f64 - expected).abs() < 1e-6, "{old:?} {new:?}");
+        assert_eq!(old[0], new[0]);
+    }
+    // With the levels' list but one image short: refused, named.
+    let (mut doc, bin) = split(&quad_glb());
+    doc["extras"]["sdfc_levels"] = json!([3, 4]);
+    let Err(ReadError::Invalid(e)) = read_glb(&join(&doc, &bin)) else {
+        panic!("a short list of the levels' images was read");
+    };
+    assert!(
+        e.contains("lists 2 images for the 3 textures' levels"),
+        "{e}"
+    );
+}
+
 #[test]
 fn a_layout_of_16384_squared_is_refused_before_decoding() {
     let png = solid_png(16384, 16384);
@@ -189,7 +226,7 @@ fn a_png_larger_than_its_layout_is_refused_before_decoding() {
     let (code, err) = render(&write(dir.path(), "other.glb", &bytes));
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("its PNG is 128×128 texels, the atlas 64×48"),
+        err.contains("its PNG is 128×128 texels, the atlas's part 64×48"),
         "{err}"
     );
 }

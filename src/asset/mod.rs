@@ -53,6 +53,22 @@ pub struct Textures {
     pub emissive: Option<image::RgbaImage>,
 }
 
+impl Textures {
+    /// The images with their names (`base_color`, `metallic_roughness`, `normal`,
+    /// `emissive` when there is one), in that order.
+    pub fn named(&self) -> Vec<(&image::RgbaImage, &'static str)> {
+        let mut out = vec![
+            (&self.base_color, "base_color"),
+            (&self.metallic_roughness, "metallic_roughness"),
+            (&self.normal, "normal"),
+        ];
+        if let Some(e) = &self.emissive {
+            out.push((e, "emissive"));
+        }
+        out
+    }
+}
+
 /// Where each chart's levels lie in the flat atlas (§3.3): every chart has the same
 /// level-0 resolution `chart_size` (a power of two), placed in a `columns` × `rows`
 /// grid; level `l` is the same grid with cells of `chart_size >> l` texels, with its
@@ -112,14 +128,25 @@ impl FlatLayout {
         [ox + cx * stride + inset, oy + cy * stride + inset]
     }
 
-    /// The level-0 atlas coordinate (glTF TEXCOORD_0, in [0, 1]) of chart-local (u, v).
+    /// The height of level 0's part of the image: its rows of charts, from the top. The
+    /// glTF's material textures hold this part alone, every texel a level-0 texel that
+    /// other tools read; the levels below it, which only sdfc's lookup reads, travel in
+    /// images of their own (`bake::export`). Texture coordinates are relative to it.
+    pub fn image_height(&self) -> u32 {
+        let top = self.level_origins.first().map_or(0, |o| o[1]);
+        top.saturating_add(self.rows.saturating_mul(self.stride(0)))
+            .clamp(1, self.height.max(1))
+    }
+
+    /// The level-0 atlas coordinate (glTF TEXCOORD_0, in [0, 1]) of chart-local (u, v):
+    /// over the width and [`FlatLayout::image_height`].
     pub fn texcoord(&self, chart: usize, u: f64, v: f64) -> [f32; 2] {
         // (Through chart_origin, which includes the gutter.)
         let n = self.chart_size as f64;
         let [x, y] = self.chart_origin(chart, 0);
         [
             ((x as f64 + 0.5 + u * (n - 1.0)) / self.width as f64) as f32,
-            ((y as f64 + 0.5 + v * (n - 1.0)) / self.height as f64) as f32,
+            ((y as f64 + 0.5 + v * (n - 1.0)) / self.image_height() as f64) as f32,
         ]
     }
 
@@ -217,6 +244,16 @@ impl ChartLayout {
     pub fn height(&self) -> u32 {
         match self {
             ChartLayout::Flat(l) => l.height,
+            ChartLayout::Packed(l) => l.height,
+        }
+    }
+
+    /// The height of the part of the image other tools read (texture coordinates are
+    /// relative to it): a flat layout's level 0 ([`FlatLayout::image_height`]); a
+    /// packed layout's whole image (each chart's levels lie beside it in its block).
+    pub fn image_height(&self) -> u32 {
+        match self {
+            ChartLayout::Flat(l) => l.image_height(),
             ChartLayout::Packed(l) => l.height,
         }
     }

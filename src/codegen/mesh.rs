@@ -16,7 +16,7 @@ choice_enum! {
     pub enum MeshFilter {
         #[default]
         Atlas = "atlas": "sdfc's lookup (the seamless-atlas paper's §6): the chart and level per fragment (Eq. 1–2), trilinear between the atlas's own boundary-symmetric levels",
-        Standard = "standard": "what any glTF viewer does: TEXCOORD_0 interpolated over each triangle, hardware trilinear filtering on a generic mip chain of the whole image",
+        Standard = "standard": "what any glTF viewer does: TEXCOORD_0 interpolated over each triangle, hardware trilinear filtering on a generic mip chain of the glTF's images (level 0)",
     }
 }
 
@@ -56,6 +56,7 @@ pub fn mesh_wgsl_with(
     let values = [
         ("width", f(layout.width)),
         ("height", f(layout.height)),
+        ("image_height", f(atlas.image_height())),
         ("chart_size", f(layout.chart_size)),
         ("gutter", f(layout.gutter)),
         ("columns", f(layout.columns)),

@@ -5,7 +5,7 @@
 //! half-texel-inset coordinates of the levels around it, blended). Or, with
 //! [`MeshFilter::Standard`], as any glTF viewer reads it: TEXCOORD_0 interpolated over
 //! each triangle and sampled with hardware trilinear filtering on a generic mip chain
-//! of the whole image ([`generic_mips`]), to see what other tools show.
+//! of the glTF's images, level 0 ([`super::generic_mips`]), to see what other tools show.
 //!
 //! The frame is the implicit renderer's [`Frame`] from the same [`View`], so the two
 //! can be compared pixel for pixel: the same projection (`camera_ray` inverted), the
@@ -17,6 +17,7 @@
 //! the distance from the eye, -1 where nothing was drawn), the normal-mapped normal,
 //! and in `atlas` the chart-local (u, v), the level i and the chart's index.
 
+use super::atlas_textures::upload_textures;
 use super::render::{self, Frame, Targets, Timings, ViewMode};
 use super::{Gpu, GpuError};
 use crate::asset::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
@@ -315,7 +316,6 @@ impl MeshRenderer {
         let (wgsl, _) = mesh_module(layout, filter).map_err(MeshError::Internal)?;
         let formats = render::formats(gpu);
         let d = &gpu.device;
-        let black = image::RgbaImage::from_pixel(1, 1, image::Rgba([0, 0, 0, 255]));
         let vertices: Vec<Vertex> = (0..mesh.positions.len())
             .map(|i| {
                 let (p, n, t, c) = (
@@ -333,29 +333,7 @@ impl MeshRenderer {
             .collect();
         let started = Instant::now();
         let made = gpu.scoped(|| {
-            let standard = filter == MeshFilter::Standard;
-            let upload = |image: &image::RgbaImage, srgb: bool| {
-                upload_image(gpu, image, srgb, standard).create_view(&Default::default())
-            };
-            let textures = [
-                upload(&textures.base_color, true),
-                upload(&textures.metallic_roughness, false),
-                upload(&textures.normal, false),
-                upload(textures.emissive.as_ref().unwrap_or(&black), true),
-            ];
-            let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("flat atlas"),
-                address_mode_u: wgpu::AddressMode::ClampToEdge,
-                address_mode_v: wgpu::AddressMode::ClampToEdge,
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                mipmap_filter: if standard {
-                    wgpu::MipmapFilterMode::Linear
-                } else {
-                    wgpu::MipmapFilterMode::Nearest
-                },
-                ..Default::default()
-            });
+            let (textures, sampler) = upload_textures(gpu, textures, layout, filter);
             // wgpu rejects empty buffers with a binding; a zero-length draw reads nothing.
             let vertex_bytes: &[u8] = if vertices.is_empty() {
                 &[0; 64]
@@ -709,85 +687,6 @@ fn tonemap(c: DVec3) -> [f64; 3] {
 }
 
 /// One image as a texture of one level.
-/// One image as a texture: level 0 alone, or with `chain` its generic mip chain too.
-fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool, chain: bool) -> wgpu::Texture {
-    let (w, h) = image.dimensions();
-    let levels = if chain {
-        generic_mips(image, srgb)
-    } else {
-        Vec::new()
-    };
-    let mut data = image.as_raw().clone();
-    for level in &levels {
-        data.extend_from_slice(level.as_raw());
-    }
-    gpu.device.create_texture_with_data(
-        &gpu.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("atlas"),
-            size: render::extent(w, h),
-            mip_level_count: 1 + levels.len() as u32,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: if srgb {
-                wgpu::TextureFormat::Rgba8UnormSrgb
-            } else {
-                wgpu::TextureFormat::Rgba8Unorm
-            },
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &data,
-    )
-}
-
-/// The mip chain a generic engine builds for `image` knowing nothing of its charts
-/// (glGenerateMipmap's box filter): each level halves the last (sizes rounded down, at
-/// least 1), a texel the mean of the 2 × 2 texels below it (of the last row or column
-/// alone where a size was odd), in linear light for an sRGB image, down to 1 × 1.
-/// Level 0 (the image) is not included.
-pub fn generic_mips(image: &image::RgbaImage, srgb: bool) -> Vec<image::RgbaImage> {
-    let decode = |x: u8, channel: usize| {
-        let v = f32::from(x) / 255.0;
-        if srgb && channel < 3 {
-            crate::ir::texture::srgb_to_linear(f64::from(v)) as f32
-        } else {
-            v
-        }
-    };
-    let encode = |v: f32, channel: usize| {
-        if srgb && channel < 3 {
-            crate::asset::srgb8(v)
-        } else {
-            crate::asset::unorm8(v)
-        }
-    };
-    let mut out: Vec<image::RgbaImage> = Vec::new();
-    let (mut w, mut h) = image.dimensions();
-    while w > 1 || h > 1 {
-        let above = out.last().unwrap_or(image);
-        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-        let level = image::RgbaImage::from_fn(nw, nh, |x, y| {
-            let xs = [(2 * x).min(w - 1), (2 * x + 1).min(w - 1)];
-            let ys = [(2 * y).min(h - 1), (2 * y + 1).min(h - 1)];
-            let mut texel = [0u8; 4];
-            for (c, t) in texel.iter_mut().enumerate() {
-                let sum: f32 = ys
-                    .iter()
-                    .flat_map(|&yy| xs.iter().map(move |&xx| (xx, yy)))
-                    .map(|(xx, yy)| decode(above.get_pixel(xx, yy)[c], c))
-                    .sum();
-                *t = encode(sum / 4.0, c);
-            }
-            image::Rgba(texel)
-        });
-        out.push(level);
-        (w, h) = (nw, nh);
-    }
-    out
-}
-
 /// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA;
 /// vs_main and fs_main into `formats`, or with no formats the shadow map's pipeline:
 /// vs_shadow into the depth target alone.

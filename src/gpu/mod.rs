@@ -2,6 +2,7 @@
 //! queries. Every fallible wgpu call runs inside an error scope, so a device
 //! error becomes a [`GpuError`], never a panic.
 
+mod atlas_textures;
 pub mod cache;
 pub mod compute;
 pub mod embed;
@@ -11,10 +12,11 @@ mod render;
 pub mod scene_group;
 pub mod texture;
 
+pub use atlas_textures::generic_mips;
 pub use compute::{
     eval_atlas, eval_materials, eval_points, eval_points_textured, AtlasValue, MaterialSample,
 };
-pub use mesh::{check_layout, generic_mips, mesh_bounds, MeshError, MeshFilter, MeshRenderer};
+pub use mesh::{check_layout, mesh_bounds, MeshError, MeshFilter, MeshRenderer};
 pub use render::{
     eval_stats, globals, render, render_timed, scene_values, Frame, Renderer, Targets, Timings,
     ViewMode,

@@ -20,11 +20,18 @@
 //!   metallic), normalTexture, and when the material emits, emissiveTexture with
 //!   emissiveFactor [1, 1, 1];
 //! - one sampler for every texture: LINEAR magnification and minification, no mipmap
-//!   filter (the atlas holds its own levels side by side in the image, selected by the
-//!   renderer, see [`ChartLayout`]), CLAMP_TO_EDGE in both directions;
+//!   filter (the atlas has its own levels, selected by sdfc's renderer, see
+//!   [`ChartLayout`]), CLAMP_TO_EDGE in both directions;
+//! - the material's textures hold the part of the atlas other tools read: a flat
+//!   layout's level 0 (the image's rows down to
+//!   [`crate::asset::FlatLayout::image_height`], which TEXCOORD_0 spans), a packed
+//!   layout's whole image. The flat layout's smaller levels, the rows below, are
+//!   images of their own (named `…_levels`), listed in the root's
+//!   `extras.sdfc_levels` ([`LEVELS_KEY`]) and used by no texture: a third of the
+//!   image that other tools would load and never read;
 //! - the layout of the atlas, `serde_json` of [`ChartLayout`] (a flat or a packed layout,
-//!   whose table gives each chart's place), in the root's
-//!   `extras.sdfc_atlas`, where glTF readers that do not know it ignore it.
+//!   whose table gives each chart's place, in the whole image: level 0 over the levels),
+//!   in the root's `extras.sdfc_atlas`, where glTF readers that do not know it ignore it.
 //!
 //! Images whose alpha is 255 everywhere are stored as RGB PNGs; [`read_glb`] returns
 //! every image as RGBA with alpha 255 there, so a round trip gives back equal data.
@@ -65,6 +72,12 @@ pub use read::read_glb;
 
 /// The key of the atlas layout in the root's `extras`.
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
+
+/// The key, in the root's `extras`, of the images that hold a flat layout's levels
+/// below level 0 (the image's rows from [`crate::asset::FlatLayout::image_height`]
+/// down): their indices, base colour, metallic-roughness, normal, and emission when the
+/// material has it. Absent when level 0 is the whole image.
+pub const LEVELS_KEY: &str = "sdfc_levels";
 
 /// The largest image side [`read_glb`] decodes: 8192, as for a scene's textures (an
 /// 8192 × 8192 atlas is over [`MAX_TEXTURE_BYTES`] anyway).
@@ -181,13 +194,29 @@ pub fn glb(
         wrap_t: Checked::Valid(WrappingMode::ClampToEdge),
         ..Default::default()
     });
-    let base_color = doc.texture(&textures.base_color, "base_color")?;
-    let metallic_roughness = doc.texture(&textures.metallic_roughness, "metallic_roughness")?;
-    let normal_map = doc.texture(&textures.normal, "normal")?;
+    // The material's textures hold level 0's rows; the flat layout's smaller levels,
+    // which only sdfc's lookup reads, follow as images of their own.
+    let top = layout.image_height();
+    let part = |image: &RgbaImage, y: u32, h: u32| {
+        image::imageops::crop_imm(image, 0, y, image.width(), h).to_image()
+    };
+    let level0 = |image: &RgbaImage| part(image, 0, top);
+    let base_color = doc.texture(&level0(&textures.base_color), "base_color")?;
+    let metallic_roughness =
+        doc.texture(&level0(&textures.metallic_roughness), "metallic_roughness")?;
+    let normal_map = doc.texture(&level0(&textures.normal), "normal")?;
     let emissive = match &textures.emissive {
-        Some(image) => Some(doc.texture(image, "emissive")?),
+        Some(image) => Some(doc.texture(&level0(image), "emissive")?),
         None => None,
     };
+    let mut levels = Vec::new();
+    if top < layout.height() {
+        let rest = layout.height() - top;
+        for (image, name) in textures.named() {
+            let index = doc.image(&part(image, top, rest), &format!("{name}_levels"))?;
+            levels.push(index.value());
+        }
+    }
     let material = doc.root.push(Material {
         name: Some(material.to_owned()),
         pbr_metallic_roughness: PbrMetallicRoughness {
@@ -254,7 +283,12 @@ pub fn glb(
     // Straight to text: a packed layout's table as JSON values would take ten times
     // its text.
     let layout = serde_json::to_string(layout).map_err(|e| e.to_string())?;
-    let extras = format!("{{\"{LAYOUT_KEY}\":{layout}}}");
+    let extras = if levels.is_empty() {
+        format!("{{\"{LAYOUT_KEY}\":{layout}}}")
+    } else {
+        let levels = serde_json::to_string(&levels).map_err(|e| e.to_string())?;
+        format!("{{\"{LAYOUT_KEY}\":{layout},\"{LEVELS_KEY}\":{levels}}}")
+    };
     doc.root.extras = Some(RawValue::from_string(extras).map_err(|e| e.to_string())?);
     doc.finish()
 }
@@ -350,18 +384,23 @@ impl Builder {
         })
     }
 
-    /// Stores `image` as a PNG in the buffer; a texture of it with sampler 0.
-    fn texture(&mut self, image: &RgbaImage, name: &str) -> Result<Index<Texture>, String> {
+    /// Stores `image` as a PNG in the buffer: its image.
+    fn image(&mut self, image: &RgbaImage, name: &str) -> Result<Index<Image>, String> {
         let png = encode_png(image).map_err(|e| format!("encoding the {name} image: {e}"))?;
         let view = self.view(&png, None);
-        let source = self.root.push(Image {
+        Ok(self.root.push(Image {
             buffer_view: Some(view),
             mime_type: Some(gltf_json::image::MimeType("image/png".into())),
             name: Some(name.to_owned()),
             uri: None,
             extensions: None,
             extras: Default::default(),
-        });
+        }))
+    }
+
+    /// Stores `image` as a PNG in the buffer; a texture of it with sampler 0.
+    fn texture(&mut self, image: &RgbaImage, name: &str) -> Result<Index<Texture>, String> {
+        let source = self.image(image, name)?;
         Ok(self.root.push(Texture {
             name: Some(name.to_owned()),
             sampler: Some(Index::new(0)),

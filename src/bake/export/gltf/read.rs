@@ -8,11 +8,11 @@ use gltf_json::buffer::View;
 use gltf_json::extras::RawValue;
 use gltf_json::mesh::{Mode, Semantic};
 use gltf_json::validation::Checked;
-use gltf_json::{Accessor, Index, Root, Texture};
+use gltf_json::{Accessor, Image, Index, Root, Texture};
 use image::{ImageFormat, RgbaImage};
 
 use super::{
-    texture_bytes, ReadError, CHUNK_BIN, CHUNK_JSON, LAYOUT_KEY, MAGIC, MAX_IMAGE_SIZE,
+    texture_bytes, ReadError, CHUNK_BIN, CHUNK_JSON, LAYOUT_KEY, LEVELS_KEY, MAGIC, MAX_IMAGE_SIZE,
     MAX_JSON_BYTES, MAX_JSON_VALUES, MAX_TEXTURE_BYTES,
 };
 use crate::bake::export::{check_atlas, check_mesh, check_textures};
@@ -74,13 +74,23 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, ChartLayout), ReadE
     check_mesh(&mesh)?;
 
     let pbr = &material.pbr_metallic_roughness;
+    // The material's images hold the rows TEXCOORD_0 spans (a flat layout's level 0),
+    // the images of `extras.sdfc_levels` the rest. (Files from before that split hold
+    // the whole atlas in the material's images, with texture coordinates over it.)
+    let (width, height, top) = (layout.width(), layout.height(), layout.image_height());
+    let levels = read_levels(&root)?;
+    let whole = levels.is_none() && top < height;
+    let own_rows = if whole { height } else { top };
     let texture = |index: Option<Index<Texture>>, what: &str| {
         index
             .ok_or_else(|| ReadError::from(format!("the glTF's material has no {what} texture")))
-            .and_then(|index| doc.image(index, &layout))
+            .and_then(|index| {
+                let texture = root.get(index).ok_or("a texture index is out of range")?;
+                doc.image(texture.source, (width, own_rows))
+            })
             .map_err(|e| e.context(&format!("the {what} texture")))
     };
-    let textures = Textures {
+    let mut textures = Textures {
         base_color: texture(
             pbr.base_color_texture.as_ref().map(|t| t.index),
             "base colour",
@@ -95,8 +105,67 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, ChartLayout), ReadE
             None => None,
         },
     };
+    if top < height && !whole {
+        let levels = levels.unwrap_or_default();
+        let images = textures.named().len();
+        if levels.len() != images {
+            return Err(format!(
+                "extras.{LEVELS_KEY} lists {} images for the {images} textures' levels",
+                levels.len()
+            )
+            .into());
+        }
+        let below: Vec<RgbaImage> = levels
+            .iter()
+            .map(|&i| {
+                doc.image(Index::new(i), (width, height - top))
+                    .map_err(|e| e.context(&format!("image {i} of extras.{LEVELS_KEY}")))
+            })
+            .collect::<Result<_, _>>()?;
+        let mut stacked = [
+            Some(&mut textures.base_color),
+            Some(&mut textures.metallic_roughness),
+            Some(&mut textures.normal),
+            textures.emissive.as_mut(),
+        ];
+        for (image, below) in stacked.iter_mut().flatten().zip(below) {
+            let mut whole = RgbaImage::new(width, height);
+            image::imageops::replace(&mut whole, *image, 0, 0);
+            image::imageops::replace(&mut whole, &below, 0, top as i64);
+            **image = whole;
+        }
+    }
     check_textures(&textures, &layout)?;
+    let mut mesh = mesh;
+    if whole {
+        // Texture coordinates over the whole image, as such files wrote them.
+        let scale = height as f64 / top as f64;
+        for tc in &mut mesh.texcoords {
+            tc[1] = (tc[1] as f64 * scale) as f32;
+        }
+    }
     Ok((mesh, textures, layout))
+}
+
+/// The image indices of `extras.sdfc_levels`, if the file has them.
+fn read_levels(root: &Root) -> Result<Option<Vec<u32>>, String> {
+    #[derive(serde::Deserialize)]
+    struct Extras {
+        #[serde(rename = "sdfc_levels")]
+        levels: Option<Vec<u32>>,
+    }
+    let Some(extras) = root.extras.as_ref() else {
+        return Ok(None);
+    };
+    let extras: Extras =
+        serde_json::from_str(extras.get()).map_err(|e| format!("the glTF's extras: {e}"))?;
+    match extras.levels {
+        Some(levels) if levels.len() > 4 => Err(format!(
+            "extras.{LEVELS_KEY} lists {} images; a material has at most 4 textures",
+            levels.len()
+        )),
+        levels => Ok(levels),
+    }
 }
 
 /// Checks the JSON chunk against [`MAX_JSON_BYTES`] and [`MAX_JSON_VALUES`] before it is
@@ -402,17 +471,13 @@ impl Reader<'_> {
             .collect())
     }
 
-    /// The image of texture `index`, a PNG in a buffer view, as RGBA. Images of
-    /// another size than `layout`'s are refused before they are decoded (a
-    /// [`ReadError::Limit`] when over [`MAX_IMAGE_SIZE`]).
-    fn image(&self, index: Index<Texture>, layout: &ChartLayout) -> Result<RgbaImage, ReadError> {
-        let texture = self
-            .root
-            .get(index)
-            .ok_or("a texture index is out of range")?;
+    /// Image `index`, a PNG in a buffer view, as RGBA. Images of another size than
+    /// `(w, h)` are refused before they are decoded (a [`ReadError::Limit`] when over
+    /// [`MAX_IMAGE_SIZE`]).
+    fn image(&self, index: Index<Image>, (w, h): (u32, u32)) -> Result<RgbaImage, ReadError> {
         let image = self
             .root
-            .get(texture.source)
+            .get(index)
             .ok_or("an image index is out of range")?;
         if image.mime_type.as_ref().map(|m| m.0.as_str()) != Some("image/png") {
             return Err("the image is not a PNG in the GLB".into());
@@ -424,20 +489,12 @@ impl Reader<'_> {
                 "its PNG is {pw}×{ph} texels, over the limit of {MAX_IMAGE_SIZE} × {MAX_IMAGE_SIZE} for a .glb's textures"
             )));
         }
-        if (pw, ph) != (layout.width(), layout.height()) {
-            return Err(format!(
-                "its PNG is {pw}×{ph} texels, the atlas {}×{}",
-                layout.width(),
-                layout.height()
-            )
-            .into());
+        if (pw, ph) != (w, h) {
+            return Err(format!("its PNG is {pw}×{ph} texels, the atlas's part {w}×{h}").into());
         }
         let mut reader = image::ImageReader::with_format(Cursor::new(png), ImageFormat::Png);
         let mut limits = image::Limits::default();
-        let (w, h) = (
-            layout.width().min(MAX_IMAGE_SIZE),
-            layout.height().min(MAX_IMAGE_SIZE),
-        );
+        let (w, h) = (w.min(MAX_IMAGE_SIZE), h.min(MAX_IMAGE_SIZE));
         limits.max_image_width = Some(w);
         limits.max_image_height = Some(h);
         // The decoded image (at most 16-bit RGBA) and some room for the decoder.

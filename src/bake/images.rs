@@ -100,9 +100,13 @@ pub fn render_frame(
         (b + 1) * n + a,
     ]
     .map(|k| base + k);
-    let p = k.map(|k| DVec3::from_array(exported.positions[k].map(f64::from)));
-    // The split mesh_data chose, and the barycentric weights of (s, t) in its triangle.
-    let weights = split_weights(p, s, t);
+    // The split mesh_data chose, read from its triangles (the quad's first triangle
+    // ends at corner 2 when split along 0–2; deciding again from the f32 positions
+    // could flip a choice made on the f64 grid), and the barycentric weights of
+    // (s, t) in its triangle.
+    let first = 6 * (c * m * m + b * m + a);
+    let along_02 = exported.indices.get(first + 2) == Some(&(k[2] as u32));
+    let weights = weights_in_split(along_02, s, t);
     let mut nrm = DVec3::ZERO;
     let mut tan = DVec3::ZERO;
     let mut sign = 0.0;
@@ -295,6 +299,10 @@ pub fn vertex_grid(
 pub fn split_along_02(p: [DVec3; 4]) -> bool {
     let shorter = (p[2] - p[0]).length() <= (p[3] - p[1]).length();
     let normal = (p[2] - p[0]).cross(p[3] - p[1]).normalize_or_zero();
+    if normal == DVec3::ZERO {
+        // Parallel diagonals: no normal to fold against.
+        return shorter;
+    }
     let facing = |a: usize, b: usize, c: usize| {
         let n = (p[b] - p[a]).cross(p[c] - p[a]).normalize_or_zero();
         if n == DVec3::ZERO {
@@ -319,7 +327,13 @@ pub fn split_along_02(p: [DVec3; 4]) -> bool {
 /// corners `p` (in (0,0), (1,0), (1,1), (0,1) order) split as [`split_along_02`] says,
 /// as [`mesh_data`] splits it.
 fn split_weights(p: [DVec3; 4], s: f64, t: f64) -> [f64; 4] {
-    if split_along_02(p) {
+    weights_in_split(split_along_02(p), s, t)
+}
+
+/// The barycentric weights of `(s, t)` in the triangle that holds it, of a quad split
+/// along 0–2 (`along_02`) or 1–3.
+fn weights_in_split(along_02: bool, s: f64, t: f64) -> [f64; 4] {
+    if along_02 {
         if s >= t {
             [1.0 - s, s - t, t, 0.0]
         } else {

@@ -330,14 +330,21 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     );
     match l {
         sdfc::bake::ChartLayout::Flat(f) => eprintln!(
-            "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²); the material's textures {}×{} (level 0), the levels below in images of their own",
+            "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²){}",
             f.width,
             f.height,
             r.charts,
             r.chart_size,
             r.levels,
-            f.width,
-            f.image_height()
+            if f.image_height() < f.height {
+                format!(
+                    "; the material's textures {}×{} (level 0), the levels below in images of their own",
+                    f.width,
+                    f.image_height()
+                )
+            } else {
+                String::new()
+            }
         ),
         sdfc::bake::ChartLayout::Packed(p) => eprintln!(
             "atlas:          {}×{} packed, {} charts of 1 to {} cells ({:.1} cells on average), {}² texels a cell, {} levels (down to 2² a cell)",

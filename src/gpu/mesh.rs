@@ -686,7 +686,6 @@ fn tonemap(c: DVec3) -> [f64; 3] {
     [c.x, c.y, c.z]
 }
 
-/// One image as a texture of one level.
 /// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA;
 /// vs_main and fs_main into `formats`, or with no formats the shadow map's pipeline:
 /// vs_shadow into the depth target alone.

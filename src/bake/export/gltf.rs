@@ -49,8 +49,10 @@
 //! - the textures' decoded size: the atlas at most [`MAX_IMAGE_SIZE`] a side, and the
 //!   memory its textures take in `sdfc render` ([`texture_bytes`]) at most
 //!   [`MAX_TEXTURE_BYTES`], both from the layout before any PNG is decoded; each PNG's
-//!   header must then give the layout's size, and the decoder's own limits hold it
-//!   to that.
+//!   header must then give its part's size (the material's: the layout's width by
+//!   [`crate::asset::FlatLayout::image_height`]; the levels': the rest of the height;
+//!   a file from before the split: the whole layout), and the decoder's own limits
+//!   hold it to that.
 
 use gltf_json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf_json::buffer::{Target, View};

@@ -1,8 +1,9 @@
 //! Export: the baked mesh and its atlas as files other programs read.
 //!
 //! - [`glb`] writes a binary glTF 2.0 file (`sdfc bake SCENE -o OUT.glb`): the mesh, one
-//!   PBR material whose textures are the flat atlas as PNGs, and the atlas layout in the
-//!   root's `extras.sdfc_atlas`; [`read_glb`] reads such a file back (`sdfc render
+//!   PBR material whose textures are the atlas's level 0 as PNGs (a flat layout's
+//!   smaller levels are PNGs of their own, listed in the root's `extras.sdfc_levels`),
+//!   and the atlas layout in the root's `extras.sdfc_atlas`; [`read_glb`] reads such a file back (`sdfc render
 //!   OUT.glb`). See [`gltf`] for the file's structure.
 //! - [`ktx2()`] writes the atlas's levels as an uncompressed KTX2 texture (see [`ktx2`]).
 //!

@@ -143,6 +143,8 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, ChartLayout), ReadE
         for tc in &mut mesh.texcoords {
             tc[1] = (tc[1] as f64 * scale) as f32;
         }
+        // (A huge coordinate may have become infinite.)
+        check_mesh(&mesh)?;
     }
     Ok((mesh, textures, layout))
 }

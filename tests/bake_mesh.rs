@@ -3,9 +3,11 @@
 //! more than 45° from the field's gradient at their centroid), and the Hausdorff
 //! distance between the mesh and the zero set, both ways, under half a cell.
 //!
-//! Ignored until the mesher meets it (issue 40): today's figures are in
-//! docs/baking.md ("The mesh against the zero set"). Run it with
-//! `cargo test --release --test bake_mesh -- --ignored --nocapture`.
+//! Four examples have detail finer than the default grid's cell and do not meet it
+//! (issue 40): they are named in [`FINER_THAN_A_CELL`] with their reasons and held to
+//! today's figures, so that they cannot get worse unseen; every other example meets
+//! the goal. Today's figures are in docs/baking.md ("The mesh against the zero set");
+//! `--nocapture` prints them.
 
 mod common;
 
@@ -50,18 +52,19 @@ fn to_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 /// The distance from `q` to the zero set, from above: the nearer of the surface point
-/// Newton's projection reaches and, when that is over a quarter of `reach`, the
-/// nearest sign change along 26 directions (the cube's faces, edges and corners) and
-/// the gradient's, within `reach`. Newton's projection alone overshoots where the
+/// Newton's projection reaches and, when that is over a quarter of `reach` and over
+/// `known` (the largest distance found so far: a point under it cannot change the
+/// maximum), the nearest sign change along 26 directions (the cube's faces, edges and
+/// corners) and the gradient's, within `reach`. Newton's projection alone overshoots where the
 /// gradient is short (inside a smooth blend, |∇f| < 1): waving_robot's arm joint has
 /// mesh points 0.07 cells from the surface whose projection lands 0.9 cells away.
-fn to_zero_set(field: sdfc::ir::Field, q: DVec3, reach: f64) -> f64 {
+fn to_zero_set(field: sdfc::ir::Field, q: DVec3, reach: f64, known: f64) -> f64 {
     let f0 = eval::distance(field, q);
     if f0 == 0.0 {
         return 0.0;
     }
     let mut best = eval::project(field, q, 1e-9).map_or(f64::INFINITY, |on| (on - q).length());
-    if best <= 0.25 * reach {
+    if best <= 0.25 * reach || best <= known {
         return best;
     }
     let mut directions = vec![eval::gradient(field, q).normalize_or_zero() * -f0.signum()];
@@ -143,7 +146,8 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
             turned += 1;
         }
         for q in [centroid, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
-            mesh_to_surface = mesh_to_surface.max(to_zero_set(field, q, 2.0 * cell));
+            mesh_to_surface =
+                mesh_to_surface.max(to_zero_set(field, q, 2.0 * cell, mesh_to_surface));
         }
     }
     // Surface points against the mesh, through a coarse bucket grid of triangles.
@@ -192,8 +196,35 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
     })
 }
 
+/// The examples whose detail is finer than a cell of the default grid (48 along the
+/// longest side), which a grid cannot hold: (name, why, and today's turned share,
+/// mesh → surface and surface → mesh in cells, each with a little room, as ceilings).
+const FINER_THAN_A_CELL: [(&str, &str, f64, f64, f64); 4] = [
+    (
+        "displaced_sphere.sdf",
+        "a displacement finer than a cell",
+        0.0,
+        1.15,
+        1.1,
+    ),
+    (
+        "fit_blob.sdf",
+        "a fitted height map finer than a cell (the field's gradient follows detail the mesh cannot)",
+        0.17,
+        2.45,
+        1.85,
+    ),
+    ("shell_arrows.sdf", "arrows finer than a cell", 0.0, 0.05, 1.95),
+    (
+        "warps.sdf",
+        "a 0.05-thick shell and 0.15 spheres, thinner than a cell",
+        0.08,
+        0.65,
+        2.35,
+    ),
+];
+
 #[test]
-#[ignore = "the mesher does not meet it yet (issue 40; figures in docs/baking.md)"]
 fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
     let Some(gpu) = gpu_for_tests() else { return };
     let mut measured = 0;
@@ -216,11 +247,18 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
             q.mesh_to_surface / q.cell,
             q.surface_to_mesh / q.cell
         );
-        if share >= 0.001 || q.mesh_to_surface >= 0.5 * q.cell || q.surface_to_mesh >= 0.5 * q.cell
-        {
-            failures.push(name);
+        let (to, from) = (q.mesh_to_surface / q.cell, q.surface_to_mesh / q.cell);
+        let limits = match FINER_THAN_A_CELL.iter().find(|e| e.0 == name) {
+            Some(&(_, _, turned, to, from)) => (turned, to, from),
+            None => (0.001, 0.5, 0.5),
+        };
+        if share >= limits.0.max(0.001) || to >= limits.1 || from >= limits.2 {
+            failures.push(format!(
+                "{name}: {:.3} % turned, {to:.3} / {from:.3} cells",
+                100.0 * share
+            ));
         }
     }
-    assert!(measured >= 8, "only {measured} examples baked");
-    assert!(failures.is_empty(), "{failures:?}");
+    assert!(measured >= 16, "only {measured} examples baked");
+    assert!(failures.is_empty(), "{failures:#?}");
 }

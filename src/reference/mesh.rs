@@ -5,7 +5,8 @@
 //! four cells around it; every cell with a sign change gets one vertex, placed at the
 //! minimizer of the quadric error (QEF) of the tangent planes at its edge crossings
 //! (Ju et al. 2002), which keeps sharp edges and corners where the grid allows. The
-//! vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale).
+//! vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale). Vertices joined
+//! by a quad side under a tenth of a cell then share one point ([`MERGE_CELLS`]).
 
 use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
@@ -132,11 +133,79 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
             }
         }
     }
-    QuadMesh {
+    let mut mesh = QuadMesh {
         vertices: placed.iter().map(|p| p.0).collect(),
         normals: placed.iter().map(|p| p.1).collect(),
         quads,
         cell: grid.cell,
+    };
+    merge_close(shape, &mut mesh, tolerance);
+    mesh
+}
+
+/// Vertices joined by a quad side shorter than this many cells become one point.
+pub const MERGE_CELLS: f64 = 0.1;
+
+/// Gives vertices joined by a quad side shorter than [`MERGE_CELLS`] one position:
+/// where a crease or corner passes near a cell's face, the QEF puts both cells'
+/// vertices on it a hair apart, and the quads between them split into a sliver whose
+/// face normal is noise (a fin). Joined, the sliver has no area at all, and the
+/// neighbours are moved by at most half that distance. Each cluster (by union over
+/// such sides) goes to its mean, projected onto the surface; its normal is the
+/// gradient there. The quads keep their four corners (a chart still has four), some
+/// of which now coincide.
+fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: f64) {
+    let shape: Field = shape.into();
+    let limit = MERGE_CELLS * mesh.cell;
+    let mut parent: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut merged = false;
+    for q in &mesh.quads {
+        for k in 0..4 {
+            let (a, b) = (q[k], q[(k + 1) % 4]);
+            if (mesh.vertices[a as usize] - mesh.vertices[b as usize]).length() < limit {
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                    merged = true;
+                }
+            }
+        }
+    }
+    if !merged {
+        return;
+    }
+    let roots: Vec<u32> = (0..mesh.vertices.len() as u32)
+        .map(|i| root(&mut parent, i))
+        .collect();
+    // Each cluster's sum and size, then its point.
+    let mut clusters: std::collections::HashMap<u32, (DVec3, usize)> = Default::default();
+    for (i, &r) in roots.iter().enumerate() {
+        let e = clusters.entry(r).or_insert((DVec3::ZERO, 0));
+        e.0 += mesh.vertices[i];
+        e.1 += 1;
+    }
+    clusters.retain(|_, c| c.1 > 1);
+    for (r, (sum, count)) in &mut clusters {
+        let mean = *sum / *count as f64;
+        *sum = eval::project(shape, mean, tolerance)
+            .filter(|p| (*p - mean).length() < limit)
+            .unwrap_or(mesh.vertices[*r as usize]);
+    }
+    for (i, r) in roots.iter().enumerate() {
+        if let Some((p, _)) = clusters.get(r) {
+            mesh.vertices[i] = *p;
+            let n = eval::gradient(shape, *p).normalize_or_zero();
+            if n != DVec3::ZERO {
+                mesh.normals[i] = n;
+            }
+        }
     }
 }
 

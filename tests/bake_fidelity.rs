@@ -59,12 +59,15 @@ fn compare_source(
     mode: ViewMode,
     style: Style,
 ) -> f64 {
-    let filter = MeshFilter::Atlas;
-    compare_frames(example, source, base, settings, size, mode, style, filter)
-        .map_or(f64::INFINITY, |(implicit, drawn)| psnr(&implicit, &drawn))
+    let filters = [MeshFilter::Atlas];
+    compare_frames(example, source, base, settings, size, mode, style, &filters)
+        .map_or(f64::INFINITY, |(implicit, drawn)| {
+            psnr(&implicit, &drawn[0])
+        })
 }
 
-/// The implicit render and the baked mesh's (read with `filter`), or None without a GPU.
+/// The implicit render and the baked mesh's, one bake read with each of `filters`, or
+/// None without a GPU.
 #[allow(clippy::too_many_arguments)]
 fn compare_frames(
     example: &str,
@@ -74,8 +77,8 @@ fn compare_frames(
     (w, h): (u32, u32),
     mode: ViewMode,
     style: Style,
-    filter: MeshFilter,
-) -> Option<(Frame, Frame)> {
+    filters: &[MeshFilter],
+) -> Option<(Frame, Vec<Frame>)> {
     let gpu = gpu_for_tests()?;
     let analysis = sdfc::driver::check(source, Some(base));
     assert!(!analysis.has_errors());
@@ -102,25 +105,30 @@ fn compare_frames(
     view.width = w;
     view.height = h;
     let implicit = sdfc::gpu::render(&gpu, &compiled.module, &view, mode, base).unwrap();
-    let mesh = MeshRenderer::with_filter(&gpu, &baked.mesh, &baked.textures, &baked.atlas, filter)
-        .unwrap();
-    let drawn = mesh.render(&gpu, &view, mode).unwrap();
-    let p = psnr(&implicit, &drawn);
-    if let Ok(dir) = std::env::var("SDFC_FIDELITY_DIR") {
-        for (name, f) in [("implicit", &implicit), ("mesh", &drawn)] {
-            let img = image::RgbaImage::from_raw(f.width, f.height, f.color.clone()).unwrap();
-            img.save(format!("{dir}/{example}-{mode:?}-{filter}-{name}.png"))
+    let mut frames = Vec::new();
+    for &filter in filters {
+        let mesh =
+            MeshRenderer::with_filter(&gpu, &baked.mesh, &baked.textures, &baked.atlas, filter)
                 .unwrap();
+        let drawn = mesh.render(&gpu, &view, mode).unwrap();
+        let p = psnr(&implicit, &drawn);
+        if let Ok(dir) = std::env::var("SDFC_FIDELITY_DIR") {
+            for (name, f) in [("implicit", &implicit), ("mesh", &drawn)] {
+                let img = image::RgbaImage::from_raw(f.width, f.height, f.color.clone()).unwrap();
+                img.save(format!("{dir}/{example}-{mode:?}-{filter}-{name}.png"))
+                    .unwrap();
+            }
         }
+        eprintln!(
+            "{example}: {size}-wide {style:?} atlas, grid {grid}, {} charts of {} cells, {}² texels a cell ({chart_quads}² quads each), {filter} filter: {mode:?} at {w}×{h}: PSNR {p:.2} dB, worst 8 × 8 block {:.1}/255",
+            baked.patches.len(),
+            baked.table.len(),
+            baked.atlas.cell_size(),
+            worst_block(&implicit, &drawn)
+        );
+        frames.push(drawn);
     }
-    eprintln!(
-        "{example}: {size}-wide {style:?} atlas, grid {grid}, {} charts of {} cells, {}² texels a cell ({chart_quads}² quads each), {filter} filter: {mode:?} at {w}×{h}: PSNR {p:.2} dB, worst 8 × 8 block {:.1}/255",
-        baked.patches.len(),
-        baked.table.len(),
-        baked.atlas.cell_size(),
-        worst_block(&implicit, &drawn)
-    );
-    Some((implicit, drawn))
+    Some((implicit, frames))
 }
 
 /// The largest mean absolute difference (over RGB) of an 8 × 8 block of pixels, in
@@ -268,29 +276,26 @@ fn close_ups_on_curved_parts_match_the_implicit_render() {
         let start = source.find("camera = ").unwrap();
         let end = start + source[start..].find(";\n").unwrap();
         let close = format!("{}camera = {camera}{}", &source[..start], &source[end..]);
-        let frames = |filter| {
-            compare_frames(
-                &format!("{example}-close"),
-                &close,
-                &base,
-                (2048, 48, 2),
-                (480, 320),
-                ViewMode::Albedo,
-                Style::Flat,
-                filter,
-            )
-        };
-        let Some((implicit, standard)) = frames(MeshFilter::Standard) else {
+        let Some((implicit, drawn)) = compare_frames(
+            &format!("{example}-close"),
+            &close,
+            &base,
+            (2048, 48, 2),
+            (480, 320),
+            ViewMode::Albedo,
+            Style::Flat,
+            &[MeshFilter::Standard, MeshFilter::Atlas],
+        ) else {
             return;
         };
-        let p = psnr(&implicit, &standard);
+        let (standard, atlas) = (&drawn[0], &drawn[1]);
+        let p = psnr(&implicit, standard);
         assert!(
             p >= floor,
             "{example} close-up, standard filter: albedo PSNR {p:.2} dB"
         );
         // The two readers of the same file agree: sdfc's lookup and a generic viewer's.
-        let (_, atlas) = frames(MeshFilter::Atlas).unwrap();
-        let both = psnr(&atlas, &standard);
+        let both = psnr(atlas, standard);
         assert!(
             both >= 36.0,
             "{example} close-up: the standard and atlas filters differ, PSNR {both:.2} dB"

@@ -136,20 +136,27 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
         .map(|t| [p(t[0]), p(t[1]), p(t[2])])
         .collect();
     let cell = baked.quads.cell;
-    let mut turned = 0;
-    let mut mesh_to_surface = 0.0f64;
-    for [a, b, c] in &tris {
-        let centroid = (*a + *b + *c) / 3.0;
-        let n = (*b - *a).cross(*c - *a).normalize_or_zero();
-        let g = eval::gradient(field, centroid).normalize_or_zero();
-        if n != DVec3::ZERO && g != DVec3::ZERO && n.dot(g) < 45f64.to_radians().cos() {
-            turned += 1;
-        }
-        for q in [centroid, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
-            mesh_to_surface =
-                mesh_to_surface.max(to_zero_set(field, q, 2.0 * cell, mesh_to_surface));
-        }
-    }
+    // In chunks on every core: each chunk's turned triangles and its largest distance.
+    use rayon::prelude::*;
+    let (turned, mesh_to_surface) = tris
+        .par_chunks(256)
+        .map(|chunk| {
+            let mut turned = 0;
+            let mut far = 0.0f64;
+            for [a, b, c] in chunk {
+                let centroid = (*a + *b + *c) / 3.0;
+                let n = (*b - *a).cross(*c - *a).normalize_or_zero();
+                let g = eval::gradient(field, centroid).normalize_or_zero();
+                if n != DVec3::ZERO && g != DVec3::ZERO && n.dot(g) < 45f64.to_radians().cos() {
+                    turned += 1;
+                }
+                for q in [centroid, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
+                    far = far.max(to_zero_set(field, q, 2.0 * cell, far));
+                }
+            }
+            (turned, far)
+        })
+        .reduce(|| (0, 0.0), |x, y| (x.0 + y.0, x.1.max(y.1)));
     // Surface points against the mesh, through a coarse bucket grid of triangles.
     let key = |x: DVec3| (x / (2.0 * cell)).floor().as_ivec3();
     let mut buckets: std::collections::HashMap<glam::IVec3, Vec<usize>> = Default::default();

@@ -249,7 +249,7 @@ fn baked_textured_examples_stay_close_to_the_implicit_render() {
 /// texel of the surface point nearest it, not the one its ray meets: a shift of a
 /// fraction of a pixel at every mortar line) and resampling a texture twice. Measured
 /// (lavapipe, 2-core machine), standard filter, 480 × 320: normal_map 29.80 dB,
-/// capsule 26.32 dB, robot 31.45 dB; at a 4096 atlas, grid 96 and 640 × 640: 33.88,
+/// capsule 26.32 dB, robot 31.45 dB; at a 4096 atlas, grid 96 and 640 × 640: 33.90,
 /// 29.84 and 36.52 dB. The 35 dB at every close-up is not met; the floors
 /// keep what is measured.
 #[test]

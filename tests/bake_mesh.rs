@@ -18,6 +18,7 @@ use sdfc::ir::eval;
 
 /// What the test measures of one baked mesh.
 struct Quality {
+    /// Triangles with an area.
     triangles: usize,
     /// Triangles whose normal is more than 45° off the gradient at their centroid.
     turned: usize,
@@ -195,7 +196,12 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
         surface_to_mesh = surface_to_mesh.max(best.min(4.0 * cell));
     }
     Some(Quality {
-        triangles: tris.len(),
+        // Triangles the mesher's joined vertices left without area have no face
+        // normal to turn: they are not counted either way.
+        triangles: tris
+            .iter()
+            .filter(|[a, b, c]| (*b - *a).cross(*c - *a) != DVec3::ZERO)
+            .count(),
         turned,
         mesh_to_surface,
         surface_to_mesh,
@@ -217,7 +223,7 @@ const FINER_THAN_A_CELL: [(&str, &str, f64, f64, f64); 4] = [
     (
         "fit_blob.sdf",
         "a fitted height map finer than a cell (the field's gradient follows detail the mesh cannot)",
-        0.17,
+        0.175,
         2.45,
         1.85,
     ),
@@ -236,6 +242,7 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
     let Some(gpu) = gpu_for_tests() else { return };
     let mut measured = 0;
     let mut failures = Vec::new();
+    let mut excepted = Vec::new();
     let examples = common::scene_files()
         .into_iter()
         .filter(|p| p.parent().is_some_and(|d| d.ends_with("examples")));
@@ -256,10 +263,14 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
         );
         let (to, from) = (q.mesh_to_surface / q.cell, q.surface_to_mesh / q.cell);
         let limits = match FINER_THAN_A_CELL.iter().find(|e| e.0 == name) {
-            Some(&(_, _, turned, to, from)) => (turned, to, from),
+            Some(&(_, _, turned, to, from)) => {
+                excepted.push(name.clone());
+                (turned, to, from)
+            }
             None => (0.001, 0.5, 0.5),
         };
-        if share >= limits.0.max(0.001) || to >= limits.1 || from >= limits.2 {
+        // (An exception is never held tighter than the goal.)
+        if share >= limits.0.max(0.001) || to >= limits.1.max(0.5) || from >= limits.2.max(0.5) {
             failures.push(format!(
                 "{name}: {:.3} % turned, {to:.3} / {from:.3} cells",
                 100.0 * share
@@ -267,5 +278,10 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
         }
     }
     assert!(measured >= 16, "only {measured} examples baked");
+    assert_eq!(
+        excepted.len(),
+        FINER_THAN_A_CELL.len(),
+        "an exception was not measured (renamed?): {excepted:?}"
+    );
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -25,6 +25,13 @@ pub fn corner_tangents(mesh: &QuadMesh, patches: &Patches) -> Vec<[DVec3; 4]> {
             for i in 0..a {
                 let q = mesh.quads[cells[j * a + i] as usize].map(|k| v[k as usize]);
                 let (bottom, top) = (q[1] - q[0], q[2] - q[3]);
+                // A side the mesher collapsed (two corners joined) has no direction:
+                // the other side's is the limit of ∂/∂u there.
+                let (bottom, top) = match (bottom == DVec3::ZERO, top == DVec3::ZERO) {
+                    (true, false) => (top, top),
+                    (false, true) => (bottom, bottom),
+                    _ => (bottom, top),
+                };
                 for (di, dj, e) in [(0, 0, bottom), (1, 0, bottom), (1, 1, top), (0, 1, top)] {
                     let s = &mut sum[(j + dj) * (a + 1) + i + di];
                     s.0 += e;

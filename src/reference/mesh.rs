@@ -6,7 +6,7 @@
 //! minimizer of the quadric error (QEF) of the tangent planes at its edge crossings
 //! (Ju et al. 2002), which keeps sharp edges and corners where the grid allows. The
 //! vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale). Vertices joined
-//! by a quad side under a tenth of a cell then share one point ([`MERGE_CELLS`]).
+//! by a quad side under a tenth of a cell then share one point ([`merge_close`]).
 
 use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
@@ -149,11 +149,12 @@ pub const MERGE_CELLS: f64 = 0.1;
 /// Gives vertices joined by a quad side shorter than [`MERGE_CELLS`] one position:
 /// where a crease or corner passes near a cell's face, the QEF puts both cells'
 /// vertices on it a hair apart, and the quads between them split into a sliver whose
-/// face normal is noise (a fin). Joined, the sliver has no area at all, and the
-/// neighbours are moved by at most half that distance. Each cluster (by union over
-/// such sides) goes to its mean, projected onto the surface; its normal is the
-/// gradient there. The quads keep their four corners (a chart still has four), some
-/// of which now coincide.
+/// face normal is noise (a fin). Joined, the sliver has no area at all. Each cluster
+/// (by union over such sides) goes to its mean, projected onto the surface, with the
+/// gradient there for its normal, when every member lies within [`MERGE_CELLS`] of the
+/// mean and the projection moves it less than that: a member moves by under two
+/// tenths of a cell (about half a tenth for a pair). The quads keep their four corners
+/// (a chart still has four), some of which now coincide.
 fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: f64) {
     let shape: Field = shape.into();
     let limit = MERGE_CELLS * mesh.cell;
@@ -192,12 +193,25 @@ fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: 
         e.1 += 1;
     }
     clusters.retain(|_, c| c.1 > 1);
-    for (r, (sum, count)) in &mut clusters {
-        let mean = *sum / *count as f64;
-        *sum = eval::project(shape, mean, tolerance)
-            .filter(|p| (*p - mean).length() < limit)
-            .unwrap_or(mesh.vertices[*r as usize]);
+    // Each cluster's mean, projected; a cluster whose members lie farther than the
+    // limit from it (a chain), or whose projection lands farther, stays as it was.
+    for (i, r) in roots.iter().enumerate() {
+        if let Some(c) = clusters.get(r) {
+            if (mesh.vertices[i] - c.0 / c.1 as f64).length() >= limit {
+                clusters.remove(r);
+            }
+        }
     }
+    clusters.retain(|_, (sum, count)| {
+        let mean = *sum / *count as f64;
+        match eval::project(shape, mean, tolerance).filter(|p| (*p - mean).length() < limit) {
+            Some(p) => {
+                *sum = p;
+                true
+            }
+            None => false,
+        }
+    });
     for (i, r) in roots.iter().enumerate() {
         if let Some((p, _)) = clusters.get(r) {
             mesh.vertices[i] = *p;

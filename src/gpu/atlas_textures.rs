@@ -3,10 +3,10 @@
 //! them: the material's images (a flat layout's level 0) with the box-filtered mip
 //! chain a generic engine builds ([`generic_mips`]).
 
-use super::{render, Gpu};
+use super::Gpu;
 use crate::asset::{ChartLayout, Textures};
 use crate::codegen::mesh::MeshFilter;
-use wgpu::util::DeviceExt;
+use crate::ir::texture::MipChain;
 
 /// The four textures (a black one for no emission) and the sampler, as `filter` reads
 /// them: the whole atlas, or for the standard filter what other tools read (the glTF's
@@ -52,37 +52,15 @@ pub(super) fn upload_textures(
     (views, sampler)
 }
 
-/// One image as a texture: level 0 alone, or with `chain` its generic mip chain too.
+/// One image as a texture: level 0 alone, or with `chain` its generic mip chain too
+/// (uploaded as the materials' textures are, [`super::texture::upload_to`]; the
+/// renderer's error scope holds it).
 fn upload_image(gpu: &Gpu, image: &image::RgbaImage, srgb: bool, chain: bool) -> wgpu::Texture {
-    let (w, h) = image.dimensions();
-    let levels = if chain {
-        generic_mips(image, srgb)
-    } else {
-        Vec::new()
-    };
-    let mut data = image.as_raw().clone();
-    for level in &levels {
-        data.extend_from_slice(level.as_raw());
+    let mut levels = vec![image.clone()];
+    if chain {
+        levels.extend(generic_mips(image, srgb));
     }
-    gpu.device.create_texture_with_data(
-        &gpu.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("atlas"),
-            size: render::extent(w, h),
-            mip_level_count: 1 + levels.len() as u32,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: if srgb {
-                wgpu::TextureFormat::Rgba8UnormSrgb
-            } else {
-                wgpu::TextureFormat::Rgba8Unorm
-            },
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &data,
-    )
+    super::texture::upload_to(&gpu.device, &gpu.queue, &MipChain { levels }, srgb)
 }
 
 /// The mip chain a generic engine builds for `image` knowing nothing of its charts

@@ -254,3 +254,47 @@ fn an_edit_that_leaves_an_atlas_as_it_was_does_not_redo_its_geometry() {
     driver::check(&moved, Some(&dir));
     assert!(PREPARE_STATS[1].load(Relaxed) > misses);
 }
+
+/// `sdfc bench --scale`'s scenes that are not cities: every generated scene checks
+/// with no diagnostic, its spheres lie in the cube with their stated radii, the same
+/// index gives the same sphere whatever `n`, and the language-server scene has about
+/// 4,400 lines.
+#[test]
+fn scattered_scenes_are_valid_and_stable() {
+    use sdfc::bench::{scattered, scattered_sphere, SCATTERED, SCATTERED_SIDE};
+    for (n, seeds) in SCATTERED {
+        let src = scattered(n, seeds);
+        assert_eq!(src, scattered(n, seeds), "deterministic");
+        let a = driver::check(&src, None);
+        assert!(a.diagnostics.is_empty(), "scattered({n}, {seeds}): {:?}", a.diagnostics.first());
+        let shape = shape_named(&a, "cloud");
+        if n >= 16 {
+            let g = shape.group(shape.root()).expect("one group");
+            assert_eq!(g.leaves.len(), n);
+        }
+        // The CPU field is the union of the stated spheres.
+        let mut rng = Rng(n as u64 + 3);
+        let h = DVec3::splat(SCATTERED_SIDE / 2.0 + 0.5);
+        for p in random_points(&mut rng, -h, h, 300) {
+            let brute = (0..n)
+                .map(|i| {
+                    let (c, r) = scattered_sphere(i);
+                    (p - DVec3::from(c)).length() - r
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!((eval::distance(&shape, p) - brute).abs() < 1e-9);
+        }
+        if seeds > 0 {
+            let lines = src.lines().count();
+            assert!((4200..4700).contains(&lines), "{lines} lines");
+            assert!(a.atlases.iter().all(|x| x.is_some()), "the atlas prepares");
+        }
+    }
+    for i in 0..5000 {
+        let (c, r) = scattered_sphere(i);
+        assert!(c.iter().all(|x| x.abs() <= SCATTERED_SIDE / 2.0));
+        assert!((0.05..=0.15).contains(&r));
+    }
+    // A prefix of a bigger scene is the smaller scene's spheres.
+    assert!(scattered(1200, 0).contains(&scattered(12, 0).lines().nth(2).unwrap().to_string()));
+}

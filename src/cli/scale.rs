@@ -3,10 +3,12 @@
 //! seeds; for each: compile time (source → validated WGSL), WGSL lines, pipeline time,
 //! frame time and the language server's didChange → diagnostics latency, and up to
 //! 1,200 spheres the same scene with its unions as code (no groups), measured in one
-//! run on one adapter, with a log-log plot (`--plot`, SVG or PNG).
+//! run on one adapter, with a log-log plot (`--plot`, SVG or PNG). Then scenes that are
+//! not cities (`sdfc::bench::scattered`): 12 and 1,200 small spheres scattered through
+//! a cube, where most rays miss, and 4,000 with 200 seeds for the language server.
 
 use super::BenchArgs;
-use sdfc::bench::{city, SCALE_COUNTS};
+use sdfc::bench::{city, scattered, SCALE_COUNTS, SCATTERED};
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver;
 use sdfc::gpu::{Gpu, Renderer, ViewMode};
@@ -39,6 +41,13 @@ struct Row {
     lsp_p95: Duration,
     /// The same scene with its unions as code: WGSL lines, pipeline, frame.
     as_code: Option<(usize, Duration, Duration)>,
+}
+
+/// Which generator a row's scene comes from.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    City,
+    Scattered,
 }
 
 fn ms(d: Duration) -> f64 {
@@ -92,29 +101,8 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
         .chain(SEED_COUNTS.iter().map(|&s| (SEEDED_PRIMITIVES, s)));
     let configs: Vec<(usize, usize)> = configs.collect();
     for (n, seeds) in configs {
-        let row = measure(&gpu, args, n, seeds, (width, height))?;
-        let code = row
-            .as_code
-            .map_or(String::new(), |(lines, pipeline, frame)| {
-                format!(
-                    " | {lines:>8} {:>11.1} {:>11.1} {:>7.1}x",
-                    ms(pipeline),
-                    ms(frame),
-                    ms(frame) / ms(row.frame)
-                )
-            });
-        println!(
-            "{:>7} {:>6} {:>8} {:>11.1} {:>11.1} {:>11.1} {:>9.1} {:>9.1} {:>9.1}{code}",
-            row.primitives,
-            row.seeds,
-            row.lines,
-            ms(row.compile),
-            ms(row.pipeline),
-            ms(row.frame),
-            ms(row.lsp_front_p95),
-            ms(row.lsp_p50),
-            ms(row.lsp_p95)
-        );
+        let row = measure(&gpu, args, (Kind::City, n, seeds), (width, height))?;
+        print_row(&row);
         rows.push(row);
     }
     let growth = |f: &dyn Fn(&Row) -> f64| {
@@ -132,6 +120,22 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
     println!("  lines    {}", growth(&|r| r.lines as f64));
     println!("  pipeline {}", growth(&|r| ms(r.pipeline)));
     println!("  frame    {}", growth(&|r| ms(r.frame)));
+    println!("\nscattered: sdfc::bench::scattered(N, seeds), N spheres through a 10-unit cube, no ground (most rays miss)");
+    let mut spread = Vec::new();
+    for (n, seeds) in SCATTERED {
+        let row = measure(&gpu, args, (Kind::Scattered, n, seeds), (width, height))?;
+        print_row(&row);
+        spread.push(row);
+    }
+    let frame_of = |n: usize| {
+        spread
+            .iter()
+            .find(|r| r.primitives == n && r.seeds == 0)
+            .map(|r| ms(r.frame))
+    };
+    if let (Some(few), Some(many)) = (frame_of(12), frame_of(1200)) {
+        println!("  frame, 1,200 ÷ 12 scattered spheres: {:.1}x", many / few);
+    }
     // A chart that cannot be written does not lose the JSON: its error comes last.
     let plotted = match &args.plot {
         Some(path) => plot(path, &rows).map(|()| println!("plot:      {}", path.display())),
@@ -142,6 +146,7 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
             "bench": "scale",
             "adapter": gpu.describe(),
             "size": [width, height],
+            "scattered": spread.iter().map(row_json).collect::<Vec<_>>(),
             "rows": rows.iter().map(|r| serde_json::json!({
                 "primitives": r.primitives,
                 "seeds": r.seeds,
@@ -164,15 +169,56 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
     plotted
 }
 
+/// A row's JSON (the scattered series; the cities' rows are written inline).
+fn row_json(r: &Row) -> serde_json::Value {
+    serde_json::json!({
+        "primitives": r.primitives,
+        "seeds": r.seeds,
+        "wgsl_lines": r.lines,
+        "compile_ms": ms(r.compile),
+        "pipeline_ms": ms(r.pipeline),
+        "frame_ms": ms(r.frame),
+        "lsp_front_p95_ms": ms(r.lsp_front_p95),
+        "lsp_p50_ms": ms(r.lsp_p50),
+        "lsp_p95_ms": ms(r.lsp_p95),
+    })
+}
+
+fn print_row(row: &Row) {
+    let code = row
+        .as_code
+        .map_or(String::new(), |(lines, pipeline, frame)| {
+            format!(
+                " | {lines:>8} {:>11.1} {:>11.1} {:>7.1}x",
+                ms(pipeline),
+                ms(frame),
+                ms(frame) / ms(row.frame)
+            )
+        });
+    println!(
+        "{:>7} {:>6} {:>8} {:>11.1} {:>11.1} {:>11.1} {:>9.1} {:>9.1} {:>9.1}{code}",
+        row.primitives,
+        row.seeds,
+        row.lines,
+        ms(row.compile),
+        ms(row.pipeline),
+        ms(row.frame),
+        ms(row.lsp_front_p95),
+        ms(row.lsp_p50),
+        ms(row.lsp_p95)
+    );
+}
+
 fn measure(
     gpu: &Gpu,
     args: &BenchArgs,
-    n: usize,
-    seeds: usize,
+    (kind, n, seeds): (Kind, usize, usize),
     (width, height): (u32, u32),
 ) -> Result<Row, ExitCode> {
-    let source = city(n, seeds);
-    let name = format!("city({n}, {seeds})");
+    let (source, name) = match kind {
+        Kind::City => (city(n, seeds), format!("city({n}, {seeds})")),
+        Kind::Scattered => (scattered(n, seeds), format!("scattered({n}, {seeds})")),
+    };
     let options = Options {
         walk: WalkForm::Loop,
         ..Default::default()
@@ -188,7 +234,7 @@ fn measure(
                 sdfc::diagnostic::render(&name, &source, &analysis.diagnostics, false)
             );
             eprintln!(
-                "error: a generated scale scene has diagnostics (a bug in sdfc::bench::city)"
+                "error: a generated scale scene has diagnostics (a bug in sdfc::bench)"
             );
             return Err(ExitCode::from(super::exit::SCENE));
         }
@@ -217,7 +263,7 @@ fn measure(
         .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
         .map_err(fail)?;
     // The baseline: the same scene, its unions as code (the one compile is not timed).
-    let as_code = if n <= MAX_AS_CODE && seeds == 0 {
+    let as_code = if kind == Kind::City && n <= MAX_AS_CODE && seeds == 0 {
         let code = driver::compile(
             &analysis,
             &Options {
@@ -242,7 +288,7 @@ fn measure(
         None
     };
     // The language server on the same text, in process (`--lsp-latency`'s loop).
-    let file = std::env::temp_dir().join(format!("sdfc-scale-{n}-{seeds}.sdf"));
+    let file = std::env::temp_dir().join(format!("sdfc-scale-{name}.sdf"));
     let (lsp, _) = super::latency::measure(
         &file,
         &source,

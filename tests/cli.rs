@@ -289,3 +289,23 @@ fn a_chart_without_a_font_is_refused_before_measuring() {
     assert_eq!(code, 2);
     assert!(err.contains(".svg or .png"), "{err}");
 }
+
+/// `bench --lsp-latency` on a file whose name needs percent-encoding in a URI (a
+/// space, brackets, a comma): the in-process client opens it by a real `file:` URI, so
+/// the server answers (a raw path with a space is no URI: the server ignored it, and
+/// the bench waited ten minutes for diagnostics, then failed).
+#[test]
+fn lsp_latency_measures_a_file_whose_name_needs_encoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("my scene (v2),b.sdf");
+    std::fs::write(&path, "render sphere(1);\n").unwrap();
+    let (code, out, err) = common::sdfc(&[
+        "bench",
+        path.to_str().unwrap(),
+        "--lsp-latency",
+        "--edits",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("the full set") && out.contains("p95"), "{out}");
+}

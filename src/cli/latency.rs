@@ -94,7 +94,11 @@ pub(super) fn measure(
     let (server, client) = Connection::memory();
     let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
     let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    let uri = format!("file://{}", abs.display());
+    // A real `file:` URI, percent-encoded as editors send it: a path with a space or
+    // a bracket written raw is no URI, and the server would never answer for it.
+    let uri = url::Url::from_file_path(&abs)
+        .map(String::from)
+        .unwrap_or_else(|()| format!("file://{}", abs.display()));
     client.sender.send(Message::Request(Request::new(
         RequestId::from(1),
         String::from("initialize"),

@@ -266,7 +266,11 @@ fn scattered_scenes_are_valid_and_stable() {
         let src = scattered(n, seeds);
         assert_eq!(src, scattered(n, seeds), "deterministic");
         let a = driver::check(&src, None);
-        assert!(a.diagnostics.is_empty(), "scattered({n}, {seeds}): {:?}", a.diagnostics.first());
+        assert!(
+            a.diagnostics.is_empty(),
+            "scattered({n}, {seeds}): {:?}",
+            a.diagnostics.first()
+        );
         let shape = shape_named(&a, "cloud");
         if n >= 16 {
             let g = shape.group(shape.root()).expect("one group");

@@ -179,7 +179,7 @@ pub const SCATTERED: [(usize, usize); 3] = [(12, 0), (1200, 0), (4000, 200)];
 /// Sphere `i` of [`scattered`]: centre and radius, from a hash of `i` (SplitMix64),
 /// so the scene is the same on every machine and for every `n`.
 pub fn scattered_sphere(i: usize) -> ([f64; 3], f64) {
-    let mut state = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5CA7_7E2E_D5CE_4E5;
+    let mut state = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x05CA_77E2_ED5C_E4E5;
     let mut next = || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = state;
@@ -249,7 +249,8 @@ pub fn scattered(n: usize, seeds: usize) -> String {
             let ([x, y, z], r) = spheres[i];
             let t = [x, y + r, z];
             let clear = spheres.iter().enumerate().all(|(j, (c, rj))| {
-                let d = ((t[0] - c[0]).powi(2) + (t[1] - c[1]).powi(2) + (t[2] - c[2]).powi(2)).sqrt();
+                let d =
+                    ((t[0] - c[0]).powi(2) + (t[1] - c[1]).powi(2) + (t[2] - c[2]).powi(2)).sqrt();
                 j == i || d - rj > 1e-3
             });
             clear.then_some(t)

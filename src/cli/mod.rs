@@ -266,9 +266,11 @@ pub struct BenchArgs {
     #[arg(long, conflicts_with_all = ["scene", "shape"])]
     pub seed_sweep: bool,
     /// How cost grows with the scene: generated cities of 10 to 10,000 spheres, then
-    /// 1,200 spheres with 0 to 256 seeds; compile time, WGSL lines, pipeline and frame
-    /// time (default size 160x120) and the language server's latency of each, and up to
-    /// 1,200 spheres the same against the scene with its unions as code.
+    /// 1,200 spheres with 0 to 500 seeds, then scenes that are not cities (12 and 1,200
+    /// small spheres scattered through a cube, most rays missing, and 4,000 with 200
+    /// seeds); compile time, WGSL lines, pipeline and frame time (default size 160x120)
+    /// and the language server's latency of each, and up to 1,200 spheres of city the
+    /// same against the scene with its unions as code.
     #[arg(long, conflicts_with_all = ["scene", "shape", "seed_sweep"])]
     pub scale: bool,
     /// With --scale or --seed-sweep: also draw the chart, SVG or PNG by the extension,

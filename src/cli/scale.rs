@@ -233,9 +233,7 @@ fn measure(
                 "{}",
                 sdfc::diagnostic::render(&name, &source, &analysis.diagnostics, false)
             );
-            eprintln!(
-                "error: a generated scale scene has diagnostics (a bug in sdfc::bench)"
-            );
+            eprintln!("error: a generated scale scene has diagnostics (a bug in sdfc::bench)");
             return Err(ExitCode::from(super::exit::SCENE));
         }
         let module = driver::compile(&analysis, &options)

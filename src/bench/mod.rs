@@ -104,6 +104,27 @@ pub fn city_centre(i: usize, n: usize) -> [f64; 3] {
     [(i % side) as f64 - half, 0.0, (i / side) as f64 - half]
 }
 
+/// Unions of the named groups `g0`, `g1`, … ([`CITY_GROUP`] at a time), level by level
+/// (an expression nests at most 256 levels deep), written to `s`; the names of the
+/// last level, at most [`CITY_GROUP`] of them, for the final union.
+fn union_levels(s: &mut String, groups: usize) -> Vec<String> {
+    let mut names: Vec<String> = (0..groups).map(|g| format!("g{g}")).collect();
+    let mut level = 0;
+    while names.len() > CITY_GROUP {
+        level += 1;
+        names = names
+            .chunks(CITY_GROUP)
+            .enumerate()
+            .map(|(k, part)| {
+                let name = format!("u{level}_{k}");
+                let _ = writeln!(s, "let {name} = {};", part.join(" | "));
+                name
+            })
+            .collect();
+    }
+    names
+}
+
 /// The scale benchmark's scene (`sdfc bench --scale`, the 1,200-sphere scene
 /// generalised): `n` spheres of radius 0.4 in named unions of [`CITY_GROUP`], unions
 /// of those 20 at a time up to one union, a checker material; with `seeds` > 0, an atlas on the city with
@@ -125,22 +146,7 @@ pub fn city(n: usize, seeds: usize) -> String {
             .collect();
         let _ = writeln!(s, "let g{g} = {};", members.join(" | "));
     }
-    // Unions of the groups, 20 at a time, level by level (an expression nests at most
-    // 256 levels deep), down to the city.
-    let mut names: Vec<String> = (0..groups).map(|g| format!("g{g}")).collect();
-    let mut level = 0;
-    while names.len() > CITY_GROUP {
-        level += 1;
-        names = names
-            .chunks(CITY_GROUP)
-            .enumerate()
-            .map(|(k, part)| {
-                let name = format!("u{level}_{k}");
-                let _ = writeln!(s, "let {name} = {};", part.join(" | "));
-                name
-            })
-            .collect();
-    }
+    let names = union_levels(&mut s, groups);
     let _ = writeln!(s, "let city = {};\n", names.join(" | "));
     let seeds = seeds.min(n);
     let uv = if seeds > 0 {
@@ -221,56 +227,46 @@ pub fn scattered(n: usize, seeds: usize) -> String {
             let _ = writeln!(s, "    sphere({r}).translate([{x}, {y}, {z}]){sep}");
         }
     }
-    let mut names: Vec<String> = (0..groups).map(|g| format!("g{g}")).collect();
-    let mut level = 0;
-    while names.len() > CITY_GROUP {
-        level += 1;
-        names = names
-            .chunks(CITY_GROUP)
-            .enumerate()
-            .map(|(k, part)| {
-                let name = format!("u{level}_{k}");
-                let _ = writeln!(s, "let {name} = {};", part.join(" | "));
-                name
-            })
-            .collect();
-    }
+    let names = union_levels(&mut s, groups);
     let _ = writeln!(s, "let cloud = {};\n", names.join(" | "));
-    let seeds = seeds.min(n);
+    // An atlas holds at most MAX_SEEDS seeds (E0117), and each seed takes its own sphere.
+    let seeds = seeds.min(n).min(crate::sema::MAX_SEEDS);
     let uv = if seeds > 0 {
         let _ = writeln!(
             s,
             "atlas skin on cloud {{\n    steps = 6;\n    max_distance = 0.3;"
         );
         let spheres: Vec<([f64; 3], f64)> = (0..n).map(scattered_sphere).collect();
-        // The top of sphere i, when no other sphere comes within 1e-3 of it (so the
-        // seed lies on the union's surface).
         let top = |i: usize| {
             let ([x, y, z], r) = spheres[i];
-            let t = [x, y + r, z];
-            let clear = spheres.iter().enumerate().all(|(j, (c, rj))| {
-                let d =
-                    ((t[0] - c[0]).powi(2) + (t[1] - c[1]).powi(2) + (t[2] - c[2]).powi(2)).sqrt();
-                j == i || d - rj > 1e-3
-            });
-            clear.then_some(t)
+            [x, y + r, z]
         };
-        let mut i = 0;
+        // Whether no other sphere comes within 1e-3 of sphere i's top (so a seed there
+        // lies on the union's surface).
+        let clear: Vec<bool> = (0..n)
+            .map(|i| {
+                let t = top(i);
+                spheres.iter().enumerate().all(|(j, (c, rj))| {
+                    let d = ((t[0] - c[0]).powi(2) + (t[1] - c[1]).powi(2) + (t[2] - c[2]).powi(2))
+                        .sqrt();
+                    j == i || d - rj > 1e-3
+                })
+            })
+            .collect();
+        let mut used = vec![false; n];
+        let mut next = 0;
         for k in 0..seeds {
-            i = i.max(k * n / seeds);
-            // At most n tries: a scene with no clear top takes its sphere's top anyway.
-            let start = i;
-            let [x, y, z] = loop {
-                match top(i % n) {
-                    Some(t) => break t,
-                    None if i + 1 - start < n => i += 1,
-                    None => {
-                        let ([x, y, z], r) = spheres[start % n];
-                        break [x, y + r, z];
-                    }
-                }
-            };
-            i += 1;
+            // Spread over the spheres: the first unused clear top from every
+            // (n / seeds)-th sphere on, else any unused clear top, else any unused top.
+            let from = next.max(k * n / seeds);
+            let pick = (from..n)
+                .find(|&j| !used[j] && clear[j])
+                .or_else(|| (0..n).find(|&j| !used[j] && clear[j]))
+                .or_else(|| (0..n).find(|&j| !used[j]))
+                .expect("seeds ≤ n leaves an unused sphere");
+            used[pick] = true;
+            next = pick + 1;
+            let [x, y, z] = top(pick);
             let tangent = if k == 0 { " tangent [1, 0, 0]" } else { "" };
             let _ = writeln!(s, "    seed s{k} = [{x}, {y:.3}, {z}]{tangent};");
         }

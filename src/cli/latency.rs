@@ -91,14 +91,15 @@ pub(super) fn measure(
     edits: u32,
     kind: Edit,
 ) -> Result<(Latencies, usize), Error> {
-    let (server, client) = Connection::memory();
-    let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
-    let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    // A real `file:` URI, percent-encoded as editors send it: a path with a space or
-    // a bracket written raw is no URI, and the server would never answer for it.
+    // A real `file:` URI of an absolute path, percent-encoded as editors send it: a
+    // path with a space or a bracket written raw is no URI, and the server would never
+    // answer for it (the file need not exist: `--scale` measures generated text).
+    let abs = std::fs::canonicalize(path).or_else(|_| std::path::absolute(path))?;
     let uri = url::Url::from_file_path(&abs)
         .map(String::from)
-        .unwrap_or_else(|()| format!("file://{}", abs.display()));
+        .map_err(|()| format!("{} has no file: URI", abs.display()))?;
+    let (server, client) = Connection::memory();
+    let thread = std::thread::spawn(move || sdfc::lsp::serve(server).map_err(|e| e.to_string()));
     client.sender.send(Message::Request(Request::new(
         RequestId::from(1),
         String::from("initialize"),

@@ -127,14 +127,14 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
         print_row(&row);
         spread.push(row);
     }
-    let frame_of = |n: usize| {
-        spread
-            .iter()
-            .find(|r| r.primitives == n && r.seeds == 0)
-            .map(|r| ms(r.frame))
-    };
-    if let (Some(few), Some(many)) = (frame_of(12), frame_of(1200)) {
-        println!("  frame, 1,200 ÷ 12 scattered spheres: {:.1}x", many / few);
+    // The frame ratio of the first two scenes (few and many spheres, no seeds).
+    if let [few, many, ..] = &spread[..] {
+        println!(
+            "  frame, {} ÷ {} scattered spheres: {:.1}x",
+            many.primitives,
+            few.primitives,
+            ms(many.frame) / ms(few.frame)
+        );
     }
     // A chart that cannot be written does not lose the JSON: its error comes last.
     let plotted = match &args.plot {
@@ -147,29 +147,14 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
             "adapter": gpu.describe(),
             "size": [width, height],
             "scattered": spread.iter().map(row_json).collect::<Vec<_>>(),
-            "rows": rows.iter().map(|r| serde_json::json!({
-                "primitives": r.primitives,
-                "seeds": r.seeds,
-                "wgsl_lines": r.lines,
-                "compile_ms": ms(r.compile),
-                "pipeline_ms": ms(r.pipeline),
-                "frame_ms": ms(r.frame),
-                "lsp_front_p95_ms": ms(r.lsp_front_p95),
-                "lsp_p50_ms": ms(r.lsp_p50),
-                "lsp_p95_ms": ms(r.lsp_p95),
-                "as_code": r.as_code.map(|(lines, pipeline, frame)| serde_json::json!({
-                    "wgsl_lines": lines,
-                    "pipeline_ms": ms(pipeline),
-                    "frame_ms": ms(frame),
-                })),
-            })).collect::<Vec<_>>(),
+            "rows": rows.iter().map(row_json).collect::<Vec<_>>(),
         });
         super::report::write_json(path, &json)?;
     }
     plotted
 }
 
-/// A row's JSON (the scattered series; the cities' rows are written inline).
+/// A row's JSON, in both series (`as_code` is null where the baseline was not built).
 fn row_json(r: &Row) -> serde_json::Value {
     serde_json::json!({
         "primitives": r.primitives,
@@ -181,6 +166,11 @@ fn row_json(r: &Row) -> serde_json::Value {
         "lsp_front_p95_ms": ms(r.lsp_front_p95),
         "lsp_p50_ms": ms(r.lsp_p50),
         "lsp_p95_ms": ms(r.lsp_p95),
+        "as_code": r.as_code.map(|(lines, pipeline, frame)| serde_json::json!({
+            "wgsl_lines": lines,
+            "pipeline_ms": ms(pipeline),
+            "frame_ms": ms(frame),
+        })),
     })
 }
 
@@ -286,7 +276,11 @@ fn measure(
         None
     };
     // The language server on the same text, in process (`--lsp-latency`'s loop).
-    let file = std::env::temp_dir().join(format!("sdfc-scale-{name}.sdf"));
+    let stem = match kind {
+        Kind::City => "city",
+        Kind::Scattered => "scattered",
+    };
+    let file = std::env::temp_dir().join(format!("sdfc-scale-{stem}-{n}-{seeds}.sdf"));
     let (lsp, _) = super::latency::measure(
         &file,
         &source,

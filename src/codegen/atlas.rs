@@ -135,6 +135,7 @@ pub fn emit(
         ("reproject", p.reproject.to_string()),
         ("heuristic_tolerance", lit(p.heuristic_tolerance)),
         ("fd_gradient", lit(p.fd_gradient)),
+        ("fd_start", lit(p.fd_start())),
         ("fd_curvature", lit(p.fd_curvature)),
         ("fd_floor", lit(p.fd_floor)),
         ("theta0", lit(sharp_angle(p.sharp_tolerance))),

@@ -90,7 +90,22 @@ pub struct Params {
     pub fd_floor: f64,
 }
 
+/// How much narrower than a step's gradient difference the one at the walk's start is
+/// ([`Params::fd_start`]).
+pub const START_NARROWING: f64 = 4.0;
+
 impl Params {
+    /// The gradient's step at the walk's start, as a fraction of the first step's
+    /// length: [`Params::fd_gradient`] narrowed by [`START_NARROWING`]. The query point
+    /// may lie next to a crease that its walk never crosses (a face's point by the
+    /// face's edge, walking inwards); a difference as wide as a step's would straddle
+    /// that crease and tilt the start's normal into a false sharp feature. Narrower
+    /// still (the floor alone) and f32's rounding shows in the uv where the log map is
+    /// sensitive to the first direction (near a cylinder's cut locus).
+    pub fn fd_start(&self) -> f64 {
+        self.fd_gradient / START_NARROWING
+    }
+
     /// The same walk with the f64 reference's fine difference steps (far below what f32
     /// allows): the errors left are then the algorithm's own.
     pub fn reference(self) -> Params {
@@ -167,6 +182,7 @@ pub fn rotation_between(a: DVec3, b: DVec3) -> DMat3 {
 /// `fd_floor` of the magnitude of the coordinates (where rounding sets the limit).
 #[derive(Debug, Clone, Copy)]
 pub struct FdSteps {
+    start: f64,
     gradient: f64,
     curvature: f64,
     floor: f64,
@@ -176,6 +192,7 @@ impl FdSteps {
     /// The steps of a walk from `x` to seed `p` under `params`.
     pub fn new(params: &Params, p: DVec3, x: DVec3) -> FdSteps {
         FdSteps {
+            start: params.fd_start(),
             gradient: params.fd_gradient,
             curvature: params.fd_curvature,
             floor: params.fd_floor * (p.abs().max_element() + (x - p).length()),
@@ -184,6 +201,11 @@ impl FdSteps {
     /// The gradient's step for a step of length `s`.
     pub fn gradient(&self, s: f64) -> f64 {
         (self.gradient * s).max(self.floor)
+    }
+    /// The gradient's step at the walk's start, for a first step of length `s`
+    /// ([`Params::fd_start`]).
+    pub fn start(&self, s: f64) -> f64 {
+        (self.start * s).max(self.floor)
     }
     /// The second difference's step for a step of length `s`.
     pub fn curvature(&self, s: f64) -> f64 {

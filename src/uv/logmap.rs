@@ -134,8 +134,9 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
     let mut r = 0.0;
     let mut rot = DMat3::IDENTITY;
     let mut s = d0 / n_steps as f64;
-    // f at x: the walk keeps to its level set (the surface, for a point on it).
-    let (mut gi, level) = gradient_value(f, xi, fd.gradient(s));
+    // f at x: the walk keeps to its level set (the surface, for a point on it). The
+    // difference is narrower at x than along the walk (Params::fd_start).
+    let (mut gi, level) = gradient_value(f, xi, fd.start(s));
     let mut ni = gi.normalize_or_zero();
     // κ for the next step: Eq. 17 before the first step, then the normal's turn over
     // the step just taken (no evaluations: the gradients at its ends are known).
@@ -163,7 +164,11 @@ pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params)
         let kappa = match kappa_next {
             Some(k) => k,
             None => {
-                let k = normal_curvature(f, xi, vh, gi, fd.curvature(chord / remaining as f64));
+                // Centred a difference step ahead (taps x, x + h·v̂, x + 2h·v̂): the
+                // walk goes that way, and a tap behind x would cross a crease that x
+                // lies next to but the walk never meets.
+                let h = fd.curvature(chord / remaining as f64);
+                let k = normal_curvature(f, xi + vh * h, vh, gi, h);
                 rate_before = k.abs();
                 k
             }

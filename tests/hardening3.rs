@@ -244,6 +244,71 @@ fn seed_placement_ends_where_a_seed_cannot_be_prepared() {
 }
 
 #[test]
+fn seed_placement_refuses_options_that_mean_nothing() {
+    // A library caller could ask for a stretch of 1 or less (no map meets it, so every
+    // round added a seed up to the cap) or a NaN target; the CLI refused them, the
+    // library did not.
+    let src = "let b = box([1, 1, 1]); atlas a on b { } render b;";
+    let doc = sdfc::ide::Document::new(src, None);
+    let base = sdfc::uv::seeds::PlaceOptions::default();
+    let bad = [
+        (
+            "stretch target 1",
+            sdfc::uv::seeds::PlaceOptions {
+                max_stretch: Some(1.0),
+                ..base
+            },
+        ),
+        (
+            "stretch target NaN",
+            sdfc::uv::seeds::PlaceOptions {
+                max_stretch: Some(f64::NAN),
+                ..base
+            },
+        ),
+        (
+            "target coverage 0",
+            sdfc::uv::seeds::PlaceOptions {
+                target: 0.0,
+                ..base
+            },
+        ),
+        (
+            "target coverage 1.5",
+            sdfc::uv::seeds::PlaceOptions {
+                target: 1.5,
+                ..base
+            },
+        ),
+        (
+            "0 seeds",
+            sdfc::uv::seeds::PlaceOptions {
+                max_seeds: 0,
+                ..base
+            },
+        ),
+        (
+            "spacing -1",
+            sdfc::uv::seeds::PlaceOptions {
+                spacing: Some(-1.0),
+                ..base
+            },
+        ),
+    ];
+    for (what, options) in bad {
+        let e = sdfc::ide::seeds::place_edit(&doc, "a", options, 24)
+            .err()
+            .unwrap_or_else(|| panic!("{what}: placed"));
+        assert!(e.contains("is not"), "{what}: {e}");
+    }
+    let inf = sdfc::uv::seeds::PlaceOptions {
+        max_stretch: Some(f64::INFINITY),
+        ..base
+    };
+    assert!(sdfc::ide::seeds::place_edit(&doc, "a", inf, 24).is_ok());
+}
+
+#[test]
 fn seed_placement_under_mirror_never_places_a_seed_twice() {
     // Found by the mutations: on a shape that is not symmetric, a sample of the
     // mirrored side whose reflection is off the surface got a seed every round (80 of

@@ -217,9 +217,8 @@ fn keep_adds_seeds_to_the_gaps_and_leaves_the_seeds_there() {
     );
 }
 
-/// The stretch report: 1 for an isometry (a flat slab's top, one seed, but for a band
-/// along its rim), above 1 where the log map stretches (a sphere with one seed, far
-/// from it).
+/// The stretch report: 1 for an isometry (a flat slab's top, one seed, up to its
+/// rim), above 1 where the log map stretches (a sphere with one seed, far from it).
 #[test]
 fn stretch_is_one_on_a_plane_and_grows_on_a_sphere() {
     let measure = |src: &str| {
@@ -233,10 +232,10 @@ fn stretch_is_one_on_a_plane_and_grows_on_a_sphere() {
         "let slab = box([4, 0.5, 4]);\natlas a on slab { seed o = [0, 0.25, 0] tangent [1, 0, 0]; }\nrender slab;",
     );
     assert!(n > 100, "{n}");
-    // The mean is not 1: within about a walk step of the rim (2 % of the samples
-    // measured, which are drawn uniformly by area, so some lie 0.02 from the edge)
-    // Alg. 1's last step reaches past the edge and its uv is off (stretch up to 10).
-    assert!((p95 - 1.0).abs() < 1e-3 && mean < 1.1, "{mean} {p95}");
+    // The samples by the rim count too (drawn uniformly by area, some lie 0.02 from
+    // the edge): Eq. 17's first difference once reached back across the edge from a
+    // point beside it, and the uv there was off (stretch up to 10, a mean of 1.05).
+    assert!((p95 - 1.0).abs() < 1e-3 && mean < 1.001, "{mean} {p95}");
     let (mean, p95, _) = measure(
         "let ball = sphere(1);\natlas a on ball { max_distance = 3.2; seed o = [0, 0, 1]; }\nrender ball;",
     );

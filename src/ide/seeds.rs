@@ -224,8 +224,7 @@ pub fn offered(doc: &Document, range: Span) -> Vec<(String, bool)> {
 /// independent draw of the same density: placement covers its own samples by
 /// construction (on the robot, 99.91 % of its own samples against 99.4 % of a fresh
 /// draw). Placing again with the fresh draw added cost three times the time and
-/// gained little: what a fresh draw finds uncovered is mostly the band within the
-/// gradient's step of a crease, where Alg. 1's last normal straddles it.
+/// gained little.
 fn place_held_out(
     def: &crate::sema::AtlasDef,
     shape: &crate::ir::Shape,
@@ -251,6 +250,7 @@ pub fn place_edit(
     options: PlaceOptions,
     grid: usize,
 ) -> Result<(Placement, Edit), String> {
+    options.check()?;
     let def = doc
         .analysis
         .program

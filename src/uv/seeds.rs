@@ -106,6 +106,38 @@ impl Default for PlaceOptions {
     }
 }
 
+impl PlaceOptions {
+    /// Whether the options mean something: a target share in (0, 1], between 1 and
+    /// [`crate::sema::MAX_SEEDS`] seeds, a positive finite spacing, and a stretch target
+    /// above 1 (an isometry stretches by 1, so no placement meets a lower one; `inf` is
+    /// none). [`crate::ide::seeds::place_edit`] refuses options that fail this; [`place`]
+    /// takes them as given (a target it cannot meet places `max_seeds` seeds).
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.target > 0.0 && self.target <= 1.0) {
+            return Err(format!(
+                "the target coverage {} is not in (0, 1]",
+                self.target
+            ));
+        }
+        if !(1..=crate::sema::MAX_SEEDS).contains(&self.max_seeds) {
+            return Err(format!(
+                "{} seeds at most is not between 1 and {}",
+                self.max_seeds,
+                crate::sema::MAX_SEEDS
+            ));
+        }
+        if let Some(s) = self.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(format!("the spacing {s} is not a positive distance"));
+        }
+        if let Some(s) = self.max_stretch.filter(|s| !(*s > 1.0)) {
+            return Err(format!(
+                "the stretch target {s} is not above 1 (1 is an isometry; infinity turns it off)"
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The seeds and merges found, and how well they cover. With `keep`, the atlas's own
 /// seeds and merges come first ([`Placement::kept`]).
 #[derive(Debug, Clone, PartialEq)]

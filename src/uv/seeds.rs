@@ -15,7 +15,13 @@
 //! sample within the spacing. Farthest-point sampling spreads the
 //! seeds evenly, and because a walk stops at a sharp feature (the ε2 test), the
 //! samples behind one stay uncovered until a seed lands among them: every island the
-//! sharp features cut out gets its own seed, largest gaps first. A variational
+//! sharp features cut out gets its own seed, largest gaps first. A sample picked on a
+//! curve (a fillet) first tries seeds on the flat faces beside it instead (`SNAP`): the
+//! nearest flat sample, and the nearest on a face across the curve, kept where their
+//! walks cover the picked sample. Each face's edge is then nearer a seed of its own
+//! face than one across the fillet, and walks there stay flat; a seed on the fillet
+//! would be their nearest, and Alg. 1's walk over a fillet crossed at a slant stretches
+//! its map. A variational
 //! (Lloyd-like) relaxation would need the walk distances from every sample to every
 //! candidate, which costs far more walks for a modest saving in seeds.
 //!
@@ -174,6 +180,17 @@ const COVER_SLACK: f64 = 2.0;
 /// and Alg. 2 gives each point its nearest seed, good map or not.
 const FLATNESS: i32 = 20;
 
+/// A curved sample picked for a seed first tries the nearest flat sample (smooth ≥
+/// `FLAT_COS`) within SNAP · spacing instead, kept where that seed's walk covers the
+/// picked sample: a fillet is then covered by seeds on the faces beside it, and a face's
+/// edge is served by its own face's seed over a flat walk, where a seed on the fillet
+/// would be its nearest and stretch it (Alg. 1's walk over a fillet crossed at a slant).
+/// Where the flat seed does not cover the sample, the sample is picked again as it is.
+const SNAP: f64 = 0.1;
+
+/// The smoothness of a flat sample for [`SNAP`] (its neighbours' normals within 0.8°).
+const FLAT_COS: f64 = 0.9999;
+
 /// Seeds closer than this, relative to the shape's size, count as one point (the
 /// atlas's W0004 limit is 1e-3).
 const COINCIDENT: f64 = 2e-3;
@@ -273,6 +290,8 @@ pub fn place(
     // Per sample, the walk distance within which a seed covers it: the spacing, less
     // where the placed atlas stretched too much there.
     let mut limit = vec![spacing; samples.len()];
+    // Curved samples whose flat neighbour was tried for them (SNAP).
+    let mut snapped = vec![false; samples.len()];
     let mut stretch_rounds = 0;
     loop {
         fn covered(
@@ -318,6 +337,47 @@ pub fn place(
             // shell, two draws at one point) would make coincident seeds (W0004).
             if d < COINCIDENT * scale {
                 continue;
+            }
+            if !snapped[k] && samples[k].smooth < FLAT_COS {
+                snapped[k] = true;
+                let first =
+                    nearest_flat(samples, k, SNAP * spacing, &rejected, &seeds, scale, None);
+                if let Some(j) = first {
+                    add_seed(
+                        (def, shape, samples),
+                        j,
+                        (spacing, options.max_stretch),
+                        &mut seeds,
+                        &mut best,
+                        &mut covered_by_alg2,
+                    );
+                    // And on the face across the curve: each face's edge then has a
+                    // seed of its own face nearer than the other's.
+                    let n = samples[j].n;
+                    let across = nearest_flat(
+                        samples,
+                        k,
+                        SNAP * spacing,
+                        &rejected,
+                        &seeds,
+                        scale,
+                        Some(n),
+                    );
+                    if let Some(j) = across.filter(|_| seeds.len() < options.max_seeds) {
+                        add_seed(
+                            (def, shape, samples),
+                            j,
+                            (spacing, options.max_stretch),
+                            &mut seeds,
+                            &mut best,
+                            &mut covered_by_alg2,
+                        );
+                    }
+                    if !covered(k, &best, &covered_by_alg2, &limit) {
+                        rejected[k] = false;
+                    }
+                    continue;
+                }
             }
             // Where the seed cannot be prepared (its projection does not converge, as
             // at a pyramid's apex), none is added; that sample is never picked again.
@@ -522,6 +582,34 @@ fn own_seeds(
         cover(&atlas, i, samples, reach, best, &mut None);
     }
     (seeds, def.merges.iter().map(|m| (m.a, m.b)).collect())
+}
+
+/// The flat sample (smooth ≥ [`FLAT_COS`]) nearest to sample `k` within `radius`, not
+/// retired and not on an existing seed; with `other`, on a face whose normal is not
+/// `other`'s.
+#[allow(clippy::too_many_arguments)]
+fn nearest_flat(
+    samples: &[SurfaceSample],
+    k: usize,
+    radius: f64,
+    rejected: &[bool],
+    seeds: &[(DVec3, Option<DVec3>)],
+    scale: f64,
+    other: Option<DVec3>,
+) -> Option<usize> {
+    let p = samples[k].p;
+    (0..samples.len())
+        .filter(|&j| j != k && !rejected[j] && samples[j].smooth >= FLAT_COS)
+        .filter(|&j| other.is_none_or(|n| samples[j].n.dot(n) < FLAT_COS))
+        .map(|j| ((samples[j].p - p).length(), j))
+        .filter(|&(d, _)| d <= radius)
+        .filter(|&(_, j)| {
+            seeds
+                .iter()
+                .all(|(q, _)| (samples[j].p - *q).length() >= COINCIDENT * scale)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+        .map(|(_, j)| j)
 }
 
 /// Among `candidates`, the next seed's sample: the eligible one farthest from every

@@ -701,3 +701,51 @@ fn node_bounds_leave_the_gpu_field_unchanged() {
     // The points test skipping, not only evaluation.
     assert!(skipped > 1000, "{skipped}");
 }
+
+/// `render --walk auto` (the default) takes the adapter's best walk: a loop on a
+/// software adapter (lavapipe, llvmpipe), the unrolled walk on a GPU. The loop and the
+/// unrolled walk give the same picture to a few levels; `auto` gives exactly the form
+/// it names.
+#[test]
+fn render_walk_auto_takes_the_adapters_walk() {
+    let Some(gpu) = gpu_for_tests() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.sdf");
+    std::fs::write(
+        &scene,
+        "let b = sphere(0.8);\natlas a on b { steps = 8; seed s = [0, 0, 0.8]; }\nmaterial m { color = [0.2, 0.2, 0.2] + checker(a.uv, 4) * 0.6; }\nrender b.paint(m);\n",
+    )
+    .unwrap();
+    let render = |walk: &str| {
+        let out = dir.path().join(format!("{walk}.png"));
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
+            .args(["render", "--size", "48x36", "--timings", "-o"])
+            .arg(&out)
+            .args(if walk == "default" {
+                vec![]
+            } else {
+                vec!["--walk", walk]
+            })
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "{err}");
+        (std::fs::read(out).unwrap(), err)
+    };
+    let expected = if gpu.is_software() {
+        "loop"
+    } else {
+        "unrolled"
+    };
+    assert_eq!(format!("{}", gpu.preferred_walk()), expected);
+    let (auto, err) = render("default");
+    assert!(err.contains(&format!("; {expected} walk)")), "{err}");
+    let (named, err) = render(expected);
+    assert!(err.contains(&format!("; {expected} walk)")), "{err}");
+    assert_eq!(auto, named, "auto and --walk {expected} differ");
+    let (_, err) = render("unrolled");
+    assert!(err.contains("; unrolled walk)"), "{err}");
+}

@@ -340,9 +340,10 @@ pub struct RenderArgs {
     /// The graphics API.
     #[arg(long, value_parser = choice::<sdfc::gpu::Backend>(), default_value = "auto")]
     pub backend: sdfc::gpu::Backend,
-    /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop.
-    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
-    pub walk: sdfc::codegen::WalkForm,
+    /// How the geodesic walk is emitted: unrolled to exactly N steps, or a loop; `auto`
+    /// takes the adapter's best (unrolled on a GPU, a loop on a software adapter).
+    #[arg(long, value_parser = choice::<sdfc::gpu::WalkChoice>(), default_value = "auto")]
+    pub walk: sdfc::gpu::WalkChoice,
     /// Prune each walk's field to the union operands within its reach (exact; off by
     /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]

@@ -62,8 +62,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
         return ExitCode::from(super::exit::USAGE);
     }
     let compile_start = Instant::now();
-    let options = sdfc::codegen::Options {
-        walk: args.walk,
+    let mut options = sdfc::codegen::Options {
+        walk: args.walk.first(),
         seed_grid: args.seed_grid,
         atlas: args.atlas.clone(),
         plain: false,
@@ -74,13 +74,12 @@ pub fn run(args: RenderArgs) -> ExitCode {
         seed_data: args.seed_data,
         bounds: args.bounds,
     };
-    let (_, analysis, compiled) = match compile::build(&args.scene, args.shape.as_deref(), &options)
-    {
-        Ok(x) => x,
-        Err(code) => return code,
-    };
-    let module = &compiled.module;
-    let compile_time = compile_start.elapsed();
+    let (source, analysis, mut compiled) =
+        match compile::build(&args.scene, args.shape.as_deref(), &options) {
+            Ok(x) => x,
+            Err(code) => return code,
+        };
+    let mut compile_time = compile_start.elapsed();
     let mut view = match super::view_for(&analysis, args.shape.as_deref()) {
         Ok(v) => v,
         Err(code) => return code,
@@ -94,6 +93,21 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(g) => g,
         Err(code) => return code,
     };
+    // `--walk auto` on a software adapter: the checked scene generated again with the
+    // loop walk (code generation only), where it has an atlas to walk.
+    if args.walk == sdfc::gpu::WalkChoice::Auto
+        && gpu.preferred_walk() != options.walk
+        && !analysis.program.atlases.is_empty()
+    {
+        let again = Instant::now();
+        options.walk = gpu.preferred_walk();
+        compiled = match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &options) {
+            Ok(c) => c,
+            Err(e) => return compile::report(&args.scene.display().to_string(), &source, e),
+        };
+        compile_time += again.elapsed();
+    }
+    let module = &compiled.module;
     if let Some(seconds) = args.animate {
         if !args.aov.is_empty() || args.timings {
             eprintln!("error: --animate writes colour frames only (no --aov, no --timings)");
@@ -116,9 +130,10 @@ pub fn run(args: RenderArgs) -> ExitCode {
     };
     let timings = args.timings.then(|| {
         let mut t = format!(
-            "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL)\n",
+            "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL; {} walk)\n",
             gpu.describe(),
-            compile_time.as_secs_f64() * 1e3
+            compile_time.as_secs_f64() * 1e3,
+            options.walk
         );
         if args.view == ViewMode::Evals {
             let (mean, p95, max) = gpu::eval_stats(&frame);

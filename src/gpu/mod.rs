@@ -232,11 +232,48 @@ impl Gpu {
     }
 
     /// A one-line description of the adapter.
+    /// Whether the adapter runs on the CPU (lavapipe, llvmpipe, SwiftShader, WARP).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The walk form that serves this adapter best, for `--walk auto`: the unrolled walk
+    /// (the design's) on a GPU; a loop on a software adapter, where the unrolled form
+    /// measured 2–4× slower a textured frame and 4–11× slower to build its pipeline
+    /// (docs/performance.md, "The walk's form").
+    pub fn preferred_walk(&self) -> crate::codegen::WalkForm {
+        if self.is_software() {
+            crate::codegen::WalkForm::Loop
+        } else {
+            crate::codegen::WalkForm::Unrolled
+        }
+    }
+
     pub fn describe(&self) -> String {
         format!(
             "{} ({:?}, {:?})",
             self.info.name, self.info.backend, self.info.device_type
         )
+    }
+}
+
+crate::choice::choice_enum! {
+/// `render --walk`: a walk form, or the adapter's best ([`Gpu::preferred_walk`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WalkChoice {
+    Auto = "auto": "Unrolled on a GPU, a loop on a software adapter (lavapipe, llvmpipe, SwiftShader, WARP), where the unrolled walk is 2-4x slower a frame and 4-11x slower to build.",
+    Unrolled = "unrolled": "N calls of the step, each with its constant N - i.",
+    Loop = "loop": "A loop of N iterations.",
+}
+}
+
+impl WalkChoice {
+    /// The form to compile before the adapter is known (`auto`: the design's, unrolled).
+    pub fn first(self) -> crate::codegen::WalkForm {
+        match self {
+            WalkChoice::Loop => crate::codegen::WalkForm::Loop,
+            WalkChoice::Auto | WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
+        }
     }
 }
 

@@ -72,6 +72,13 @@ use crate::sema::{AtlasDef, MergeDef, SeedDef};
 use glam::DVec3;
 use rayon::prelude::*;
 
+mod pick;
+mod stretch;
+
+use pick::{farthest, snap};
+pub use stretch::{local_stretch, stretch};
+use stretch::{stretch_of, tighten};
+
 /// A surface sample: position, unit normal, area weight, and how smooth the surface
 /// is around it: the smallest cosine between its normal and the normals a short way
 /// off in the tangent plane (1 on a flat face, low near a crease).
@@ -294,14 +301,6 @@ pub fn place(
     let mut snapped = vec![false; samples.len()];
     let mut stretch_rounds = 0;
     loop {
-        fn covered(
-            k: usize,
-            best: &[[(f64, usize); 2]],
-            alg2: &Option<Vec<bool>>,
-            limit: &[f64],
-        ) -> bool {
-            best[k][0].0 <= limit[k] && alg2.as_ref().is_none_or(|c| c[k])
-        }
         let share = |best: &[[(f64, usize); 2]], alg2: &Option<Vec<bool>>| {
             (0..samples.len())
                 .filter(|&k| covered(k, best, alg2, &limit))
@@ -338,46 +337,13 @@ pub fn place(
             if d < COINCIDENT * scale {
                 continue;
             }
-            if !snapped[k] && samples[k].smooth < FLAT_COS {
-                snapped[k] = true;
-                let first =
-                    nearest_flat(samples, k, SNAP * spacing, &rejected, &seeds, scale, None);
-                if let Some(j) = first {
-                    add_seed(
-                        (def, shape, samples),
-                        j,
-                        (spacing, options.max_stretch),
-                        &mut seeds,
-                        &mut best,
-                        &mut covered_by_alg2,
-                    );
-                    // And on the face across the curve: each face's edge then has a
-                    // seed of its own face nearer than the other's.
-                    let n = samples[j].n;
-                    let across = nearest_flat(
-                        samples,
-                        k,
-                        SNAP * spacing,
-                        &rejected,
-                        &seeds,
-                        scale,
-                        Some(n),
-                    );
-                    if let Some(j) = across.filter(|_| seeds.len() < options.max_seeds) {
-                        add_seed(
-                            (def, shape, samples),
-                            j,
-                            (spacing, options.max_stretch),
-                            &mut seeds,
-                            &mut best,
-                            &mut covered_by_alg2,
-                        );
-                    }
-                    if !covered(k, &best, &covered_by_alg2, &limit) {
-                        rejected[k] = false;
-                    }
-                    continue;
-                }
+            let state = (&mut seeds, &mut best[..], &mut covered_by_alg2);
+            let limits = ((spacing, options.max_stretch), options.max_seeds);
+            let picked = (&rejected[..], &mut snapped[..]);
+            if snap((def, shape, samples), k, limits, picked, state) {
+                // Picked again as it is where the flat seeds do not cover it.
+                rejected[k] = covered(k, &best, &covered_by_alg2, &limit);
+                continue;
             }
             // Where the seed cannot be prepared (its projection does not converge, as
             // at a pyramid's apex), none is added; that sample is never picked again.
@@ -422,62 +388,45 @@ pub fn place(
             stretch_rounds += 1;
         }
         if !more && !tightened {
-            return Placement {
+            return finish(
                 kept,
-                seeds: placed,
-                merges,
+                (placed, merges),
                 coverage,
-                failing: (0..samples.len())
-                    .filter(|&k| !ok[k])
-                    .map(|k| (samples[k].p, statuses[k]))
-                    .collect(),
-                eligible: eligible.iter().filter(|&&e| e).count(),
-            };
+                (samples, &statuses),
+                &eligible,
+            );
         }
         covered_by_alg2 = Some(ok);
     }
 }
 
-/// While the 95th percentile of `atlas`'s local stretch ([`local_stretch`]) over the
-/// samples exceeds `target`: at every sample that stretches more than `target`, the
-/// walk distance within which a seed covers it shrinks toward what the target allows
-/// (on a surface of curvature K a log map stretches by about 1 + K r²/6 at distance r,
-/// so the reach scales by √((target − 1)/(stretch − 1)), kept within 0.6 and 0.85 a
-/// round). Returns whether any sample's reach shrank.
-fn tighten(
-    atlas: &Atlas,
-    samples: &[SurfaceSample],
-    best: &[[(f64, usize); 2]],
-    target: f64,
-    limit: &mut [f64],
-) -> bool {
-    let stretch: Vec<Option<f64>> = samples
-        .par_iter()
-        .map(|s| local_stretch(atlas, s))
-        .collect();
-    let mut measured: Vec<f64> = stretch.iter().flatten().copied().collect();
-    if measured.is_empty() {
-        return false;
+/// The placement at the end: what was placed, the coverage, the samples where Alg. 2
+/// fails with their status, and how many samples could take a seed.
+#[allow(clippy::type_complexity)]
+fn finish(
+    kept: (usize, usize),
+    (seeds, merges): (Vec<(DVec3, Option<DVec3>)>, Vec<(usize, usize)>),
+    coverage: f64,
+    (samples, statuses): (&[SurfaceSample], &[Status]),
+    eligible: &[bool],
+) -> Placement {
+    Placement {
+        kept,
+        seeds,
+        merges,
+        coverage,
+        failing: (0..samples.len())
+            .filter(|&k| statuses[k] != Status::Ok)
+            .map(|k| (samples[k].p, statuses[k]))
+            .collect(),
+        eligible: eligible.iter().filter(|&&e| e).count(),
     }
-    measured.sort_by(f64::total_cmp);
-    if measured[((measured.len() as f64 * 0.95) as usize).min(measured.len() - 1)] <= target {
-        return false;
-    }
-    let mut any = false;
-    for (k, s) in stretch.iter().enumerate() {
-        let Some(s) = *s else { continue };
-        let d = best[k][0].0;
-        if s <= target || !d.is_finite() || d <= 0.0 {
-            continue;
-        }
-        let shrink = ((target - 1.0) / (s - 1.0)).sqrt().clamp(0.6, 0.85);
-        let reach = (d * shrink).min(limit[k]);
-        if reach < limit[k] {
-            limit[k] = reach;
-            any = true;
-        }
-    }
-    any
+}
+
+/// Whether sample `k` is covered: a seed's walk reaches it within its reach `limit`,
+/// and Alg. 2 succeeds there at the last check (`alg2`, none before the first).
+fn covered(k: usize, best: &[[(f64, usize); 2]], alg2: &Option<Vec<bool>>, limit: &[f64]) -> bool {
+    best[k][0].0 <= limit[k] && alg2.as_ref().is_none_or(|c| c[k])
 }
 
 /// The area share of `samples` where the placed atlas's Alg. 2 succeeds, and the
@@ -582,65 +531,6 @@ fn own_seeds(
         cover(&atlas, i, samples, reach, best, &mut None);
     }
     (seeds, def.merges.iter().map(|m| (m.a, m.b)).collect())
-}
-
-/// The flat sample (smooth ≥ [`FLAT_COS`]) nearest to sample `k` within `radius`, not
-/// retired and not on an existing seed; with `other`, on a face whose normal is not
-/// `other`'s.
-#[allow(clippy::too_many_arguments)]
-fn nearest_flat(
-    samples: &[SurfaceSample],
-    k: usize,
-    radius: f64,
-    rejected: &[bool],
-    seeds: &[(DVec3, Option<DVec3>)],
-    scale: f64,
-    other: Option<DVec3>,
-) -> Option<usize> {
-    let p = samples[k].p;
-    (0..samples.len())
-        .filter(|&j| j != k && !rejected[j] && samples[j].smooth >= FLAT_COS)
-        .filter(|&j| other.is_none_or(|n| samples[j].n.dot(n) < FLAT_COS))
-        .map(|j| ((samples[j].p - p).length(), j))
-        .filter(|&(d, _)| d <= radius)
-        .filter(|&(_, j)| {
-            seeds
-                .iter()
-                .all(|(q, _)| (samples[j].p - *q).length() >= COINCIDENT * scale)
-        })
-        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-        .map(|(_, j)| j)
-}
-
-/// Among `candidates`, the next seed's sample: the eligible one farthest from every
-/// seed (Euclidean), with the distance counting less where the surface curves (see
-/// [`FLATNESS`]: seeds go to flat faces before fillets); on an island with no eligible
-/// sample, the smoothest. Ties go to the lower index. Returns (distance, sample).
-fn farthest(
-    samples: &[SurfaceSample],
-    seeds: &[(DVec3, Option<DVec3>)],
-    eligible: &[bool],
-    candidates: impl Iterator<Item = usize>,
-) -> Option<(f64, usize)> {
-    candidates
-        .map(|k| {
-            let d = seeds
-                .iter()
-                .map(|(p, _)| (samples[k].p - *p).length())
-                .fold(f64::INFINITY, f64::min);
-            let key = if eligible[k] {
-                d * samples[k].smooth.max(0.0).powi(FLATNESS)
-            } else {
-                samples[k].smooth
-            };
-            (eligible[k], key, k, d)
-        })
-        .max_by(|a, b| {
-            (a.0.cmp(&b.0))
-                .then(a.1.total_cmp(&b.1))
-                .then(b.2.cmp(&a.2))
-        })
-        .map(|(_, _, k, d)| (d, k))
 }
 
 /// Walks from seed `i` of `atlas` to every sample within `reach` (the spacing: a walk
@@ -838,58 +728,4 @@ fn merge_forest(
         }
     }
     (placed, merges)
-}
-
-/// The local stretch of an atlas's uv over surface samples, as `--view distortion`
-/// measures it: the uv Jacobian from two tangent offsets of 1e-3 of the shape's size,
-/// its singular values s1 ≥ s2, and the stretch max(s1, 1/s2) (1 for an isometry).
-/// Samples whose three Alg. 2 queries do not all succeed with the same seed (edges of
-/// charts, frontiers), or whose offsets leave the surface (within a step of a crease),
-/// are left out. Returns (mean, 95th percentile, samples measured).
-pub fn stretch(atlas: &Atlas, samples: &[SurfaceSample]) -> (f64, f64, usize) {
-    let mut values: Vec<f64> = samples
-        .par_iter()
-        .filter_map(|s| local_stretch(atlas, s))
-        .collect();
-    if values.is_empty() {
-        return (f64::NAN, f64::NAN, 0);
-    }
-    values.sort_by(f64::total_cmp);
-    let mean = values.iter().sum::<f64>() / values.len() as f64;
-    let p95 = values[((values.len() as f64 * 0.95) as usize).min(values.len() - 1)];
-    (mean, p95, values.len())
-}
-
-/// The local stretch at one sample (see [`stretch`]); `None` where it is not measured.
-pub fn local_stretch(atlas: &Atlas, s: &SurfaceSample) -> Option<f64> {
-    let h = 1e-3 * super::atlas::scale(&atlas.shape);
-    let (t1, t2) = (tangent(s.n), s.n.cross(tangent(s.n)));
-    // Both offsets stay on the surface (within a twentieth of the step): within a step
-    // of a crease one lies off it, Alg. 2 sees its projection, and the Jacobian would
-    // measure the crease rather than the map.
-    let off = |x: DVec3| crate::ir::eval::distance(atlas.field(), x).abs() > 0.05 * h;
-    if off(s.p + t1 * h) || off(s.p + t2 * h) {
-        return None;
-    }
-    let a = atlas.sample(s.p);
-    let b = atlas.sample(s.p + t1 * h);
-    let c = atlas.sample(s.p + t2 * h);
-    let ok = [&a, &b, &c]
-        .iter()
-        .all(|x| x.status == Status::Ok && x.seed == a.seed);
-    if !ok {
-        return None;
-    }
-    Some(stretch_of((b.uv - a.uv) / h, (c.uv - a.uv) / h))
-}
-
-/// max(s1, 1/s2) of the 2 × 2 Jacobian with columns `ju` and `jv` (singular values
-/// s1 ≥ s2).
-fn stretch_of(ju: glam::DVec2, jv: glam::DVec2) -> f64 {
-    let ss = ju.length_squared() + jv.length_squared();
-    let det = (ju.x * jv.y - ju.y * jv.x).abs();
-    let root = (ss * ss - 4.0 * det * det).max(0.0).sqrt();
-    let s1 = (0.5 * (ss + root)).sqrt();
-    let s2 = (0.5 * (ss - root)).max(1e-24).sqrt();
-    s1.max(1.0 / s2)
 }

@@ -298,9 +298,10 @@ pub struct BenchArgs {
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
     pub edits: u32,
-    /// The walk form of the sweep (the scene benchmark measures both).
-    #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "unrolled")]
-    pub walk: sdfc::codegen::WalkForm,
+    /// The walk form of the sweep, `auto` the adapter's best as for `render` (the scene
+    /// benchmark measures both).
+    #[arg(long, value_parser = choice::<sdfc::gpu::WalkChoice>(), default_value = "auto")]
+    pub walk: sdfc::gpu::WalkChoice,
     /// Frames per measurement (the median is reported).
     #[arg(long, default_value = "5")]
     pub frames: u32,

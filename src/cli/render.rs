@@ -95,12 +95,9 @@ pub fn run(args: RenderArgs) -> ExitCode {
     };
     // `--walk auto` on a software adapter: the checked scene generated again with the
     // loop walk (code generation only), where it has an atlas to walk.
-    if args.walk == sdfc::gpu::WalkChoice::Auto
-        && gpu.preferred_walk() != options.walk
-        && !analysis.program.atlases.is_empty()
-    {
+    if args.walk.on(&gpu) != options.walk && !analysis.program.atlases.is_empty() {
         let again = Instant::now();
-        options.walk = gpu.preferred_walk();
+        options.walk = args.walk.on(&gpu);
         compiled = match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &options) {
             Ok(c) => c,
             Err(e) => return compile::report(&args.scene.display().to_string(), &source, e),

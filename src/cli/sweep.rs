@@ -137,7 +137,8 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
     println!("adapter:   {}", gpu.describe());
     println!(
         "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}",
-        bench.frames, args.walk
+        bench.frames,
+        args.walk.on(&gpu)
     );
     let (rows, baselines) = measure_rows(&bench, args)?;
     println!();
@@ -173,7 +174,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
             "adapter": gpu.describe(),
             "size": [width, height],
             "frames": bench.frames,
-            "walk": format!("{:?}", args.walk),
+            "walk": format!("{:?}", args.walk.on(&gpu)),
             "constant_uv_ms": ms(constant),
             "plain_ms": ms(plain),
             "rows": rows.iter().map(|r| serde_json::json!({
@@ -215,7 +216,7 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Baselines)
                 let source = plate(seeds, steps, merged);
                 for grid in [false, true] {
                     let options = Options {
-                        walk: args.walk,
+                        walk: args.walk.on(bench.gpu),
                         seed_grid: if grid {
                             SeedGridChoice::On
                         } else {

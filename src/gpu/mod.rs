@@ -268,6 +268,14 @@ pub enum WalkChoice {
 }
 
 impl WalkChoice {
+    /// The form on `gpu`: its [`Gpu::preferred_walk`] for `auto`.
+    pub fn on(self, gpu: &Gpu) -> crate::codegen::WalkForm {
+        match self {
+            WalkChoice::Auto => gpu.preferred_walk(),
+            other => other.first(),
+        }
+    }
+
     /// The form to compile before the adapter is known (`auto`: the design's, unrolled).
     pub fn first(self) -> crate::codegen::WalkForm {
         match self {

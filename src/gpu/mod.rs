@@ -231,7 +231,6 @@ impl Gpu {
         Ok(bytes)
     }
 
-    /// A one-line description of the adapter.
     /// Whether the adapter runs on the CPU (lavapipe, llvmpipe, SwiftShader, WARP).
     pub fn is_software(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu
@@ -240,7 +239,7 @@ impl Gpu {
     /// The walk form that serves this adapter best, for `--walk auto`: the unrolled walk
     /// (the design's) on a GPU; a loop on a software adapter, where the unrolled form
     /// measured 2–4× slower a textured frame and 4–11× slower to build its pipeline
-    /// (docs/performance.md, "The walk's form").
+    /// (docs/performance.md, "What each lever gave": the walk form).
     pub fn preferred_walk(&self) -> crate::codegen::WalkForm {
         if self.is_software() {
             crate::codegen::WalkForm::Loop
@@ -249,6 +248,7 @@ impl Gpu {
         }
     }
 
+    /// A one-line description of the adapter.
     pub fn describe(&self) -> String {
         format!(
             "{} ({:?}, {:?})",

@@ -93,15 +93,27 @@ pub fn run(args: RenderArgs) -> ExitCode {
         Ok(g) => g,
         Err(code) => return code,
     };
-    // `--walk auto` on a software adapter: the checked scene generated again with the
-    // loop walk (code generation only), where it has an atlas to walk.
-    if args.walk.on(&gpu) != options.walk && !analysis.program.atlases.is_empty() {
+    // `--walk auto` on a GPU: the checked scene generated again with the unrolled walk
+    // (code generation and naga's validation, no parse or atlas preparation), where it
+    // has an atlas to walk; the loop stays where the unrolled module is too large.
+    let walks = !analysis.program.atlases.is_empty();
+    if walks && args.walk.on(&gpu) != options.walk {
         let again = Instant::now();
-        options.walk = args.walk.on(&gpu);
-        compiled = match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &options) {
-            Ok(c) => c,
-            Err(e) => return compile::report(&args.scene.display().to_string(), &source, e),
+        let unrolled = sdfc::codegen::Options {
+            walk: args.walk.on(&gpu),
+            ..options.clone()
         };
+        match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &unrolled) {
+            Ok(c) => (compiled, options) = (c, unrolled),
+            Err(sdfc::driver::CompileError::Scene(d))
+                if d.iter().all(|d| d.code == sdfc::codes::E_INLINED_SIZE) =>
+            {
+                eprintln!(
+                    "note: the unrolled walk is too large here (E0118); the loop walk is used"
+                );
+            }
+            Err(e) => return compile::report(&args.scene.display().to_string(), &source, e),
+        }
         compile_time += again.elapsed();
     }
     let module = &compiled.module;
@@ -127,10 +139,14 @@ pub fn run(args: RenderArgs) -> ExitCode {
     };
     let timings = args.timings.then(|| {
         let mut t = format!(
-            "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL; {} walk)\n",
+            "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL{})\n",
             gpu.describe(),
             compile_time.as_secs_f64() * 1e3,
-            options.walk
+            if walks {
+                format!("; {} walk", options.walk)
+            } else {
+                String::new()
+            }
         );
         if args.view == ViewMode::Evals {
             let (mean, p95, max) = gpu::eval_stats(&frame);

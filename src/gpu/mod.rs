@@ -238,7 +238,7 @@ impl Gpu {
 
     /// The walk form that serves this adapter best, for `--walk auto`: the unrolled walk
     /// (the design's) on a GPU; a loop on a software adapter, where the unrolled form
-    /// measured 2–4× slower a textured frame and 4–11× slower to build its pipeline
+    /// measured 1.6–3.7× slower a frame and 2–12× slower to build its pipeline
     /// (docs/performance.md, "What each lever gave": the walk form).
     pub fn preferred_walk(&self) -> crate::codegen::WalkForm {
         if self.is_software() {
@@ -261,8 +261,8 @@ crate::choice::choice_enum! {
 /// `render --walk`: a walk form, or the adapter's best ([`Gpu::preferred_walk`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WalkChoice {
-    Auto = "auto": "Unrolled on a GPU, a loop on a software adapter (lavapipe, llvmpipe, SwiftShader, WARP), where the unrolled walk is 2-4x slower a frame and 4-11x slower to build.",
-    Unrolled = "unrolled": "N calls of the step, each with its constant N - i.",
+    Auto = "auto": "Unrolled on a GPU (the loop where the unrolled module is too large, E0118), a loop on a software adapter (lavapipe, llvmpipe, SwiftShader, WARP), where the unrolled walk is 1.6-3.7x slower a frame and 2-12x slower to build.",
+    Unrolled = "unrolled": "N calls of the step, each with its constant N − i.",
     Loop = "loop": "A loop of N iterations.",
 }
 }
@@ -276,11 +276,13 @@ impl WalkChoice {
         }
     }
 
-    /// The form to compile before the adapter is known (`auto`: the design's, unrolled).
+    /// The form to compile before the adapter is known (`auto`: the loop, the smaller
+    /// module, so that every error of the scene is reported before the adapter opens;
+    /// a GPU then generates the unrolled walk again).
     pub fn first(self) -> crate::codegen::WalkForm {
         match self {
-            WalkChoice::Loop => crate::codegen::WalkForm::Loop,
-            WalkChoice::Auto | WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
+            WalkChoice::Loop | WalkChoice::Auto => crate::codegen::WalkForm::Loop,
+            WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
         }
     }
 }

@@ -85,7 +85,8 @@ pub struct Params {
     /// The walk's step for the second directional difference (Eq. 17), as a fraction of
     /// the step length.
     pub fd_curvature: f64,
-    /// The floor of both, as a fraction of |p|∞ + |x − p| (the coordinates' magnitude,
+    /// The floor of these and of the start's gradient step ([`Params::fd_start`]), as a
+    /// fraction of |p|∞ + |x − p| (the coordinates' magnitude,
     /// which sets the rounding error).
     pub fd_floor: f64,
 }

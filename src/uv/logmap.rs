@@ -106,7 +106,11 @@ pub fn turn_curvature(n_next: DVec3, vh: DVec3, arc: f64) -> f64 {
 ///   Newton step back onto the level set of f through x (the surface, for x on it),
 ///   whose f is the mean of the gradient's six taps ([`gradient_value`]). A step costs
 ///   6 evaluations instead of 9, and the walk does not drift off its level set (the
-///   sphere's distance error drops from 3.5e-5 to 2.7e-7).
+///   sphere's distance error drops from 3.5e-5 to 2.7e-7);
+/// - the start looks only where the walk goes: Eq. 17's first second difference is
+///   centred a tap ahead of x along the first direction, and the gradient at x is
+///   narrower than a step's ([`Params::fd_start`]), so that neither reaches across a
+///   crease beside x that the walk never meets.
 pub fn log_map(f: &dyn Fn(DVec3) -> f64, x: DVec3, seed: &Seed, params: &Params) -> LogMap {
     let n_steps = params.steps.max(1);
     let p = seed.p;

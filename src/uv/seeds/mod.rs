@@ -17,8 +17,8 @@
 //! samples behind one stay uncovered until a seed lands among them: every island the
 //! sharp features cut out gets its own seed, largest gaps first. A sample picked on a
 //! curve (a fillet) first tries seeds on the flat faces beside it instead (`SNAP`): the
-//! nearest flat sample, and the nearest on a face across the curve, kept where their
-//! walks cover the picked sample. Each face's edge is then nearer a seed of its own
+//! nearest flat sample, and the nearest on a face across the curve (the picked sample
+//! is picked again, as it is, where their walks do not cover it; the flat seeds stay). Each face's edge is then nearer a seed of its own
 //! face than one across the fillet, and walks there stay flat; a seed on the fillet
 //! would be their nearest, and Alg. 1's walk over a fillet crossed at a slant stretches
 //! its map. A variational
@@ -187,12 +187,13 @@ const COVER_SLACK: f64 = 2.0;
 /// and Alg. 2 gives each point its nearest seed, good map or not.
 const FLATNESS: i32 = 20;
 
-/// A curved sample picked for a seed first tries the nearest flat sample (smooth ≥
-/// `FLAT_COS`) within SNAP · spacing instead, kept where that seed's walk covers the
-/// picked sample: a fillet is then covered by seeds on the faces beside it, and a face's
-/// edge is served by its own face's seed over a flat walk, where a seed on the fillet
-/// would be its nearest and stretch it (Alg. 1's walk over a fillet crossed at a slant).
-/// Where the flat seed does not cover the sample, the sample is picked again as it is.
+/// A curved sample picked for a seed first gets seeds at the nearest flat sample (smooth
+/// ≥ `FLAT_COS`) within SNAP · spacing and at the nearest on a face across the curve,
+/// instead of one of its own: a fillet is then covered by seeds on the faces beside it,
+/// and a face's edge is served by its own face's seed over a flat walk, where a seed on
+/// the fillet would be its nearest and stretch it (Alg. 1's walk over a fillet crossed
+/// at a slant). The flat seeds stay; where they do not cover the sample, it is picked
+/// again and then gets its own seed.
 const SNAP: f64 = 0.1;
 
 /// The smoothness of a flat sample for [`SNAP`] (its neighbours' normals within 0.8°).
@@ -289,8 +290,10 @@ pub fn place(
     // rounds (it can differ from the walks' union where a nearer seed's walk fails).
     let mut covered_by_alg2: Option<Vec<bool>> = None;
     // Samples once picked (with or without a seed prepared there) are never picked
-    // again, so every round adds a seed or retires a sample and placement ends; where
-    // a sample's own seed does not make Alg. 2 succeed, another there would not either.
+    // again, but for a curved sample whose snapped seeds do not cover it, once
+    // (`snapped`): so every round adds a seed, retires a sample or spends a snap, and
+    // placement ends; where a sample's own seed does not make Alg. 2 succeed, another
+    // there would not either.
     let mut rejected: Vec<bool> = (0..samples.len()).map(mirrored).collect();
     // The seeds at the end of the last round: a round that adds none ends placement.
     let mut last_round: Option<usize> = None;

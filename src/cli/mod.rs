@@ -423,7 +423,10 @@ pub struct BakeArgs {
     /// Mesh quads along each chart's side: charts come from a grid M times coarser
     /// than the mesh, so there are M² times fewer charts, each with more texels (less
     /// border overhead); each chart is split into M × M quads projected onto the surface.
-    #[arg(long, value_name = "M", default_value = "1")]
+    /// `--grid 96 --chart-quads 2` keeps the charts and texels of the default and
+    /// quarters the mesh's chord error: texels then land where the implicit render
+    /// shows them in close-ups (docs/baking.md).
+    #[arg(long, value_name = "M", default_value_t = sdfc::bake::pipeline::DEFAULT_CHART_QUADS)]
     pub chart_quads: usize,
     /// Pad every level-0 chart with a gutter of TEXELS texels (`--gutter=4`; 2 when
     /// the flag is given alone), filled from the charts across its sides, for engines that build

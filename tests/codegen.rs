@@ -29,6 +29,7 @@ fn library_files_validate_on_their_own() {
     for (name, text) in [
         ("sdf.wgsl", codegen::SDF_LIBRARY),
         ("render.wgsl", codegen::RENDER_LIBRARY),
+        ("dual.wgsl", codegen::DUAL_LIBRARY),
         ("blit.wgsl", sdfc::viewer::present::BLIT),
     ] {
         if let Err(e) = codegen::validate(text) {

@@ -518,10 +518,21 @@ fn texture_level_follows_the_pixel_footprint() {
 
 #[test]
 fn evals_view_counts_six_evaluations_per_walk_step() {
-    // The same textured sphere with N = 10 and N = 20: every pixel whose walk runs to
-    // its end makes exactly 6 · 10 more SDF evaluations with N = 20 (the trace, normal,
-    // shadow and material are the same); a miss makes one per trace step (one more than
-    // the steps counted when the ray leaves the far plane).
+    evals_per_walk_step(true, 6.0);
+}
+
+#[test]
+fn evals_view_counts_one_derivative_per_walk_step() {
+    evals_per_walk_step(false, 1.0);
+}
+
+/// The same textured sphere with N = 10 and N = 20: every pixel whose walk runs to its
+/// end makes exactly `per_step` · 10 more SDF evaluations with N = 20 (the trace,
+/// normal, shadow and material are the same): 6 with central differences (`differences`),
+/// 1 with forward derivatives, whose one evaluation of the derivative the view counts
+/// once. A miss makes one per trace step (one more than the steps counted when the ray
+/// leaves the far plane).
+fn evals_per_walk_step(differences: bool, per_step: f32) {
     let Some(gpu) = gpu_for_tests() else { return };
     let frame = |steps: u32, mode: ViewMode| {
         let src = format!("let ball = sphere(1);\natlas skin on ball {{ steps = {steps}; max_distance = 10; seed s = [0, 0, 1] tangent [1, 0, 0]; }}\nmaterial m {{ color = mix([0.1, 0.1, 0.1], [0.9, 0.9, 0.9], checker(skin.uv, 4)); }}\nrender ball.paint(m) {{ camera = orbit(distance: 4, yaw: 0deg, pitch: 0deg, fov: 50deg); size = [32, 24]; }}");
@@ -529,6 +540,7 @@ fn evals_view_counts_six_evaluations_per_walk_step() {
         let a = sdfc::driver::check(&src, None);
         let options = codegen::Options {
             walk: codegen::WalkForm::Loop,
+            differences,
             ..Default::default()
         };
         let module = sdfc::driver::compile(&a, &options).unwrap().module;
@@ -552,13 +564,13 @@ fn evals_view_counts_six_evaluations_per_walk_step() {
         } else {
             hits += 1;
             assert!(a > s + 4.0, "hit {i}: {a} evaluations, {s} steps");
-            if b - a == 60.0 {
+            if b - a == 10.0 * per_step {
                 sixty += 1;
             }
         }
     }
     let (mean, p95, max) = gpu::eval_stats(&long);
-    eprintln!("{hits} hits, {misses} misses; N = 20: mean {mean:.1}, p95 {p95}, max {max}; {sixty} hits with exactly 60 more");
+    eprintln!("{hits} hits, {misses} misses; N = 20: mean {mean:.1}, p95 {p95}, max {max}; {sixty} hits with exactly {} more", 10.0 * per_step);
     assert!(hits > 100 && misses > 100, "{hits} {misses}");
     assert!(sixty as f64 >= 0.9 * hits as f64, "{sixty} of {hits}");
 }
@@ -723,10 +735,10 @@ fn render_walk_auto_takes_the_adapters_walk() {
         let run = std::process::Command::new(env!("CARGO_BIN_EXE_sdfc"))
             .args(["render", "--size", "48x36", "--timings", "-o"])
             .arg(&out)
-            .args(if walk == "default" {
-                vec![]
-            } else {
-                vec!["--walk", walk]
+            .args(match walk {
+                "default" => vec![],
+                "forward" | "differences" => vec!["--gradients", walk],
+                _ => vec!["--walk", walk],
             })
             .arg(&scene)
             .output()
@@ -741,11 +753,38 @@ fn render_walk_auto_takes_the_adapters_walk() {
         "unrolled"
     };
     assert_eq!(format!("{}", gpu.preferred_walk()), expected);
+    // The walk's gradients likewise: differences on a software adapter.
+    let gradients = if gpu.prefers_differences() {
+        "differences"
+    } else {
+        "forward derivatives"
+    };
     let (auto, err) = render("default");
-    assert!(err.contains(&format!("; {expected} walk)")), "{err}");
+    assert!(
+        err.contains(&format!("; {expected} walk, {gradients})")),
+        "{err}"
+    );
     let (named, err) = render(expected);
-    assert!(err.contains(&format!("; {expected} walk)")), "{err}");
+    assert!(err.contains(&format!("; {expected} walk, ")), "{err}");
     assert_eq!(auto, named, "auto and --walk {expected} differ");
     let (_, err) = render("unrolled");
-    assert!(err.contains("; unrolled walk)"), "{err}");
+    assert!(err.contains("; unrolled walk, "), "{err}");
+    let (forward, err) = render("forward");
+    assert!(err.contains(", forward derivatives)"), "{err}");
+    let (differenced, err) = render("differences");
+    assert!(err.contains(", differences)"), "{err}");
+    // The same picture either way, to a few levels of 8 bits (the two gradients
+    // differ by the differences' error).
+    let (a, b) = (
+        image::load_from_memory(&forward).unwrap().to_rgba8(),
+        image::load_from_memory(&differenced).unwrap().to_rgba8(),
+    );
+    let worst = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap();
+    assert!(worst <= 8, "forward and differences differ by {worst}/255");
 }

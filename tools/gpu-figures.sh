@@ -2,7 +2,8 @@
 # The performance figures that need a real GPU (docs/performance.md), in one run:
 # robot.sdf and sphere.sdf at 1080p with every variant `sdfc bench` compares (unrolled
 # and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
-# and the seed sweep with its chart, both walk forms. Each bench writes its --json next to its log.
+# and the seed sweep with its chart, both walk forms, and once on central differences
+# against forward derivatives. Each bench writes its --json next to its log.
 #
 #   tools/gpu-figures.sh OUT_DIR            # on the GPU machine: everything
 #   tools/gpu-figures.sh OUT_DIR robot sweep   # only these parts (robot sphere csg plate sweep)
@@ -53,5 +54,13 @@ for walk in unrolled loop; do
   "$sdfc" bench --seed-sweep --walk "$walk" --size "$size" --frames "$frames" \
     --json "$out/sweep-$walk.json" --plot "$out/sweep-$walk.png" 2>&1 | tee "$out/sweep-$walk.txt"
 done
+
+# The walk's gradients: forward derivatives (a GPU's default) against central
+# differences, unrolled walk.
+if want sweep; then
+  echo "== seed sweep, unrolled walk, central differences"
+  "$sdfc" bench --seed-sweep --walk unrolled --gradients differences --size "$size" --frames "$frames" \
+    --json "$out/sweep-differences.json" 2>&1 | tee "$out/sweep-differences.txt"
+fi
 
 echo "wrote $out"

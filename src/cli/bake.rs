@@ -251,6 +251,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         prune: false,
         seed_data: sdfc::codegen::SeedData::Auto,
         bounds: sdfc::codegen::Bounds::Off,
+        differences: false,
     };
     let (_, analysis, compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &codegen_options) {

@@ -184,6 +184,8 @@ struct Forms {
     unmapped: Vec<Module>,
     /// `refine = 1`, `2`.
     refined: Vec<Module>,
+    /// The walks on central differences where the compiler differentiates forward.
+    differenced: Option<Module>,
 }
 
 impl Forms {
@@ -204,6 +206,7 @@ impl Forms {
         let undisplaced = undisplaced_form(from, args)?;
         let unmapped = unmapped_forms(from)?;
         let refined = refined_forms(from)?;
+        let differenced = differenced_form(from)?;
         Ok(Forms {
             plain,
             unrolled,
@@ -216,12 +219,28 @@ impl Forms {
             undisplaced,
             unmapped,
             refined,
+            differenced,
         })
     }
 
     fn other_seed_data(&self) -> Option<SeedData> {
         self.other_form.as_ref().map(|(data, _)| *data)
     }
+}
+
+/// The loop walk on central differences of the whole field (`Options::differences`),
+/// measured against forward derivatives (the default); None when no atlas has them.
+fn differenced_form(from: &Source) -> Result<Option<Module>, ExitCode> {
+    let exact = from
+        .analysis
+        .atlases
+        .iter()
+        .flatten()
+        .any(|a| a.params.exact_gradient);
+    if !exact {
+        return Ok(None);
+    }
+    from.looped(|o| o.differences = true).map(Some)
 }
 
 /// The walks pruned per seed (uv::prune, opt-in), measured against the default loop;
@@ -368,6 +387,7 @@ struct Rows<'a> {
     undisplaced: Option<usize>,
     unmapped: Option<(usize, usize)>,
     refined: Option<(usize, usize)>,
+    differenced: Option<usize>,
 }
 
 impl<'a> Rows<'a> {
@@ -433,6 +453,10 @@ impl<'a> Rows<'a> {
             }
             _ => None,
         };
+        let differenced = forms
+            .differenced
+            .as_ref()
+            .map(|m| push(&[("shaded, loop walk, differences", m)]));
         let refined = match &forms.refined[..] {
             [one, two] => {
                 let k = push(&[
@@ -451,6 +475,7 @@ impl<'a> Rows<'a> {
             undisplaced,
             unmapped,
             refined,
+            differenced,
         }
     }
 
@@ -473,6 +498,9 @@ impl<'a> Rows<'a> {
         }
         if let Some(k) = self.pruned {
             pairs.push(("pruned ÷ unpruned walks, loop", k, 2));
+        }
+        if let Some(k) = self.differenced {
+            pairs.push(("differences ÷ forward derivatives, loop", k, 2));
         }
         if let Some((plain_costly, costly, all)) = self.bounded {
             pairs.push(("node bounds ÷ none, plain", plain_costly, 0));

@@ -302,6 +302,11 @@ pub struct BenchArgs {
     /// benchmark measures both).
     #[arg(long, value_parser = choice::<sdfc::gpu::WalkChoice>(), default_value = "auto")]
     pub walk: sdfc::gpu::WalkChoice,
+    /// With --seed-sweep: the walk's gradients, `auto` as for `render` (central
+    /// differences of the field on a software adapter, its forward derivative on a GPU).
+    /// The scene benchmark measures both.
+    #[arg(long, value_parser = choice::<sdfc::gpu::Gradients>(), default_value = "auto")]
+    pub gradients: sdfc::gpu::Gradients,
     /// Frames per measurement (the median is reported).
     #[arg(long, default_value = "5")]
     pub frames: u32,
@@ -345,6 +350,11 @@ pub struct RenderArgs {
     /// takes the adapter's best (unrolled on a GPU, a loop on a software adapter).
     #[arg(long, value_parser = choice::<sdfc::gpu::WalkChoice>(), default_value = "auto")]
     pub walk: sdfc::gpu::WalkChoice,
+    /// How the walk takes the field's gradient: the forward derivative the compiler
+    /// writes (one evaluation a step; `compile`'s), central differences (six), or `auto`,
+    /// the adapter's best (differences on a software adapter, where they draw faster).
+    #[arg(long, value_parser = choice::<sdfc::gpu::Gradients>(), default_value = "auto")]
+    pub gradients: sdfc::gpu::Gradients,
     /// Prune each walk's field to the union operands within its reach (exact; off by
     /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]

@@ -136,9 +136,14 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
     println!("seed-count sweep (Fig. 15): the 8 x 8 plate of examples/plate.sdf");
     println!("adapter:   {}", gpu.describe());
     println!(
-        "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}",
+        "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}, {}",
         bench.frames,
-        args.walk.on(&gpu)
+        args.walk.on(&gpu),
+        if args.gradients.on(&gpu) {
+            "gradients by central differences"
+        } else {
+            "gradients by forward derivatives"
+        }
     );
     let (rows, baselines) = measure_rows(&bench, args)?;
     println!();
@@ -175,6 +180,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
             "size": [width, height],
             "frames": bench.frames,
             "walk": format!("{:?}", args.walk.on(&gpu)),
+            "gradients": if args.gradients.on(&gpu) { "differences" } else { "forward" },
             "constant_uv_ms": ms(constant),
             "plain_ms": ms(plain),
             "rows": rows.iter().map(|r| serde_json::json!({
@@ -222,6 +228,7 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Baselines)
                         } else {
                             SeedGridChoice::Off
                         },
+                        differences: args.gradients.on(bench.gpu),
                         ..Default::default()
                     };
                     let name = format!("plate({seeds}, {steps}, {merged})");

@@ -97,6 +97,7 @@ pub fn emit(
         .flatten();
     let field_fn = field_fn(k, atlas, options, &mut w, pruning.as_ref(), words, groups);
     groups.append(&mut w.groups);
+    let grad_value_fn = grad_value_fn(k, atlas, options);
     let (walk_begin, walk_end) = walk_mask(k, pruning.is_some());
     let n = p.steps.max(1);
     let walk_steps = walk_steps(k, n, form);
@@ -128,6 +129,7 @@ pub fn emit(
         ("n", n.to_string()),
         ("field_fn", field_fn),
         ("field_helpers", w.helpers),
+        ("grad_value_fn", grad_value_fn),
         ("walk_begin", walk_begin),
         ("walk_end", walk_end),
         ("h_gradient", lit(p.h_gradient)),
@@ -214,6 +216,48 @@ fn field_fn(
             whole_fn + &pruned_field(k, pr, &w.out, &field, words)
         }
     }
+}
+
+/// `atlas_K_grad_value(x, h) -> vec4<f32>`: the field's gradient at x (xyz) and f
+/// there (w). Where the compiler differentiates the field forward
+/// (`Params::exact_gradient`, `ir::dual`), exact (h unused), from `atlas_K_dual`: one
+/// evaluation of the derivative instead of six of the field; else by central
+/// differences of step h, with the mean of the six taps for f, f(x) + (h²/6)·Δf
+/// (`uv/logmap.rs: gradient_value`). `Options::differences` keeps the differences (for
+/// measuring the two; the CPU reference then differs by their error).
+fn grad_value_fn(k: usize, atlas: &Atlas, options: &super::Options) -> String {
+    if atlas.params.exact_gradient && !options.differences {
+        let mut w = super::dual::DualWriter::new(&format!("atlas_{k}_dual"));
+        let d = w.node(&atlas.shape, atlas.shape.root(), "p");
+        return format!(
+            "{}// The field's gradient and value by forward derivatives (codegen/dual.rs).
+fn atlas_{k}_dual(p: vec3<f32>) -> vec4<f32> {{
+    sdf_evals = sdf_evals + 1u;
+{}    return {d};
+}}
+
+// The gradient at x (xyz) and f there (w), exact: h is the differences' step elsewhere.
+fn atlas_{k}_grad_value(x: vec3<f32>, h: f32) -> vec4<f32> {{
+    return atlas_{k}_dual(x);
+}}
+",
+            w.helpers, w.out
+        );
+    }
+    format!(
+        "// The gradient by central differences of step h (xyz), with the mean of its six taps
+// (w): f(x) + (h²/6)·Δf, f at x for no evaluation (uv/logmap.rs: gradient_value).
+fn atlas_{k}_grad_value(x: vec3<f32>, h: f32) -> vec4<f32> {{
+    let dx = vec3<f32>(h, 0.0, 0.0);
+    let dy = vec3<f32>(0.0, h, 0.0);
+    let dz = vec3<f32>(0.0, 0.0, h);
+    let a = vec3<f32>(atlas_{k}_f(x + dx), atlas_{k}_f(x + dy), atlas_{k}_f(x + dz));
+    let b = vec3<f32>(atlas_{k}_f(x - dx), atlas_{k}_f(x - dy), atlas_{k}_f(x - dz));
+    let sum = a + b;
+    return vec4<f32>((a - b) / (2.0 * h), (sum.x + sum.y + sum.z) / 6.0);
+}}
+"
+    )
 }
 
 /// The lines that set and reset a pruned walk's mask around it (none unpruned).

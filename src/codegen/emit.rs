@@ -10,7 +10,7 @@ use std::fmt::Write;
 pub use super::literal::{arg, lit, vec3};
 
 /// `m * expr`, or just `expr` when `m` is the identity.
-fn apply(m: DMat3, expr: &str) -> String {
+pub(super) fn apply(m: DMat3, expr: &str) -> String {
     if m.abs_diff_eq(DMat3::IDENTITY, 1e-12) {
         expr.to_string()
     } else {
@@ -18,7 +18,7 @@ fn apply(m: DMat3, expr: &str) -> String {
     }
 }
 
-fn mat3(m: DMat3) -> String {
+pub(super) fn mat3(m: DMat3) -> String {
     format!(
         "mat3x3f({}, {}, {})",
         vec3(m.x_axis),
@@ -543,7 +543,7 @@ impl Writer {
 
 /// The WGSL call of a primitive's distance at point `p` ([`Prim::wgsl_call`]), its
 /// run-time numbers from the parameters' block.
-fn prim_call(pr: &Prim, dynamic: Option<&Dyn>, p: &str) -> String {
+pub(super) fn prim_call(pr: &Prim, dynamic: Option<&Dyn>, p: &str) -> String {
     let run_time = |i: usize, slot: crate::ir::prim::Slot| match dynamic {
         Some(Dyn::Prim(slots)) => slots
             .get(i)?

@@ -13,6 +13,7 @@
 mod atlas;
 mod atlases;
 pub mod bindings;
+mod dual;
 mod emit;
 mod field;
 mod group;
@@ -51,6 +52,8 @@ use std::fmt::Write;
 pub const SDF_LIBRARY: &str = include_str!("../../shaders/sdf.wgsl");
 pub const RENDER_LIBRARY: &str = include_str!("../../shaders/render.wgsl");
 pub const UV_LIBRARY: &str = include_str!("../../shaders/uv.wgsl");
+/// Forward derivatives of the distance functions (`vec4(∇f, f)`; `codegen::dual`).
+pub const DUAL_LIBRARY: &str = include_str!("../../shaders/dual.wgsl");
 
 /// A generated module with its description.
 #[derive(Debug, Clone)]
@@ -201,6 +204,11 @@ pub struct Options {
     /// Which unions' operands are skipped by their boxes where they cannot change the
     /// union (`ir::guard`).
     pub bounds: Bounds,
+    /// The walk differentiates every atlas's field by central differences, even where
+    /// the compiler could differentiate it forward (`codegen::dual`): the baseline
+    /// `sdfc bench --gradients differences` measures forward derivatives against. The
+    /// CPU reference then differs from the shader by the differences' error.
+    pub differences: bool,
 }
 
 crate::choice::choice_enum! {

@@ -37,10 +37,11 @@ fn library() -> &'static Library {
     static LIBRARY: OnceLock<Library> = OnceLock::new();
     LIBRARY.get_or_init(|| {
         let text = format!(
-            "{}\n{}\n{}\n",
+            "{}\n{}\n{}\n{}\n",
             super::SDF_LIBRARY,
             super::RENDER_LIBRARY,
-            super::UV_LIBRARY
+            super::UV_LIBRARY,
+            super::DUAL_LIBRARY
         );
         let mut items: Vec<Item> = split(&text)
             .into_iter()

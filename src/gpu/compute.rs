@@ -88,6 +88,28 @@ pub fn eval_atlas(
         .collect())
 }
 
+/// Atlas `k`'s field gradient and value as its walk reads them
+/// (`atlas_K_grad_value(p, h)`: forward derivatives where the compiler writes them,
+/// else central differences of step `h`) at each point: (∇f, f). Through an entry point
+/// appended to the module for the query alone.
+pub fn eval_atlas_gradients(
+    gpu: &Gpu,
+    module: &Module,
+    k: usize,
+    h: f32,
+    points: &[DVec3],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    let group0 = Group0 {
+        module,
+        textures: None,
+    };
+    let wgsl = format!(
+        "{}\n@compute @workgroup_size(64)\nfn cs_atlas_gradient(@builtin(global_invocation_id) id: vec3<u32>) {{\n    let i = id.x;\n    if (i >= arrayLength(&points)) {{\n        return;\n    }}\n    results[i] = atlas_{k}_grad_value(points[i].xyz, {h:e});\n}}\n",
+        module.wgsl
+    );
+    run(gpu, &wgsl, Some(group0), "cs_atlas_gradient", points, 1)
+}
+
 /// The query pipeline and its buffers: `points` in, `size` bytes of results out.
 struct Queries {
     pipeline: wgpu::ComputePipeline,

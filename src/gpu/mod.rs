@@ -236,6 +236,17 @@ impl Gpu {
         self.info.device_type == wgpu::DeviceType::Cpu
     }
 
+    /// Whether the walk serves this adapter best with central differences of the field
+    /// (six evaluations a step) rather than its forward derivative (one): on a software
+    /// adapter, where a frame of the walk on forward derivatives measured 1.7–2.5× slower
+    /// (lavapipe; docs/performance.md, "Forward derivatives"), although the derivative
+    /// itself costs no more there than the differences (the walk's exact normals slow
+    /// it, not the derivative's evaluation). `render`, the viewer and `bench --seed-sweep`
+    /// follow it; `compile` writes the forward derivative.
+    pub fn prefers_differences(&self) -> bool {
+        self.is_software()
+    }
+
     /// The walk form that serves this adapter best, for `--walk auto`: the unrolled walk
     /// (the design's) on a GPU; a loop on a software adapter, where the unrolled form
     /// measured 1.6–3.7× slower a frame and 2–12× slower to build its pipeline
@@ -283,6 +294,28 @@ impl WalkChoice {
         match self {
             WalkChoice::Loop | WalkChoice::Auto => crate::codegen::WalkForm::Loop,
             WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
+        }
+    }
+}
+
+crate::choice::choice_enum! {
+/// `bench --seed-sweep --gradients`: how the walk takes the field's gradient, or the
+/// adapter's best ([`Gpu::prefers_differences`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Gradients {
+    Auto = "auto": "Central differences on a software adapter, the forward derivative on a GPU.",
+    Forward = "forward": "The forward derivative the compiler writes (one evaluation a step).",
+    Differences = "differences": "Central differences of the field (six evaluations a step).",
+}
+}
+
+impl Gradients {
+    /// Whether the walk takes differences on `gpu`.
+    pub fn on(self, gpu: &Gpu) -> bool {
+        match self {
+            Gradients::Auto => gpu.prefers_differences(),
+            Gradients::Forward => false,
+            Gradients::Differences => true,
         }
     }
 }

@@ -9,6 +9,7 @@
 //! ([`eval`]) both walk this IR.
 
 pub mod displace;
+pub mod dual;
 pub mod dynamic;
 pub mod eval;
 pub mod group;

@@ -93,35 +93,45 @@ pub struct Kind {
     pub slots: &'static [Slot],
     /// About how many sphere evaluations one evaluation costs (the guards' model).
     pub cost: f64,
+    /// Its gradient by hand in `shaders/dual.wgsl` (`vec4(∇f, f)`, the same arguments),
+    /// or None: differences of the primitive alone (`codegen::dual`).
+    pub gradient: Option<&'static str>,
 }
 
 use Slot::{Float as F, Vec3 as V};
 
 /// Every primitive kind, by code.
 pub static KINDS: &[Kind] = &[
-    kind(0, "sd_sphere", &[F], 1.0),
-    kind(1, "sd_box", &[V], 1.5),
-    kind(2, "sd_round_box", &[V, F], 1.5),
-    kind(3, "sd_box_frame", &[V, F], 2.5),
-    kind(4, "sd_torus", &[F, F], 1.5),
-    kind(5, "sd_capsule", &[V, V, F], 1.5),
-    kind(6, "sd_cylinder", &[F, F], 1.5),
-    kind(7, "sd_capped_cone", &[F, F, F], 2.5),
-    kind(8, "sd_plane", &[V, F], 1.0),
-    kind(9, "sd_ellipsoid", &[V], 1.5),
-    kind(10, "sd_octahedron", &[F], 2.5),
-    kind(11, "sd_hex_prism", &[F, F], 2.5),
-    kind(12, "sd_tri_prism", &[F, F], 1.5),
-    kind(13, "sd_pyramid", &[F], 2.5),
-    kind(14, "sd_link", &[F, F, F], 1.5),
+    kind(0, "sd_sphere", &[F], 1.0, Some("dsd_sphere")),
+    kind(1, "sd_box", &[V], 1.5, Some("dsd_box")),
+    kind(2, "sd_round_box", &[V, F], 1.5, Some("dsd_round_box")),
+    kind(3, "sd_box_frame", &[V, F], 2.5, None),
+    kind(4, "sd_torus", &[F, F], 1.5, Some("dsd_torus")),
+    kind(5, "sd_capsule", &[V, V, F], 1.5, Some("dsd_capsule")),
+    kind(6, "sd_cylinder", &[F, F], 1.5, Some("dsd_cylinder")),
+    kind(7, "sd_capped_cone", &[F, F, F], 2.5, None),
+    kind(8, "sd_plane", &[V, F], 1.0, Some("dsd_plane")),
+    kind(9, "sd_ellipsoid", &[V], 1.5, Some("dsd_ellipsoid")),
+    kind(10, "sd_octahedron", &[F], 2.5, None),
+    kind(11, "sd_hex_prism", &[F, F], 2.5, None),
+    kind(12, "sd_tri_prism", &[F, F], 1.5, Some("dsd_tri_prism")),
+    kind(13, "sd_pyramid", &[F], 2.5, None),
+    kind(14, "sd_link", &[F, F, F], 1.5, Some("dsd_link")),
 ];
 
-const fn kind(code: u32, wgsl: &'static str, slots: &'static [Slot], cost: f64) -> Kind {
+const fn kind(
+    code: u32,
+    wgsl: &'static str,
+    slots: &'static [Slot],
+    cost: f64,
+    gradient: Option<&'static str>,
+) -> Kind {
     Kind {
         code,
         wgsl,
         slots,
         cost,
+        gradient,
     }
 }
 

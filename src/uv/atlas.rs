@@ -4,7 +4,7 @@
 //! merged neighbours (Eqs. 39–44, with the corrected last line of the notes).
 
 use super::grid::SeedGrid;
-use super::logmap::{gradient, log_map, LogMap, Params, Seed, Status};
+use super::logmap::{gradient, log_map_with, LogMap, Params, Seed, Status};
 use super::merge::{self, MergeGraph};
 use crate::ir::rest::RestQuery;
 use crate::ir::{eval, Field, Heights, NoHeights, Shape};
@@ -186,6 +186,7 @@ impl Atlas {
             fd_gradient: FD_GRADIENT,
             fd_curvature: FD_CURVATURE,
             fd_floor: FD_FLOOR,
+            exact_gradient: crate::ir::dual::supported(&shape),
         };
         // The merge graph, walked in f64 with the reference's fine difference steps.
         let pairs: Vec<(usize, usize)> = def
@@ -254,7 +255,14 @@ impl Atlas {
             max_distance,
             ..self.params
         };
-        log_map(&f, x, &self.seeds[i].seed, &params)
+        // The shader's forward derivative, where it has one (Params::exact_gradient).
+        let dual = |q: DVec3| crate::ir::dual::eval(&self.shape, q);
+        let dual: Option<&dyn Fn(DVec3) -> (DVec3, f64)> = if params.exact_gradient {
+            Some(&dual)
+        } else {
+            None
+        };
+        log_map_with(&f, dual, x, &self.seeds[i].seed, &params)
     }
 
     /// The geodesic-nearest seed's log map. Seeds are visited by Euclidean distance and

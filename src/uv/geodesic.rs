@@ -89,6 +89,10 @@ pub struct Params {
     /// fraction of |p|∞ + |x − p| (the coordinates' magnitude,
     /// which sets the rounding error).
     pub fd_floor: f64,
+    /// The field's gradient is exact: the generated WGSL differentiates it forward
+    /// (`ir::dual::supported`, `codegen::dual`), and the walk here reads it to f64's
+    /// precision ([`exact_gradient`]) where it took differences of the step's width.
+    pub exact_gradient: bool,
 }
 
 /// How much narrower than a step's gradient difference the one at the walk's start is
@@ -161,6 +165,34 @@ pub fn gradient(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DVec3 {
     DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
 }
 
+/// The gradient by central differences, with the mean of its six taps: f(x) plus
+/// (h²/6)·Δf, an estimate of f(x) that costs no evaluation (for the walk's h, a few
+/// 1e-4 of the step length squared times the mean curvature).
+pub fn gradient_value(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> (DVec3, f64) {
+    let mut g = DVec3::ZERO;
+    let mut sum = 0.0;
+    for e in [DVec3::X, DVec3::Y, DVec3::Z] {
+        let (a, b) = (f(x + e * h), f(x - e * h));
+        g += e * (a - b);
+        sum += a + b;
+    }
+    (g / (2.0 * h), sum / 6.0)
+}
+
+/// The gradient to f64's precision where the field is smooth, the CPU side of the
+/// generated WGSL's forward derivatives: fourth-order central differences (Richardson's
+/// five-point stencil) of step 1e-4 of the coordinates' magnitude `scale`, whose
+/// truncation (h⁴/30 of the fifth derivative) and rounding (1e-16 of f over h) are both
+/// far below f32's.
+pub fn exact_gradient(f: &dyn Fn(DVec3) -> f64, x: DVec3, scale: f64) -> DVec3 {
+    let h = 1e-4 * scale.max(1e-12);
+    let d = |e: DVec3| {
+        (8.0 * (f(x + e * h) - f(x - e * h)) - (f(x + e * (2.0 * h)) - f(x - e * (2.0 * h))))
+            / (12.0 * h)
+    };
+    DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z))
+}
+
 /// Eq. 31: the smallest rotation taking unit `a` to unit `b`: I + J + J²/(1 + a·b),
 /// J the cross-product matrix of a × b. Near a·b = −1 (which the sharp-feature test
 /// normally rejects first) it falls back to the identity.
@@ -181,22 +213,66 @@ pub fn rotation_between(a: DVec3, b: DVec3) -> DMat3 {
 /// The finite-difference steps of a walk: fractions of the step length, so that they
 /// follow the geometry the walk crosses and not the size of the scene, floored at
 /// `fd_floor` of the magnitude of the coordinates (where rounding sets the limit).
-#[derive(Debug, Clone, Copy)]
-pub struct FdSteps {
+#[derive(Clone, Copy)]
+pub struct FdSteps<'a> {
+    /// The field's forward derivative (`ir::dual::eval`) where the walk has one.
+    dual: Option<&'a dyn Fn(DVec3) -> (DVec3, f64)>,
     start: f64,
     gradient: f64,
     curvature: f64,
     floor: f64,
+    /// The coordinates' magnitude, |p|∞ + |x − p|.
+    scale: f64,
+    exact: bool,
 }
 
-impl FdSteps {
+impl<'a> FdSteps<'a> {
     /// The steps of a walk from `x` to seed `p` under `params`.
-    pub fn new(params: &Params, p: DVec3, x: DVec3) -> FdSteps {
+    pub fn new(params: &Params, p: DVec3, x: DVec3) -> FdSteps<'a> {
+        let scale = p.abs().max_element() + (x - p).length();
         FdSteps {
+            dual: None,
             start: params.fd_start(),
             gradient: params.fd_gradient,
             curvature: params.fd_curvature,
-            floor: params.fd_floor * (p.abs().max_element() + (x - p).length()),
+            floor: params.fd_floor * scale,
+            scale,
+            exact: params.exact_gradient,
+        }
+    }
+    /// These steps with the field's forward derivative, read where the gradient is
+    /// exact ([`Params::exact_gradient`]).
+    pub fn with_dual(self, dual: &'a dyn Fn(DVec3) -> (DVec3, f64)) -> FdSteps<'a> {
+        FdSteps {
+            dual: Some(dual),
+            ..self
+        }
+    }
+    /// The gradient at `x`: exact ([`Params::exact_gradient`]: the forward derivative,
+    /// or [`exact_gradient`] of `f` without one), else central differences of step `h`.
+    pub fn grad(&self, f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DVec3 {
+        self.grad_value_or(f, x, h, false).0
+    }
+    /// The gradient at `x` and f there: exact, else central differences of step `h`
+    /// with the mean of their six taps (`logmap::gradient_value`).
+    pub fn grad_value(&self, f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> (DVec3, f64) {
+        self.grad_value_or(f, x, h, true)
+    }
+    fn grad_value_or(
+        &self,
+        f: &dyn Fn(DVec3) -> f64,
+        x: DVec3,
+        h: f64,
+        value: bool,
+    ) -> (DVec3, f64) {
+        match (self.exact, self.dual) {
+            (true, Some(dual)) => dual(x),
+            (true, None) => (
+                exact_gradient(f, x, self.scale),
+                if value { f(x) } else { 0.0 },
+            ),
+            (false, _) if value => gradient_value(f, x, h),
+            (false, _) => (gradient(f, x, h), 0.0),
         }
     }
     /// The gradient's step for a step of length `s`.

@@ -9,7 +9,7 @@
 //! 1 − sin(ρ)/ρ of the Jacobi fields, ρ the distance in curvature radii).
 //! `shaders/atlas.wgsl.in` (`atlas_K_shoot`, `atlas_K_refine`) mirrors this file.
 
-use super::geodesic::{gradient, normal_curvature, rotation_between, FdSteps, LogMap, Seed};
+use super::geodesic::{normal_curvature, rotation_between, FdSteps, LogMap, Seed};
 use glam::{DMat3, DVec2, DVec3};
 
 /// Where a geodesic shot from a seed lands.
@@ -33,7 +33,7 @@ pub fn shoot(f: &dyn Fn(DVec3) -> f64, seed: &Seed, t: DVec3, steps: u32, fd: &F
     let steps = steps.max(1);
     let tau = len / steps as f64;
     let mut x = seed.p;
-    let g = gradient(f, x, fd.gradient(tau));
+    let g = fd.grad(f, x, fd.gradient(tau));
     let mut n = g.normalize_or_zero();
     let mut v = (t - n * n.dot(t)).normalize_or_zero();
     let mut transport = DMat3::IDENTITY;
@@ -48,7 +48,7 @@ pub fn shoot(f: &dyn Fn(DVec3) -> f64, seed: &Seed, t: DVec3, steps: u32, fd: &F
     for _ in 0..steps {
         let half = v + n * (0.5 * tau * kappa);
         let guess = x + half * tau;
-        let g_next = gradient(f, guess, fd.gradient(tau));
+        let g_next = fd.grad(f, guess, fd.gradient(tau));
         let next = guess - g_next * (f(guess) / g_next.length_squared().max(1e-300));
         let n_next = g_next.normalize_or_zero();
         v = (half - n_next * n_next.dot(half)).normalize_or_zero();

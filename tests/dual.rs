@@ -114,7 +114,32 @@ const CASES: &[(&str, &str)] = &[
         "paint",
         "sphere(0.6).paint(dull) | box([0.4, 0.4, 0.4]).translate([0.6, 0, 0])",
     ),
+    // Run-time parameters (`PARAMS`): the shader reads them from the parameters' block.
+    (
+        "rotate_param",
+        "box([1.2, 0.5, 0.4]).rotate(axis: [1, 2, 0.5], angle: turn)",
+    ),
+    (
+        "twist_param",
+        "box([0.5, 1.6, 0.3]).twist(axis: [0, 1, 0], rate: turn)",
+    ),
+    (
+        "scale_param",
+        "torus(major: 0.5, minor: 0.2).scale(0.5 + turn)",
+    ),
+    (
+        "translate_param",
+        "torus(major: 0.5, minor: 0.2).translate([turn, 0, 0])",
+    ),
+    ("round_param", "box([0.6, 0.6, 0.6]).round(0.1 * turn)"),
+    (
+        "smooth_param",
+        "smooth_union(sphere(0.5), box([0.8, 0.4, 0.4]).translate([0.5, 0, 0]), 0.2 * turn)",
+    ),
 ];
+
+/// The run-time parameters the `_param` cases read (every scene declares them).
+const PARAMS: &str = "param turn = 0.7 in [0.1, 1.5];\n";
 
 /// A scene of `expr` with an atlas on it, one seed at `seed`.
 fn scene(expr: &str, seed: Option<DVec3>) -> String {
@@ -126,7 +151,7 @@ fn scene(expr: &str, seed: Option<DVec3>) -> String {
         None => String::from("material m {\n    color = [0.5, 0.5, 0.5];\n}\n"),
     };
     format!(
-        "material dull {{\n    color = [0.2, 0.2, 0.2];\n}}\nlet s = {expr};\n{atlas}render s.paint(m) {{\n    camera = orbit(distance: 4);\n}}\n"
+        "{PARAMS}material dull {{\n    color = [0.2, 0.2, 0.2];\n}}\nlet s = {expr};\n{atlas}render s.paint(m) {{\n    camera = orbit(distance: 4);\n}}\n"
     )
 }
 

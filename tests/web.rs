@@ -252,7 +252,16 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         let size = format!("{w}x{h}");
         let out_path = reference.to_str().unwrap();
         let args = [
-            "render", scene, "--walk", "loop", "--size", &size, "-o", out_path,
+            "render",
+            scene,
+            "--walk",
+            "loop",
+            "--gradients",
+            "forward",
+            "--size",
+            &size,
+            "-o",
+            out_path,
         ];
         let (code, _, err) = common::sdfc(&args);
         assert_eq!(code, 0, "{scene}: {err}");

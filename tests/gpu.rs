@@ -779,12 +779,6 @@ fn render_walk_auto_takes_the_adapters_walk() {
         image::load_from_memory(&forward).unwrap().to_rgba8(),
         image::load_from_memory(&differenced).unwrap().to_rgba8(),
     );
-    let worst = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap();
+    let worst = common::worst_byte_difference(a.as_raw(), b.as_raw());
     assert!(worst <= 8, "forward and differences differ by {worst}/255");
 }

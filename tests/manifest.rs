@@ -356,13 +356,7 @@ fn the_embedding_example_draws_what_sdfc_render_draws() {
             "{scene}: only {} colours",
             colours.len()
         );
-        let worst = a
-            .as_raw()
-            .iter()
-            .zip(b.as_raw())
-            .map(|(x, y)| x.abs_diff(*y))
-            .max()
-            .unwrap();
+        let worst = common::worst_byte_difference(a.as_raw(), b.as_raw());
         // The same shader on the same adapter: equal to within one level of 8 bits.
         assert!(worst <= 1, "{scene}: pixels differ by up to {worst}/255");
     }

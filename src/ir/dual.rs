@@ -115,14 +115,7 @@ pub fn prim(p: DVec3, pr: &Prim) -> Dual {
             )
         }
         Prim::Capsule { a, b, r } => {
-            let (pa, ba) = (p - a, b - a);
-            let bb = ba.dot(ba);
-            let h = if bb > 0.0 {
-                (pa.dot(ba) / bb).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let w = pa - ba * h;
+            let w = super::prim::capsule_offset(p, a, b);
             (unit(w, DVec3::Y), w.length() - r)
         }
         Prim::Cylinder { r, half_h } => {

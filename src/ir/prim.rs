@@ -135,6 +135,19 @@ const fn kind(
     }
 }
 
+/// A capsule's point `p` less the nearest point of its segment `a`–`b` (the capsule's
+/// distance is its length less the radius; its gradient, `ir::dual`, its direction).
+pub fn capsule_offset(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+    let (pa, ba) = (p - a, b - a);
+    let bb = ba.dot(ba);
+    let h = if bb > 0.0 {
+        (pa.dot(ba) / bb).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    pa - ba * h
+}
+
 /// The signed distance to a centred box of half size `half` (`sd_box` in the shaders).
 pub fn box_dist(p: DVec3, half: DVec3) -> f64 {
     let q = p.abs() - half;
@@ -339,16 +352,7 @@ impl Prim {
             Prim::Torus { major, minor } => {
                 DVec2::new(DVec2::new(p.x, p.z).length() - major, p.y).length() - minor
             }
-            Prim::Capsule { a, b, r } => {
-                let (pa, ba) = (p - a, b - a);
-                let bb = ba.dot(ba);
-                let h = if bb > 0.0 {
-                    (pa.dot(ba) / bb).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                (pa - ba * h).length() - r
-            }
+            Prim::Capsule { a, b, r } => capsule_offset(p, a, b).length() - r,
             Prim::Cylinder { r, half_h } => {
                 let d =
                     DVec2::new(DVec2::new(p.x, p.z).length(), p.y).abs() - DVec2::new(r, half_h);

@@ -238,6 +238,15 @@ pub fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
     (sum as f64 / (n * 3.0), bad as f64 / n)
 }
 
+/// The largest difference of any byte (channel) between two images of equal layout.
+pub fn worst_byte_difference(a: &[u8], b: &[u8]) -> u8 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
 /// The error codes of a scene after the whole check (codegen and naga included), each
 /// run once; asserts no internal compiler error (E0900) and every span inside the text.
 pub fn error_codes(src: &str) -> Vec<&'static str> {

@@ -302,9 +302,8 @@ pub struct BenchArgs {
     /// benchmark measures both).
     #[arg(long, value_parser = choice::<sdfc::gpu::WalkChoice>(), default_value = "auto")]
     pub walk: sdfc::gpu::WalkChoice,
-    /// With --seed-sweep: the walk's gradients, `auto` as for `render` (central
-    /// differences of the field on a software adapter, its forward derivative on a GPU).
-    /// The scene benchmark measures both.
+    /// With --seed-sweep: the walk's gradients, `auto` as for `render` (the forward
+    /// derivative). The scene benchmark measures both.
     #[arg(long, value_parser = choice::<sdfc::gpu::Gradients>(), default_value = "auto")]
     pub gradients: sdfc::gpu::Gradients,
     /// Frames per measurement (the median is reported).
@@ -352,7 +351,8 @@ pub struct RenderArgs {
     pub walk: sdfc::gpu::WalkChoice,
     /// How the walk takes the field's gradient: the forward derivative the compiler
     /// writes (one evaluation a step; `compile`'s), central differences (six), or `auto`,
-    /// the adapter's best (differences on a software adapter, where they draw faster).
+    /// the forward derivative on every adapter (as fast as differences or faster on
+    /// lavapipe, measured; five evaluations a step fewer on a GPU).
     #[arg(long, value_parser = choice::<sdfc::gpu::Gradients>(), default_value = "auto")]
     pub gradients: sdfc::gpu::Gradients,
     /// Prune each walk's field to the union operands within its reach (exact; off by

@@ -73,9 +73,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         prune: args.prune,
         seed_data: args.seed_data,
         bounds: args.bounds,
-        // Before the adapter is known, as the loop walk: a GPU generates the forward
-        // derivative again below.
-        differences: true,
+        differences: args.gradients.differences(),
     };
     let (source, analysis, mut compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &options) {
@@ -99,15 +97,11 @@ pub fn run(args: RenderArgs) -> ExitCode {
     // `--walk auto` on a GPU: the checked scene generated again with the unrolled walk
     // (code generation and naga's validation, no parse or atlas preparation), where it
     // has an atlas to walk; the loop stays where the unrolled module is too large.
-    // Likewise the walk's gradients: forward derivatives on a GPU, differences on a
-    // software adapter (Gpu::prefers_differences).
     let walks = !analysis.program.atlases.is_empty();
-    let differences = args.gradients.on(&gpu);
-    if walks && (args.walk.on(&gpu) != options.walk || differences != options.differences) {
+    if walks && args.walk.on(&gpu) != options.walk {
         let again = Instant::now();
         let unrolled = sdfc::codegen::Options {
             walk: args.walk.on(&gpu),
-            differences,
             ..options.clone()
         };
         match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &unrolled) {

@@ -139,7 +139,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
         "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}, {}",
         bench.frames,
         args.walk.on(&gpu),
-        if args.gradients.on(&gpu) {
+        if args.gradients.differences() {
             "gradients by central differences"
         } else {
             "gradients by forward derivatives"
@@ -180,7 +180,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
             "size": [width, height],
             "frames": bench.frames,
             "walk": format!("{:?}", args.walk.on(&gpu)),
-            "gradients": if args.gradients.on(&gpu) { "differences" } else { "forward" },
+            "gradients": if args.gradients.differences() { "differences" } else { "forward" },
             "constant_uv_ms": ms(constant),
             "plain_ms": ms(plain),
             "rows": rows.iter().map(|r| serde_json::json!({
@@ -228,7 +228,7 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Baselines)
                         } else {
                             SeedGridChoice::Off
                         },
-                        differences: args.gradients.on(bench.gpu),
+                        differences: args.gradients.differences(),
                         ..Default::default()
                     };
                     let name = format!("plate({seeds}, {steps}, {merged})");

@@ -236,17 +236,6 @@ impl Gpu {
         self.info.device_type == wgpu::DeviceType::Cpu
     }
 
-    /// Whether the walk serves this adapter best with central differences of the field
-    /// (six evaluations a step) rather than its forward derivative (one): on a software
-    /// adapter, where a frame of the walk on forward derivatives measured 1.7–2.5× slower
-    /// (lavapipe; docs/performance.md, "Forward derivatives"), although the derivative
-    /// itself costs no more there than the differences (the walk's exact normals slow
-    /// it, not the derivative's evaluation). `render`, the viewer and `bench --seed-sweep`
-    /// follow it; `compile` writes the forward derivative.
-    pub fn prefers_differences(&self) -> bool {
-        self.is_software()
-    }
-
     /// The walk form that serves this adapter best, for `--walk auto`: the unrolled walk
     /// (the design's) on a GPU; a loop on a software adapter, where the unrolled form
     /// measured 1.6–3.7× slower a frame and 2–12× slower to build its pipeline
@@ -299,22 +288,23 @@ impl WalkChoice {
 }
 
 crate::choice::choice_enum! {
-/// `bench --seed-sweep --gradients`: how the walk takes the field's gradient, or the
-/// adapter's best ([`Gpu::prefers_differences`]).
+/// `render --gradients`, `bench --seed-sweep --gradients`: how the walk takes the
+/// field's gradient. `auto` is the forward derivative on every adapter: it measured as
+/// fast as differences or faster on lavapipe too (docs/performance.md, "Forward
+/// derivatives"), and on a GPU it saves five evaluations a step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Gradients {
-    Auto = "auto": "Central differences on a software adapter, the forward derivative on a GPU.",
+    Auto = "auto": "The forward derivative where the compiler writes one, on every adapter (the best measured on lavapipe and on GPUs).",
     Forward = "forward": "The forward derivative the compiler writes (one evaluation a step).",
     Differences = "differences": "Central differences of the field (six evaluations a step).",
 }
 }
 
 impl Gradients {
-    /// Whether the walk takes differences on `gpu`.
-    pub fn on(self, gpu: &Gpu) -> bool {
+    /// Whether the walk takes differences.
+    pub fn differences(self) -> bool {
         match self {
-            Gradients::Auto => gpu.prefers_differences(),
-            Gradients::Forward => false,
+            Gradients::Auto | Gradients::Forward => false,
             Gradients::Differences => true,
         }
     }

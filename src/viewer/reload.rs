@@ -54,13 +54,6 @@ pub struct Reloader<P> {
 }
 
 impl<P> Reloader<P> {
-    /// Whether the walks take differences of the field instead of its forward
-    /// derivative (`Gpu::prefers_differences` of the window's adapter), from the next
-    /// reload on.
-    pub fn set_differences(&mut self, differences: bool) {
-        self.options.differences = differences;
-    }
-
     pub fn new(
         name: impl Into<String>,
         access: Access,

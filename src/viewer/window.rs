@@ -619,7 +619,6 @@ impl ApplicationHandler<Changed> for App {
             }
         }
         eprintln!("adapter: {}", gpu.describe());
-        self.reloader.set_differences(gpu.prefers_differences());
         self.gpu = Some(gpu);
         self.window = Some(window);
         self.reload(false);

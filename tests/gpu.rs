@@ -780,3 +780,52 @@ fn render_walk_auto_takes_the_adapters_walk() {
     let worst = common::worst_byte_difference(a.as_raw(), b.as_raw());
     assert!(worst <= 8, "forward and differences differ by {worst}/255");
 }
+
+/// `sdfc bench SCENE` measures every row on the adapter and writes them and their
+/// ratios as JSON, among them the per-pixel cost of a frame at a quarter of the side
+/// against the full frame (a cost that every frame pays whatever its size raises it).
+#[test]
+fn the_scene_bench_writes_its_rows_and_ratios() {
+    let Some(_gpu) = gpu_for_tests() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
+    let (code, out, err) = common::sdfc(&[
+        "bench",
+        scene.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--frames",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = report["rows"].as_array().unwrap();
+    assert!(rows.len() >= 5, "{out}");
+    for row in rows {
+        let frame = row["frame_ms"].as_f64().unwrap();
+        assert!(frame > 0.0 && frame.is_finite(), "{row}");
+    }
+    let ratio = |name: &str| {
+        report["ratios"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["name"] == name)
+            .unwrap_or_else(|| panic!("no ratio {name}: {out}"))["value"]
+            .as_f64()
+            .unwrap()
+    };
+    let small = ratio("per pixel, a quarter the side ÷ full size, loop");
+    assert!(small > 0.0 && small.is_finite(), "{small}");
+    // The sphere's atlas walks on its forward derivative, so the bench also measures
+    // the walk on differences.
+    let differences = ratio("differences ÷ forward derivatives, loop");
+    assert!(
+        differences > 0.0 && differences.is_finite(),
+        "{differences}"
+    );
+}

@@ -103,6 +103,13 @@ fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
             .map_err(gpu_failed)?;
         alternated.push((label, r, "frames alternated"));
     }
+    // renderers[2]: the loop walk's row.
+    let small = rig.small_frames(&renderers[2]).map_err(gpu_failed)?;
+    alternated.push((
+        "per pixel, a quarter the side ÷ full size, loop",
+        small,
+        "a fixed cost a frame raises it",
+    ));
     let report = Report {
         scene: name,
         adapter: gpu.describe(),
@@ -571,6 +578,26 @@ impl Rig<'_> {
         let built = Renderer::new(gpu, rolled, self.dir)?;
         let again = Renderer::new(gpu, rolled, self.dir)?;
         Ok((built.pipeline_time, again.pipeline_time))
+    }
+
+    /// A frame's cost per pixel at a quarter of the view's side against the full view,
+    /// frames alternated: low when a frame's cost is its pixels' (2.3 for the sphere
+    /// at 270×270 on lavapipe, whose 64-pixel tiles and threads fill worse at 67×67),
+    /// higher when every frame pays a fixed cost (lavapipe's compile at every draw,
+    /// 10-60 ms a frame at any size: with it the sphere's loop frame cost 4.3× as much
+    /// a pixel at 135×135 as at 540×540; docs/performance.md).
+    fn small_frames(&self, renderer: &Renderer) -> Result<f64, GpuError> {
+        let (gpu, view) = (self.gpu, self.view);
+        let mut small = view.clone();
+        (small.width, small.height) = ((view.width / 4).max(1), (view.height / 4).max(1));
+        let (mut full, mut quarter) = (Vec::new(), Vec::new());
+        for _ in 0..self.frames {
+            full.extend(renderer.frames(gpu, view, ViewMode::Color, 0, 1)?.1);
+            quarter.extend(renderer.frames(gpu, &small, ViewMode::Color, 0, 1)?.1);
+        }
+        let pixels = |v: &View| f64::from(v.width) * f64::from(v.height);
+        let per_pixel = |times: Vec<Duration>, v: &View| median(times).as_secs_f64() / pixels(v);
+        Ok(per_pixel(quarter, &small) / per_pixel(full, view))
     }
 
     /// Two pipelines' frames alternated one by one, so that a load that drifts during

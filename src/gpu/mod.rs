@@ -294,7 +294,7 @@ crate::choice::choice_enum! {
 /// derivatives"), and on a GPU it saves five evaluations a step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Gradients {
-    Auto = "auto": "The forward derivative where the compiler writes one, on every adapter (the best measured on lavapipe and on GPUs).",
+    Auto = "auto": "The forward derivative where the compiler writes one, on every adapter (as fast as differences or faster on lavapipe, measured; five evaluations fewer a step anywhere).",
     Forward = "forward": "The forward derivative the compiler writes (one evaluation a step).",
     Differences = "differences": "Central differences of the field (six evaluations a step).",
 }

@@ -779,6 +779,22 @@ fn render_walk_auto_takes_the_adapters_walk() {
     );
     let worst = common::worst_byte_difference(a.as_raw(), b.as_raw());
     assert!(worst <= 8, "forward and differences differ by {worst}/255");
+    // An atlas on a union of 16 spheres (a group: no forward derivative) walks on
+    // differences whatever --gradients asks, and the timings say so.
+    let ring = (0..16)
+        .map(|i| {
+            let a = i as f64 * std::f64::consts::TAU / 16.0;
+            format!("sphere(0.2).translate([{:.3}, {:.3}, 0])", a.cos(), a.sin())
+        })
+        .collect::<Vec<_>>()
+        .join(" | ");
+    std::fs::write(
+        &scene,
+        format!("let ring = {ring};\natlas a on ring {{ steps = 8; seed s = [1.2, 0, 0]; }}\nmaterial m {{ color = [0.2, 0.2, 0.2] + checker(a.uv, 4) * 0.6; }}\nrender ring.paint(m);\n"),
+    )
+    .unwrap();
+    let (_, err) = render("forward");
+    assert!(err.contains(", differences)"), "{err}");
 }
 
 /// `sdfc bench SCENE` measures every row on the adapter and writes them and their

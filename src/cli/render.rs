@@ -138,6 +138,14 @@ pub fn run(args: RenderArgs) -> ExitCode {
             return ExitCode::from(super::exit::gpu(&e));
         }
     };
+    // Whether any atlas walks on its forward derivative: not where none of their
+    // fields has one (a displacement, a shell map or a group: ir::dual::supported).
+    let forward = !options.differences
+        && analysis
+            .atlases
+            .iter()
+            .flatten()
+            .any(|a| a.params.exact_gradient);
     let timings = args.timings.then(|| {
         let mut t = format!(
             "adapter:   {}\ncompile:   {:.2} ms (parse → validated WGSL{})\n",
@@ -147,10 +155,10 @@ pub fn run(args: RenderArgs) -> ExitCode {
                 format!(
                     "; {} walk, {}",
                     options.walk,
-                    if options.differences {
-                        "differences"
-                    } else {
+                    if forward {
                         "forward derivatives"
+                    } else {
+                        "differences"
                     }
                 )
             } else {

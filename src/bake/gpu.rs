@@ -96,6 +96,7 @@ impl BakePass {
             tables: tables.as_ref(),
             globals: None,
             params: params.as_ref(),
+            tiles: None,
         };
         let textures = gpu.scoped(|| scene_group::group(d, bindings, stage, &layout0, &with))??;
         Ok(BakePass {

@@ -252,6 +252,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         seed_data: sdfc::codegen::SeedData::Auto,
         bounds: sdfc::codegen::Bounds::Off,
         differences: false,
+        tiles: false,
     };
     let (_, analysis, compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &codegen_options) {

@@ -96,6 +96,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         seed_data: args.seed_data,
         bounds: args.bounds,
         differences: false,
+        tiles: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

@@ -42,6 +42,15 @@ pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> 
             frame.height
         );
         eprintln!("readback:  {:.2} ms", t.readback.as_secs_f64() * 1e3);
+        if t.tile_leaves + t.tiles_whole > 0 {
+            eprintln!(
+                "tiles:     {:.2} ms on the CPU ({} leaves listed over the {}-pixel tiles, {} tiles walk a whole group)",
+                t.tiles.as_secs_f64() * 1e3,
+                t.tile_leaves,
+                sdfc::gpu::tiles::TILE,
+                t.tiles_whole
+            );
+        }
     }
     eprintln!(
         "wrote {} ({}x{})",

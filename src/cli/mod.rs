@@ -355,6 +355,11 @@ pub struct RenderArgs {
     /// lavapipe, measured; five evaluations a step fewer on a GPU).
     #[arg(long, value_parser = choice::<sdfc::gpu::Gradients>(), default_value = "auto")]
     pub gradients: sdfc::gpu::Gradients,
+    /// Trace every large union whole, not over the leaves each 8 × 8-pixel screen tile
+    /// can meet (per-tile culling, exact: the baseline it is measured against; see
+    /// docs/performance.md, Big scenes).
+    #[arg(long)]
+    pub no_tiles: bool,
     /// Prune each walk's field to the union operands within its reach (exact; off by
     /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]

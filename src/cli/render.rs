@@ -74,6 +74,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         seed_data: args.seed_data,
         bounds: args.bounds,
         differences: args.gradients.differences(),
+        tiles: !args.no_tiles,
     };
     let (source, analysis, mut compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &options) {

@@ -41,6 +41,9 @@ struct Row {
     lsp_p95: Duration,
     /// The same scene with its unions as code: WGSL lines, pipeline, frame.
     as_code: Option<(usize, Duration, Duration)>,
+    /// The frame without per-tile culling (`--no-tiles`), where the scene has groups
+    /// it applies to.
+    untiled: Option<Duration>,
 }
 
 /// Which generator a row's scene comes from.
@@ -94,6 +97,9 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
     );
     println!("{:>102}", "unions as code (no groups):");
     println!("(LSP 1: the front end's diagnostics, published first; LSP: the full set, ms)");
+    println!(
+        "(frame: with per-tile culling; \"no tiles\": the same module without it, and the speedup)"
+    );
     let mut rows = Vec::new();
     let configs = SCALE_COUNTS
         .iter()
@@ -166,6 +172,7 @@ fn row_json(r: &Row) -> serde_json::Value {
         "lsp_front_p95_ms": ms(r.lsp_front_p95),
         "lsp_p50_ms": ms(r.lsp_p50),
         "lsp_p95_ms": ms(r.lsp_p95),
+        "untiled_frame_ms": r.untiled.map(ms),
         "as_code": r.as_code.map(|(lines, pipeline, frame)| serde_json::json!({
             "wgsl_lines": lines,
             "pipeline_ms": ms(pipeline),
@@ -185,8 +192,15 @@ fn print_row(row: &Row) {
                 ms(frame) / ms(row.frame)
             )
         });
+    let untiled = row.untiled.map_or(String::new(), |u| {
+        format!(
+            " | no tiles {:.1} ms ({:.1}x)",
+            ms(u),
+            ms(u) / ms(row.frame)
+        )
+    });
     println!(
-        "{:>7} {:>6} {:>8} {:>11.1} {:>11.1} {:>11.1} {:>9.1} {:>9.1} {:>9.1}{code}",
+        "{:>7} {:>6} {:>8} {:>11.1} {:>11.1} {:>11.1} {:>9.1} {:>9.1} {:>9.1}{code}{untiled}",
         row.primitives,
         row.seeds,
         row.lines,
@@ -211,6 +225,7 @@ fn measure(
     };
     let options = Options {
         walk: WalkForm::Loop,
+        tiles: true,
         ..Default::default()
     };
     let mut compiles = Vec::new();
@@ -275,6 +290,26 @@ fn measure(
     } else {
         None
     };
+    // The baseline of per-tile culling: the same module without it.
+    let untiled = if module.tiling.is_some() {
+        let plain = driver::compile(
+            &analysis,
+            &Options {
+                tiles: false,
+                ..options.clone()
+            },
+        )
+        .map_err(|e| super::compile::report(&name, &source, e))?
+        .module;
+        gpu.pipelines.clear();
+        let r = Renderer::new(gpu, &plain, Path::new(".")).map_err(fail)?;
+        let (_, frames) = r
+            .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
+            .map_err(fail)?;
+        Some(median(frames))
+    } else {
+        None
+    };
     // The language server on the same text, in process (`--lsp-latency`'s loop).
     let stem = match kind {
         Kind::City => "city",
@@ -298,6 +333,7 @@ fn measure(
         seeds,
         lines: module.wgsl.lines().count(),
         compile: median(compiles),
+        untiled,
         pipeline: renderer.pipeline_time,
         frame: median(frames),
         lsp_front_p95: front[2],

@@ -40,6 +40,9 @@ pub enum Resource {
     Tables,
     /// The run-time parameters' block (`Manifest::params`).
     Params,
+    /// The screen tiles' leaf lists of the render's trace (`codegen::tiles`), which the
+    /// runtime bins every frame (`gpu::tiles`).
+    Tiles,
 }
 
 /// A resource binding of the generated module.
@@ -61,8 +64,9 @@ pub const RENDER_GROUP: u32 = 0;
 pub const COMPUTE_GROUP: u32 = 1;
 
 /// The table for a module that samples `textures` and, with `tables`, reads the
-/// `tables` storage buffer (`Manifest::tables`).
-pub fn table(textures: &[TextureUse], tables: bool, params: bool) -> Vec<Binding> {
+/// `tables` storage buffer (`Manifest::tables`); with `tiles`, its render entry points
+/// read the `tiles` buffer (`Options::tiles`).
+pub fn table(textures: &[TextureUse], (tables, tiles): (bool, bool), params: bool) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "fs_aov", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -131,6 +135,17 @@ pub fn table(textures: &[TextureUse], tables: bool, params: bool) -> Vec<Binding
                 resource,
             });
         }
+    }
+    if tiles {
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: out.len() as u32,
+            name: "tiles".into(),
+            kind: Kind::StorageRead,
+            detail: "array<u32>".into(),
+            used_by: vec!["fs_main", "fs_aov"],
+            resource: Resource::Tiles,
+        });
     }
     let compute = [
         (

@@ -66,6 +66,10 @@ pub struct Writer {
     /// The cost from which unions' operands are guarded by their boxes
     /// (`ir::guard`); None for none.
     pub guard_cost: Option<f64>,
+    /// The groups this writer evaluates through their screen tile's list, by node, with
+    /// their slots (`codegen::tiles`); only the top writer of `scene_trace_map` has
+    /// them (its helpers walk whole groups).
+    pub tiled: std::collections::HashMap<NodeId, u32>,
 }
 
 impl Writer {
@@ -87,6 +91,7 @@ impl Writer {
             unions_as_code: false,
             prune: None,
             guard_cost: None,
+            tiled: std::collections::HashMap::new(),
         }
     }
 
@@ -186,7 +191,7 @@ impl Writer {
     fn shape_inner(&mut self, shape: &Shape, id: NodeId, p: &str) -> String {
         let d = self.fresh("d");
         if let Some(g) = shape.group(id).filter(|_| !self.unions_as_code) {
-            return self.group(shape, g, &d, p);
+            return self.group(shape, (id, g), &d, p);
         }
         let dynamic = shape[id].dynamic.as_deref();
         // A node's one run-time number, or its constant written by `constant`.

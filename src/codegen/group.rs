@@ -152,17 +152,21 @@ impl Writer {
     pub(super) fn group(
         &mut self,
         shape: &Shape,
-        g: &std::sync::Arc<Group>,
+        (id, g): (crate::ir::NodeId, &std::sync::Arc<Group>),
         d: &str,
         p: &str,
     ) -> String {
         if !self.groups.iter().any(|x| x.key == g.key) {
             self.groups.push(g.clone());
         }
+        let call = match self.tiled.get(&id) {
+            Some(&slot) => super::tiles::call(g, slot, p),
+            None => call(g, p),
+        };
         let value = if self.blend {
-            format!("{}.xyyy * vec4<f32>(1.0, 1.0, 1.0, 0.0)", call(g, p))
+            format!("{call}.xyyy * vec4<f32>(1.0, 1.0, 1.0, 0.0)")
         } else {
-            call(g, p)
+            call
         };
         self.line(&format!("let {d} = {value};"));
         let mode = if self.blend { "_blend" } else { "" };

@@ -26,6 +26,7 @@ pub mod params;
 pub mod shake;
 pub mod targets;
 pub mod template;
+pub mod tiles;
 pub mod users;
 
 pub use manifest::*;
@@ -68,6 +69,9 @@ pub struct Module {
     /// The atlases whose shapes depend on run-time parameters: their records in the
     /// `tables` buffer follow the parameters ([`Module::tables_at`]).
     pub moving: Vec<MovingAtlas>,
+    /// The traced groups the runtime bins into screen tiles every frame, when the
+    /// module was generated with `Options::tiles` and has some.
+    pub tiling: Option<tiles::Tiling>,
 }
 
 /// The scene definition a region of generated code came from.
@@ -209,6 +213,13 @@ pub struct Options {
     /// `sdfc bench --gradients differences` measures forward derivatives against. The
     /// CPU reference then differs from the shader by the differences' error.
     pub differences: bool,
+    /// The render entry points trace the groups reached from the render target through
+    /// hard unions and paints over the leaves their pixel's screen tile can meet
+    /// (`codegen::tiles`): the module gets a `tiles` binding that the runtime fills
+    /// every frame (`gpu::tiles`). Off by default, so that `compile` and `export-web`
+    /// write modules any host can drive; `sdfc render`, the viewer and the benchmarks
+    /// turn it on. No change to a module without such groups.
+    pub tiles: bool,
 }
 
 crate::choice::choice_enum! {
@@ -310,14 +321,24 @@ pub fn generate(
         unions_as_code: options.unions_as_code,
         guard_cost: options.bounds.min_cost(),
         moving: Vec::new(),
+        tiled_masks: std::collections::BTreeSet::new(),
     };
-    g.scene_constants(target);
+    let scale = g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
     for a in atlases.iter().flatten() {
         g.add_heights(a.shape.heights());
     }
     g.shapes(scene, target);
     g.render_target(scene, target, name);
+    let slots = if options.tiles {
+        tiles::slots(target, options.unions_as_code)
+    } else {
+        Default::default()
+    };
+    let traced = tiles::functions(&mut g.out, target, &slots, (g.unions_as_code, g.guard_cost));
+    g.tiled_masks.extend(traced.iter().map(|t| group::mask(t)));
+    g.groups.extend(traced);
+    let tiling = (!slots.is_empty()).then(|| tiles::tiling(target, &slots, scale));
     let plain = options.plain;
     let mut uses = Uses::default();
     g.heights(&mut uses)?;
@@ -335,14 +356,20 @@ pub fn generate(
     }
     let params = params::ParamsLayout::of(&program.params);
     g.out.push_str(&params.wgsl_struct());
-    let table = bindings::table(&textures, !g.tables.is_empty(), !params.fields.is_empty());
+    let table = bindings::table(
+        &textures,
+        (!g.tables.is_empty(), tiling.is_some()),
+        !params.fields.is_empty(),
+    );
     let entry = template::fill(
         template::ENTRY,
         &[("bindings", bindings::declarations(&table))],
     )
     .map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
-    Ok(g.finish(target, scene, table, textures, params))
+    let mut module = g.finish(target, scene, table, textures, params);
+    module.tiling = tiling;
+    Ok(module)
 }
 
 /// The module being written: the scene's code after the libraries, with its source map.
@@ -362,6 +389,8 @@ struct Generator<'a> {
     guard_cost: Option<f64>,
     /// The atlases on moving shapes, with their records' offsets in `tables`.
     moving: Vec<MovingAtlas>,
+    /// The kinds masks of the groups traced through tiles: their tiled walkers.
+    tiled_masks: std::collections::BTreeSet<u32>,
 }
 
 impl Generator<'_> {
@@ -385,14 +414,17 @@ impl Generator<'_> {
         }
     }
 
-    fn scene_constants(&mut self, target: &ir::Shape) {
+    /// `SCENE_LIPSCHITZ` and `SCENE_SCALE`; returns the scale.
+    fn scene_constants(&mut self, target: &ir::Shape) -> f64 {
         let b = target.framing_bounds();
+        let scale = (b.max - b.min).max_element().max(1e-3);
         let _ = writeln!(
             self.out,
             "// ---- scene ----\nconst SCENE_LIPSCHITZ: f32 = {};\nconst SCENE_SCALE: f32 = {};\n",
             lit(target.lipschitz().max(1.0)),
-            lit((b.max - b.min).max_element().max(1e-3))
+            lit(scale)
         );
+        scale
     }
 
     /// `map_NAME` and `sdf_NAME` for every named shape, except those with a
@@ -491,6 +523,9 @@ impl Generator<'_> {
         self.out.push('\n');
         for m in masks {
             self.out.push_str(&group::walker(m));
+        }
+        for &m in &self.tiled_masks {
+            self.out.push_str(&tiles::tiled_walker(m));
         }
     }
 
@@ -771,6 +806,7 @@ impl Generator<'_> {
             manifest,
             source_map,
             moving: self.moving,
+            tiling: None,
         }
     }
 }

@@ -317,6 +317,7 @@ fn run(
             tables: tables.as_ref(),
             globals: None,
             params: params.as_ref(),
+            tiles: None,
         },
     };
     run_raw(gpu, wgsl, &bound, entry_name, &data, per_point)
@@ -423,6 +424,7 @@ pub fn eval_materials(
         tables: tables.as_ref(),
         globals: None,
         params: params.as_ref(),
+        tiles: None,
     };
     let stage = Stage::Compute { textured: true };
     let bindings = &module.manifest.bindings;

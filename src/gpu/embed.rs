@@ -67,6 +67,7 @@ impl SceneRenderer {
             tables: tables.as_ref(),
             globals: Some(&globals),
             params: params.as_ref(),
+            tiles: None,
         };
         let bind_group = scene_group::group(device, bindings, Stage::Render, &layout, &with)
             .map_err(|e| e.to_string())?;

@@ -464,6 +464,7 @@ impl MeshRenderer {
             frame: frame_time,
             frame_from_timestamps: false,
             readback: frame.timings.readback,
+            ..Default::default()
         };
         Ok(frame)
     }

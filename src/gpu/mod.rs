@@ -11,6 +11,7 @@ pub mod overdraw;
 mod render;
 pub mod scene_group;
 pub mod texture;
+pub mod tiles;
 
 pub use atlas_textures::generic_mips;
 pub use compute::{

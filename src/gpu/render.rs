@@ -80,6 +80,12 @@ pub struct Timings {
     pub frame: Duration,
     pub frame_from_timestamps: bool,
     pub readback: Duration,
+    /// CPU time of the frame's screen tiles (`gpu::tiles`), zero without them.
+    pub tiles: Duration,
+    /// Leaves listed over the frame's tiles and groups, and the (tile, group) entries
+    /// that walk the whole group instead (`gpu::tiles::Binned`).
+    pub tile_leaves: usize,
+    pub tiles_whole: usize,
 }
 
 /// SDF evaluations per pixel of a frame rendered in [`ViewMode::Evals`]: mean, 95th
@@ -228,6 +234,9 @@ pub struct Renderer {
     params: Option<wgpu::Buffer>,
     /// The moving atlases' last tables ([`Renderer::set_param_values`]).
     moving: scene_group::MovingTables,
+    /// The traced groups binned into screen tiles every frame (`gpu::tiles`), for a
+    /// module generated with `Options::tiles` that has some.
+    tiling: Option<crate::codegen::tiles::Tiling>,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
@@ -291,6 +300,7 @@ impl Renderer {
             tables,
             params,
             moving: Default::default(),
+            tiling: module.tiling.clone(),
             formats,
             pipeline_time: started.elapsed(),
             pipeline_cached,
@@ -329,13 +339,43 @@ impl Renderer {
         Ok(Some(took))
     }
 
+    /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the
+    /// time the binning took and what it holds; `None` for a module without tiles.
+    fn tiles(&self, gpu: &Gpu, view: &View) -> Option<(wgpu::Buffer, Timings)> {
+        use wgpu::util::DeviceExt;
+        let tiling = self.tiling.as_ref()?;
+        let started = Instant::now();
+        let binned = super::tiles::bin(tiling, view);
+        let took = started.elapsed();
+        let buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("tiles"),
+                contents: bytemuck::cast_slice(&binned.words),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        let timings = Timings {
+            tiles: took,
+            tile_leaves: binned.leaves,
+            tiles_whole: binned.whole,
+            ..Default::default()
+        };
+        Some((buffer, timings))
+    }
+
     /// The render group's bind group, built from the binding table.
-    fn bind_group(&self, gpu: &Gpu, globals: &wgpu::Buffer) -> Result<wgpu::BindGroup, GpuError> {
+    fn bind_group(
+        &self,
+        gpu: &Gpu,
+        globals: &wgpu::Buffer,
+        tiles: Option<&wgpu::Buffer>,
+    ) -> Result<wgpu::BindGroup, GpuError> {
         let with = scene_group::Resources {
             images: &self.textures,
             tables: self.tables.as_ref(),
             globals: Some(globals),
             params: self.params.as_ref(),
+            tiles,
         };
         scene_group::group(
             &gpu.device,
@@ -402,15 +442,22 @@ impl Renderer {
         // Targets and their readback on the GPU, and the frame on the CPU.
         gpu.check_size(w, h, bytes_per_texel(&self.formats))?;
         let uniforms = globals(view, mode);
-        let (targets, bind_group, queries, _globals) = gpu.scoped(|| {
+        let (targets, bind_group, queries, _globals, tiles) = gpu.scoped(|| {
             use wgpu::util::DeviceExt;
             let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
                 contents: bytemuck::cast_slice(&uniforms),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bind_group = self.bind_group(gpu, &buffer);
-            (self.targets(gpu, w, h), bind_group, queries(gpu), buffer)
+            let tiles = self.tiles(gpu, view);
+            let bind_group = self.bind_group(gpu, &buffer, tiles.as_ref().map(|t| &t.0));
+            (
+                self.targets(gpu, w, h),
+                bind_group,
+                queries(gpu),
+                buffer,
+                tiles,
+            )
         })?;
         let bind_group = bind_group?;
         for _ in 0..warmup {
@@ -464,6 +511,13 @@ impl Renderer {
         frame.timings.pipeline = self.pipeline_time;
         frame.timings.frame = median;
         frame.timings.frame_from_timestamps = from_timestamps;
+        if let Some((_, t)) = tiles {
+            (
+                frame.timings.tiles,
+                frame.timings.tile_leaves,
+                frame.timings.tiles_whole,
+            ) = (t.tiles, t.tile_leaves, t.tiles_whole);
+        }
         Ok((frame, times))
     }
 
@@ -494,7 +548,8 @@ impl Renderer {
     }
 
     /// Draws one frame of `view` into `targets` (of `view`'s size) and waits for it:
-    /// returns the submit-to-complete time. Nothing is read back.
+    /// returns the submit-to-complete time, which includes binning the screen tiles
+    /// (`gpu::tiles`). Nothing is read back.
     pub fn draw_into(
         &self,
         gpu: &Gpu,
@@ -513,7 +568,8 @@ impl Renderer {
                     contents: bytemuck::cast_slice(&uniforms),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
-            let bind_group = self.bind_group(gpu, &buffer)?;
+            let tiles = self.tiles(gpu, view);
+            let bind_group = self.bind_group(gpu, &buffer, tiles.as_ref().map(|t| &t.0))?;
             let mut enc = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {

@@ -33,6 +33,7 @@ fn slots(bindings: &[Binding], stage: Stage) -> impl Iterator<Item = &Binding> {
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Render) => true,
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Compute { textured }) => textured,
             (Resource::Tables | Resource::Params, _) => true,
+            (Resource::Tiles, Stage::Render) => true,
             _ => false,
         })
 }
@@ -69,7 +70,7 @@ pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::Bin
                     shaders,
                     wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 ),
-                Resource::Tables => (
+                Resource::Tables | Resource::Tiles => (
                     shaders,
                     wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Storage { read_only: true },
@@ -184,6 +185,8 @@ pub struct Resources<'a> {
     pub globals: Option<&'a wgpu::Buffer>,
     /// The run-time parameters' block ([`params`]).
     pub params: Option<&'a wgpu::Buffer>,
+    /// The frame's screen tiles (`gpu::tiles`), for a module generated with them.
+    pub tiles: Option<&'a wgpu::Buffer>,
 }
 
 /// The bind group of `layout` (made by [`layout`] for the same `stage`); an error when a
@@ -216,6 +219,12 @@ pub fn group(
                 Resource::Params => with
                     .params
                     .ok_or_else(|| missing("parameters block"))?
+                    .as_entire_binding(),
+                Resource::Tiles => with
+                    .tiles
+                    .ok_or_else(|| {
+                        missing("screen tiles (a module generated with Options::tiles is for sdfc's own renderer)")
+                    })?
                     .as_entire_binding(),
                 _ => return Err(missing("compute buffer in the render group")),
             };

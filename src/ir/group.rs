@@ -270,6 +270,34 @@ fn split(leaves: &[Leaf], items: &mut [u32], tree: &mut Vec<TreeNode>) {
     tree[at].skip = tree.len() as u32;
 }
 
+/// The groups of `shape` whose leaves a ray's trace may restrict to those it can meet
+/// (`gpu::tiles`), in the order found: each reached from the root through hard unions
+/// and paints alone, no node on the way shared or run-time. Along such a path the
+/// shape is `min(group, others)` up to a material, so a leaf the ray never comes near
+/// changes neither where the ray first meets the surface nor the distance there.
+pub fn traced(shape: &Shape) -> Vec<NodeId> {
+    let (mut out, mut stack) = (Vec::new(), vec![shape.root()]);
+    while let Some(id) = stack.pop() {
+        let node = &shape[id];
+        if shape.is_shared(id) || node.dynamic.is_some() {
+            continue;
+        }
+        if shape.group(id).is_some() {
+            out.push(id);
+            continue;
+        }
+        match &node.op {
+            Op::Csg { a, b, .. } if is_hard_union(&node.op) => {
+                stack.push(*b);
+                stack.push(*a);
+            }
+            Op::Paint { child, .. } => stack.push(*child),
+            _ => {}
+        }
+    }
+    out
+}
+
 /// The distance from `p` to a box: 0 inside.
 pub fn box_distance(p: DVec3, b: &Aabb) -> f64 {
     (b.min - p).max(p - b.max).max(DVec3::ZERO).length()
@@ -350,6 +378,18 @@ impl Group {
             out.push(n.leaf.map_or(INNER, |k| offsets[k as usize]));
         }
         out.extend(records);
+        out
+    }
+
+    /// Each leaf's record: its offset from the group's start in [`Group::words`] (what
+    /// a leaf node's last word holds), by leaf index; increasing with the index.
+    pub fn records(&self) -> Vec<u32> {
+        let mut out = vec![0; self.leaves.len()];
+        for (i, n) in self.tree.iter().enumerate() {
+            if let Some(k) = n.leaf {
+                out[k as usize] = self.words[(i + 1) * NODE_WORDS - 1];
+            }
+        }
         out
     }
 

@@ -146,6 +146,7 @@ pub fn run(options: Options) -> Result<(), ViewError> {
     };
     let codegen_options = codegen::Options {
         walk: options.walk,
+        tiles: true,
         ..Default::default()
     };
     let mut app = App {

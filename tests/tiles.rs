@@ -1,0 +1,276 @@
+//! Per-tile culling (`codegen::tiles`, `gpu::tiles`). On the CPU, in f64: every leaf a
+//! pixel's ray comes within the trace's margins of (a slab test against its grown box)
+//! is listed in the pixel's tile, and every leaf a shadow ray meets in the ray's light
+//! cell, from cameras outside and inside the scene; the per-tile limit sends a crowded
+//! tile to the whole tree. On the GPU: the same scenes traced with and without tiles
+//! hit the same pixels, with the same normals, and shade alike but for shadow rays
+//! that graze a sphere.
+
+use glam::DVec3;
+use sdfc::bench::{city, scattered};
+use sdfc::codegen::Options;
+use sdfc::driver;
+use sdfc::gpu::{gpu_for_tests, tiles, Renderer, ViewMode};
+use sdfc::view::View;
+
+mod common;
+use common::Rng;
+
+fn analysis(src: &str) -> driver::Analysis {
+    let a = driver::check(src, None);
+    assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
+    a
+}
+
+fn module(a: &driver::Analysis, tiles: bool) -> sdfc::codegen::Module {
+    driver::compile(
+        a,
+        &Options {
+            tiles,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .module
+}
+
+fn view_of(a: &driver::Analysis, (w, h): (u32, u32)) -> View {
+    let shape = a
+        .scene
+        .as_ref()
+        .and_then(|s| s.render.clone())
+        .unwrap_or_default();
+    let mut view = View::new(a.program.render.as_ref(), &shape);
+    (view.width, view.height) = (w, h);
+    view
+}
+
+/// The ray parameter where the ray meets box [lo, hi], if it does at t ≥ 0.
+fn slab(o: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> Option<f64> {
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for k in 0..3 {
+        if d[k].abs() < 1e-300 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return None;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+    }
+    (t0 <= t1).then_some(t0)
+}
+
+/// Every pixel's ray: each leaf whose box, grown by the margins the trace needs (its
+/// hit tolerance at the box's farthest point and twice the normal's tap), the ray
+/// meets is listed in the pixel's tile (or the tile walks the whole group).
+fn screen_lists_are_conservative(a: &driver::Analysis, view: &View) -> usize {
+    let m = module(a, true);
+    let tiling = m.tiling.as_ref().expect("the scene has traced groups");
+    let binned = tiles::bin(tiling, view);
+    let c = &view.camera;
+    let (w, h) = (view.width as f64, view.height as f64);
+    let tan = (c.fov * 0.5).tan();
+    let mut met = 0;
+    for y in 0..view.height {
+        for x in 0..view.width {
+            let ndc = (
+                2.0 * (x as f64 + 0.5) / w - 1.0,
+                1.0 - 2.0 * (y as f64 + 0.5) / h,
+            );
+            let d = (c.forward + ndc.0 * (w / h) * tan * c.right + ndc.1 * tan * c.up).normalize();
+            let tile = binned.tile_of(x, y);
+            for (slot, g) in tiling.groups.iter().enumerate() {
+                let Some(list) = binned.list(tile, slot as u32) else {
+                    continue;
+                };
+                for (b, record) in g.boxes.iter().zip(&g.records) {
+                    let far = (b.min - c.eye).abs().max((b.max - c.eye).abs()).length();
+                    let margin = view.epsilon * far.max(1.0) + 2.0 * 3f64.sqrt() * tiling.tap;
+                    if slab(c.eye, d, b.min - margin, b.max + margin).is_some() {
+                        met += 1;
+                        assert!(
+                            list.binary_search(record).is_ok(),
+                            "pixel ({x}, {y}) meets record {record} of group {slot}, unlisted in tile {tile}"
+                        );
+                    }
+                }
+                assert!(list.windows(2).all(|p| p[0] < p[1]), "lists ascend");
+            }
+        }
+    }
+    met
+}
+
+#[test]
+fn every_leaf_a_pixels_ray_can_meet_is_in_its_tile() {
+    let a = analysis(&scattered(400, 0));
+    let mut view = view_of(&a, (96, 72));
+    let met = screen_lists_are_conservative(&a, &view);
+    assert!(met > 500, "the rays meet leaves ({met})");
+    // From inside the cloud, boxes reach behind the eye and across the screen's edges.
+    view.camera =
+        sdfc::view::Camera::look_at(DVec3::new(0.3, 0.2, 0.1), DVec3::new(3.0, -1.0, 2.0), 1.2);
+    let met = screen_lists_are_conservative(&a, &view);
+    assert!(met > 500, "the rays meet leaves ({met})");
+    // A city: a ground (code) beside the group, most rays hitting.
+    let a = analysis(&city(300, 0));
+    let view = view_of(&a, (80, 60));
+    screen_lists_are_conservative(&a, &view);
+}
+
+#[test]
+fn every_leaf_a_shadow_ray_can_meet_is_in_its_cell() {
+    let a = analysis(&scattered(400, 0));
+    let view = view_of(&a, (64, 48));
+    let m = module(&a, true);
+    let tiling = m.tiling.as_ref().unwrap();
+    let binned = tiles::bin(tiling, &view);
+    let l = view.sun.direction.normalize();
+    let first = binned.across * binned.down;
+    let threshold = 1e-4 * tiling.tap * 1e3;
+    let mut rng = Rng(7);
+    let (mut met, mut off) = (0, 0);
+    for _ in 0..40000 {
+        let p = DVec3::new(rng.unit(), rng.unit(), rng.unit()) * 14.0 - 7.0;
+        let cell = binned.light.cell_of(p, first);
+        if cell == first + binned.light.across * binned.light.down {
+            off += 1;
+        }
+        let g = &tiling.groups[0];
+        let list = binned.list(cell, 0).expect("no cell is crowded here");
+        for (b, record) in g.boxes.iter().zip(&g.records) {
+            if slab(p, l, b.min - threshold, b.max + threshold).is_some() {
+                met += 1;
+                assert!(
+                    list.binary_search(record).is_ok(),
+                    "a shadow ray from {p} meets record {record}, unlisted in cell {cell}"
+                );
+            }
+        }
+    }
+    assert!(
+        met > 1000 && off > 100,
+        "rays meet leaves ({met}) and leave the grid ({off})"
+    );
+}
+
+#[test]
+fn a_crowded_tile_walks_the_whole_group() {
+    // 300 spheres about one point fill every tile past the per-tile limit.
+    let mut src = String::new();
+    for part in 0..6 {
+        src.push_str(&format!("let part{part} =\n"));
+        for i in 0..50 {
+            let x = ((part * 50 + i) % 7) as f64 * 0.01;
+            let sep = if i + 1 < 50 { " |" } else { ";" };
+            src.push_str(&format!("    sphere(1).translate([{x}, 0, 0]){sep}\n"));
+        }
+    }
+    src.push_str("let heap = part0 | part1 | part2 | part3 | part4 | part5;\n");
+    src.push_str(
+        "render heap {\n    camera = look_at(eye: [0, 0, 4], target: [0, 0, 0], fov: 60deg);\n}\n",
+    );
+    let a = analysis(&src);
+    let view = view_of(&a, (32, 32));
+    let m = module(&a, true);
+    let binned = tiles::bin(m.tiling.as_ref().unwrap(), &view);
+    let centre = binned.tile_of(16, 16);
+    assert!(300 > tiles::MAX_PER_TILE);
+    assert_eq!(
+        binned.list(centre, 0),
+        None,
+        "past the limit: the whole tree"
+    );
+    assert!(binned.whole > 0);
+    // The shader takes that path: the same picture as without tiles.
+    let Some(gpu) = gpu_for_tests() else { return };
+    let [a, b] = both(&gpu, &src, (32, 32), ViewMode::Normal);
+    assert!(a.position.iter().filter(|p| p[3] >= 0.0).count() > 100);
+    assert!(common::worst_byte_difference(&a.color, &b.color) <= 6);
+}
+
+#[test]
+fn a_module_has_tiles_only_when_asked_and_it_has_a_traced_group() {
+    let a = analysis(&scattered(100, 0));
+    let tiled = module(&a, true);
+    assert!(tiled.manifest.bindings.iter().any(|b| b.name == "tiles"));
+    assert!(tiled.wgsl.contains("fn group_tiled_"));
+    let plain = module(&a, false);
+    assert!(plain.tiling.is_none());
+    assert!(!plain.manifest.bindings.iter().any(|b| b.name == "tiles"));
+    // No group reached through hard unions and paints: the module is the same.
+    let small = analysis(&scattered(12, 0));
+    assert_eq!(module(&small, true).wgsl, module(&small, false).wgsl);
+    // A group under a smooth union is not traced through tiles.
+    let mut src = String::from("let cloud =\n");
+    for i in 0..20 {
+        let sep = if i + 1 < 20 { " |" } else { ";" };
+        src.push_str(&format!(
+            "    sphere(0.1).translate([{}, 0, 0]){sep}\n",
+            i as f64 * 0.3
+        ));
+    }
+    src.push_str("let both = smooth_union(cloud, box([1, 0.1, 1]), 0.2);\nrender both {}\n");
+    let a = analysis(&src);
+    assert!(module(&a, true).tiling.is_none());
+}
+
+/// Both renders of `src` at `size` in view `mode`: (without tiles, with them).
+fn both(
+    gpu: &sdfc::gpu::Gpu,
+    src: &str,
+    size: (u32, u32),
+    mode: ViewMode,
+) -> [sdfc::gpu::Frame; 2] {
+    let a = analysis(src);
+    let view = view_of(&a, size);
+    [false, true].map(|t| {
+        let r = Renderer::new(gpu, &module(&a, t), std::path::Path::new(".")).unwrap();
+        r.frames(gpu, &view, mode, 0, 1).unwrap().0
+    })
+}
+
+#[test]
+fn tiles_trace_the_same_surface_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    for (name, src) in [
+        ("scattered(400)", scattered(400, 0)),
+        ("city(300)", city(300, 0)),
+    ] {
+        // Normals: the same hits, the same normals up to where in the hit tolerance
+        // each trace stopped.
+        let [a, b] = both(&gpu, &src, (96, 72), ViewMode::Normal);
+        let mut hits = 0;
+        for i in 0..a.position.len() {
+            let (ha, hb) = (a.position[i][3] >= 0.0, b.position[i][3] >= 0.0);
+            assert_eq!(
+                ha, hb,
+                "{name}: pixel {i} hit {ha} without tiles, {hb} with"
+            );
+            if ha {
+                hits += 1;
+                let tol = 2e-3 * a.position[i][3].max(1.0);
+                assert!(
+                    (a.position[i][3] - b.position[i][3]).abs() < tol,
+                    "{name}: depth at {i}"
+                );
+            }
+        }
+        assert!(hits > 150, "{name}: {hits} hits");
+        let worst = common::worst_byte_difference(&a.color, &b.color);
+        assert!(worst <= 6, "{name}: normals differ by {worst}/255");
+        // Colours: shadows too. A shadow ray grazing a sphere within its threshold may
+        // go either way with other steps: a few pixels.
+        let [a, b] = both(&gpu, &src, (96, 72), ViewMode::Color);
+        let differ = (0..a.color.len() / 4)
+            .filter(|&i| (0..3).any(|k| a.color[4 * i + k].abs_diff(b.color[4 * i + k]) > 8))
+            .count();
+        eprintln!("{name}: {hits} hits, {differ} pixels differ by over 8/255 in colour");
+        assert!(
+            differ * 100 <= hits,
+            "{name}: {differ} of {hits} pixels shade differently"
+        );
+    }
+}

@@ -146,6 +146,57 @@ fn group_walk_{mask:x}(at0: u32, nodes: u32, p: vec3<f32>) -> vec2<f32> {{
     )
 }
 
+/// Words before the tiles' entries in the `tiles` buffer: tile side in pixels, tiles
+/// across, tiles down, groups per tile; the light's grid: cells across and down, its
+/// origin (2) and cell size, its axes u (3) and v (3) (floats as bits); one unused.
+/// Entries (start, count) follow by cell then group: the screen's tiles row by row,
+/// the light's cells row by row, one empty cell.
+pub const TILES_HEADER: u32 = 16;
+
+/// A tile's entry count meaning "this tile's list was too long: walk the whole group".
+pub const WHOLE: u32 = u32::MAX;
+
+/// The call of group `g`'s tiled walker in slot `slot` at point `p`, in a function
+/// with the tile in `tile`: (distance, material).
+pub fn tiled_call(g: &Group, slot: u32, p: &str) -> String {
+    format!(
+        "group_tiled_{:x}(GROUP_{}_AT, {}u, {slot}u, tile, {p})",
+        mask(g),
+        g.key,
+        g.tree.len()
+    )
+}
+
+/// `fn group_tiled_MASK(at0, nodes, slot, tile, p) -> vec2<f32>`: the union of the
+/// leaves listed for `tile` and `slot` (ties to the first listed, the lowest record,
+/// as the tree walk's), or the whole tree where the list was too long.
+pub fn tiled_walker(mask: u32) -> String {
+    format!(
+        "// A large union over the leaves a screen tile's rays can come near (the `tiles`
+// buffer, binned by the runtime each frame: src/gpu/tiles.rs); the whole tree where
+// the tile's list was too long.
+fn group_tiled_{mask:x}(at0: u32, nodes: u32, slot: u32, tile: u32, p: vec3<f32>) -> vec2<f32> {{
+    let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
+    let start = tiles[h];
+    let count = tiles[h + 1u];
+    if (count == {WHOLE}u) {{
+        return group_walk_{mask:x}(at0, nodes, p);
+    }}
+    var best = vec2<f32>(3.0e38, 0.0);
+    for (var i = 0u; i < count; i = i + 1u) {{
+        let record = tiles[start + i];
+        let d = group_leaf_{mask:x}(at0 + record, p);
+        if (d < best.x) {{
+            best = vec2<f32>(d, tables_f32(at0 + record + 1u));
+        }}
+    }}
+    return best;
+}}
+
+"
+    )
+}
+
 impl Writer {
     /// A large union at point `p` into variable `d`: its leaves as data (the group's
     /// walker), then its other operands as code; the variable holding the union.
@@ -160,7 +211,7 @@ impl Writer {
             self.groups.push(g.clone());
         }
         let call = match self.tiled.get(&id) {
-            Some(&slot) => super::tiles::call(g, slot, p),
+            Some(&slot) => tiled_call(g, slot, p),
             None => call(g, p),
         };
         let value = if self.blend {

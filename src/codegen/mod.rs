@@ -525,7 +525,7 @@ impl Generator<'_> {
             self.out.push_str(&group::walker(m));
         }
         for &m in &self.tiled_masks {
-            self.out.push_str(&tiles::tiled_walker(m));
+            self.out.push_str(&group::tiled_walker(m));
         }
     }
 

@@ -168,12 +168,13 @@ impl LightGrid {
 /// The most light cells across and down.
 pub const MAX_LIGHT_CELLS: u32 = 256;
 
-/// Bins `tiling`'s leaves into the screen tiles of `view` and the cells of its sun's
-/// grid: the words of the `tiles` buffer (`codegen::tiles` reads them).
-pub fn bin(tiling: &Tiling, view: &View) -> Binned {
+/// Every leaf's cells as (slot, record, first cell, rectangle of cells: first and last
+/// across, first and last down), slot by slot in record order, the screen's tiles
+/// before the light's cells; the light's grid.
+type Rect = (u32, u32, u32, [u32; 4]);
+
+fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<Rect>, LightGrid) {
     let (w, h) = (view.width.max(1), view.height.max(1));
-    let (across, down) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    let groups = tiling.groups.len() as u32;
     let c = &view.camera;
     let basis = DMat3::from_cols(c.forward, c.right, c.up);
     let to_camera = (basis.determinant().abs() > 1e-12).then(|| basis.inverse());
@@ -181,9 +182,7 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
     let l = view.sun.direction.try_normalize().unwrap_or(DVec3::Y);
     let u = l.any_orthonormal_vector();
     let v = l.cross(u);
-    // Each leaf's screen tiles and light cells (first and last across, first and last
-    // down), slot by slot, in record order.
-    let mut screen: Vec<(u32, u32, [u32; 4])> = Vec::new();
+    let mut rects: Vec<Rect> = Vec::new();
     let mut spans: Vec<(u32, u32, [f64; 4])> = Vec::new();
     for (slot, g) in tiling.groups.iter().enumerate() {
         for (b, &record) in g.boxes.iter().zip(&g.records) {
@@ -200,10 +199,11 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
             };
             if let Some([x0, x1, y0, y1]) = pixels {
                 let rect = [x0 / TILE, x1 / TILE, y0 / TILE, y1 / TILE];
-                screen.push((slot as u32, record, rect));
+                rects.push((slot as u32, record, 0, rect));
             }
             // Shadow rays stop at 1e-4 × SCENE_SCALE (scene_shadow); single precision
-            // rounds a point's projection by about 1e-6 of its distance from the origin.
+            // rounds a point's projection by about 1e-6 of its distance from the origin,
+            // and the ray's direction by about 1e-7 of the distance it travels.
             let size = b.min.abs().max(b.max.abs()).length();
             let grow = 1.01e-4 * scale + 4e-6 * (1.0 + size) + 2e-7 * view.far + 1e-6;
             let mut span = [f64::MAX, f64::MIN, f64::MAX, f64::MIN];
@@ -233,29 +233,32 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
     let only: Vec<[f64; 4]> = spans.iter().map(|s| s.2).collect();
     let light = LightGrid::over(&only, u, v);
     let first = across * down;
-    // Cells: the screen's tiles, the light's cells, and one empty cell past the grid.
-    let cells = first + light.across * light.down + 1;
-    let entries = (cells * groups) as usize;
-    // Every leaf's cells as (first cell, row length, rectangle).
-    let mut rects: Vec<(u32, u32, u32, [u32; 4])> = screen
-        .iter()
-        .map(|&(slot, record, r)| (slot, record, 0, r))
-        .collect();
     for &(slot, record, s) in &spans {
-        let cell = |x: f64, n: u32| {
-            (((x - light.origin[0]) / light.cell).floor().max(0.0) as u32).min(n - 1)
-        };
-        let cellv = |x: f64, n: u32| {
-            (((x - light.origin[1]) / light.cell).floor().max(0.0) as u32).min(n - 1)
-        };
+        let cell =
+            |x: f64, o: f64, n: u32| (((x - o) / light.cell).floor().max(0.0) as u32).min(n - 1);
+        let (ou, ov) = (light.origin[0], light.origin[1]);
         let r = [
-            cell(s[0], light.across),
-            cell(s[1], light.across),
-            cellv(s[2], light.down),
-            cellv(s[3], light.down),
+            cell(s[0], ou, light.across),
+            cell(s[1], ou, light.across),
+            cell(s[2], ov, light.down),
+            cell(s[3], ov, light.down),
         ];
         rects.push((slot, record, first, r));
     }
+    (rects, light)
+}
+
+/// Bins `tiling`'s leaves into the screen tiles of `view` and the cells of its sun's
+/// grid: the words of the `tiles` buffer (`codegen::tiles` reads them).
+pub fn bin(tiling: &Tiling, view: &View) -> Binned {
+    let (w, h) = (view.width.max(1), view.height.max(1));
+    let (across, down) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let groups = tiling.groups.len() as u32;
+    let (rects, light) = leaf_cells(tiling, view, (across, down));
+    let (u, v) = (light.u, light.v);
+    // Cells: the screen's tiles, the light's cells, and one empty cell past the grid.
+    let cells = across * down + light.across * light.down + 1;
+    let entries = (cells * groups) as usize;
     let row = |base: u32| if base == 0 { across } else { light.across };
     let each = |(slot, base, rect): (u32, u32, &[u32; 4]), f: &mut dyn FnMut(usize)| {
         for y in rect[2]..=rect[3] {

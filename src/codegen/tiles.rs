@@ -2,13 +2,15 @@
 //! the render target through hard unions and paints alone (`ir::group::traced`) are
 //! evaluated, along a pixel's ray, over the leaves that its screen tile's rays can
 //! come near: lists the runtime bins from the camera every frame (`gpu::tiles`) into
-//! the `tiles` storage buffer. Everything else (shadows, atlases, compute entry points)
-//! evaluates the whole field.
+//! the `tiles` storage buffer. Shadow rays, all parallel, read the lists of their cell
+//! in a grid across the sun's direction, binned the same way. Everything else (atlas
+//! walks, compute entry points) evaluates the whole field.
 //!
-//! What this module writes: `scene_tile(pixel)` (the pixel's tile) and
-//! `scene_trace_map(p, tile)` (the field the trace and its normal read), which without
-//! tiling are `0u` and `scene_map(p)`; with it, the render target once more with its
-//! traced groups through their tile's list ([`tiled_walker`]).
+//! What this module writes: `scene_tile(pixel)` (the pixel's tile),
+//! `scene_shadow_cell(p)` (a shadow ray's cell) and `scene_trace_map(p, tile)` (the
+//! field the trace, its normal and the shadow ray read), which without tiling are
+//! `0u`, `0u` and `scene_map(p)`; with it, the render target once more with its traced
+//! groups through their tile's list (`codegen::group::tiled_walker`).
 
 use super::emit::Writer;
 use crate::ir::group::Group;

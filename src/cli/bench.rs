@@ -67,7 +67,9 @@ fn check_plot(args: &BenchArgs) -> Result<(), ExitCode> {
 /// and their ratios printed (and written as JSON with `--json`).
 fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
     let t = Instant::now();
+    // As `sdfc render` draws it: large unions traced per screen tile.
     let base = Options {
+        tiles: true,
         ..Default::default()
     };
     let (source, analysis, unrolled) = compile::build(scene, args.shape.as_deref(), &base)?;

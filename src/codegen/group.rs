@@ -52,9 +52,19 @@ fn call_of(code: u32) -> Option<String> {
     Some(format!("{}({})", kind.wgsl, args.join(", ")))
 }
 
-/// The kinds of a group as a bit mask: one walker function per mask.
+/// The bit of a walker's mask that says some leaf holds a matrix.
+const TURNED: u32 = 1 << 31;
+
+/// The kinds of a group as a bit mask, with [`TURNED`] where a leaf is turned: one
+/// walker function per mask (a group of unturned leaves of one kind reads neither a
+/// record's head nor a matrix).
 pub fn mask(g: &Group) -> u32 {
-    g.kinds().iter().fold(0, |m, k| m | (1 << k))
+    let kinds = g.kinds().iter().fold(0, |m, k| m | (1 << k));
+    if g.leaves.iter().any(|l| l.has_matrix()) {
+        kinds | TURNED
+    } else {
+        kinds
+    }
 }
 
 /// The call of a group's walker at point `p`: (distance, material).
@@ -70,31 +80,38 @@ pub fn call(g: &Group, p: &str) -> String {
 /// `fn group_walk_MASK(at, nodes, p) -> vec2<f32>` (distance, material): the walk of a
 /// group's tree whose leaves have the kinds of `mask`, from offset `at` of `tables`.
 pub fn walker(mask: u32) -> String {
+    let kinds: Vec<u32> = (0..31).filter(|k| mask & (1 << k) != 0).collect();
     let mut arms = String::new();
-    for code in (0..32).filter(|k| mask & (1 << k) != 0) {
+    for &code in &kinds {
         if let Some(c) = call_of(code) {
             let _ = writeln!(arms, "        case {code}u: {{ d = {c}; }}");
         }
     }
     // A leaf record's distance: its point in the primitive's frame, then its kind's arm.
-    let leaf = format!(
-        "fn group_leaf_{mask:x}(r: u32, p: vec3<f32>) -> f32 {{
-    let head = tables[r];
+    let frame = if mask & TURNED != 0 {
+        "    let head = tables[r];
     var q = p + tables_vec3(r + 2u);
     var k = r + 5u;
-    if ((head & 256u) != 0u) {{
+    if ((head & 256u) != 0u) {
         q = mat3x3<f32>(tables_vec3(r + 5u), tables_vec3(r + 8u), tables_vec3(r + 11u)) * p + tables_vec3(r + 2u);
         k = r + 14u;
-    }}
-    var d = 3.0e38;
-    switch (head & 255u) {{
-{arms}        default: {{}}
-    }}
-    return d;
-}}
-
+    }
 "
-    );
+    } else {
+        "    let q = p + tables_vec3(r + 2u);
+    let k = r + 5u;
+"
+    };
+    let body = match (&kinds[..], mask & TURNED != 0) {
+        // One kind, no matrix: the record's head is not read.
+        ([only], false) => format!("    return {};\n", call_of(*only).unwrap_or_else(|| "3.0e38".into())),
+        (_, turned) => format!(
+            "{}    var d = 3.0e38;\n    switch (head & 255u) {{\n{arms}        default: {{}}\n    }}\n    return d;\n",
+            if turned { "" } else { "    let head = tables[r];\n" }
+        ),
+    };
+    let leaf =
+        format!("fn group_leaf_{mask:x}(r: u32, p: vec3<f32>) -> f32 {{\n{frame}{body}}}\n\n");
     leaf + &format!(
         "// A large union as data: a bounding-volume hierarchy over its primitives' boxes
 // (`tables` from `at0`, `nodes` nodes), walked without a stack; a subtree whose box is

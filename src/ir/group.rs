@@ -42,7 +42,8 @@ impl Leaf {
         eval::prim(self.m * p + self.c, &self.prim)
     }
 
-    fn has_matrix(&self) -> bool {
+    /// Whether the leaf's record holds a matrix (it is turned, not only moved).
+    pub fn has_matrix(&self) -> bool {
         !self.m.abs_diff_eq(DMat3::IDENTITY, 0.0)
     }
 }

@@ -62,6 +62,11 @@ fn the_city_is_one_group_and_equals_the_brute_force_union() {
 /// Forty primitives of eight kinds, rotated, moved and painted: each a named shape of
 /// its own (a single leaf, no group), and their union (a group).
 fn mixed() -> String {
+    mixed_turned(true)
+}
+
+/// [`mixed`], with a third of the primitives rotated (`turned`) or none.
+fn mixed_turned(turned: bool) -> String {
     let prims = [
         "sphere(0.3)",
         "box([0.5, 0.3, 0.4])",
@@ -77,7 +82,7 @@ fn mixed() -> String {
     for i in 0..40 {
         let prim = prims[i % prims.len()];
         let (x, z) = ((i % 8) as f64 * 0.9 - 3.15, (i / 8) as f64 * 0.9 - 1.8);
-        let rot = if i % 3 == 0 {
+        let rot = if turned && i % 3 == 0 {
             format!(".rotate(axis: [0, 1, 0.5], angle: {}deg)", 17 * i)
         } else {
             String::new()
@@ -128,20 +133,24 @@ fn compile(a: &driver::Analysis) -> codegen::Module {
 #[test]
 fn the_gpu_walks_the_same_hierarchy_as_the_cpu() {
     let Some(gpu) = gpu_for_tests() else { return };
-    let a = analysis(&mixed());
-    let module = compile(&a);
-    let target = a.scene.as_ref().unwrap().render.clone().unwrap();
-    let mut rng = Rng(5);
-    let h = DVec3::new(4.5, 1.0, 2.5);
-    let points = random_points(&mut rng, -h, h, 4000);
-    let got = gpu::eval_points(&gpu, &module, &points).unwrap();
-    for (p, v) in points.iter().zip(&got) {
-        let cpu = eval::distance(&target, *p);
-        assert!(
-            (cpu - v[0] as f64).abs() < 2e-5 * (1.0 + cpu.abs()),
-            "at {p}: CPU {cpu} vs GPU {}",
-            v[0]
-        );
+    // Turned leaves read a matrix; unturned ones of several kinds only the head; a
+    // city's spheres (one kind, unturned) neither (codegen::group::walker).
+    for src in [mixed_turned(true), mixed_turned(false), city(100, 0)] {
+        let a = analysis(&src);
+        let module = compile(&a);
+        let target = a.scene.as_ref().unwrap().render.clone().unwrap();
+        let mut rng = Rng(5);
+        let b = target.root_node().bounds;
+        let points = random_points(&mut rng, b.min - 0.5, b.max + 0.5, 4000);
+        let got = gpu::eval_points(&gpu, &module, &points).unwrap();
+        for (p, v) in points.iter().zip(&got) {
+            let cpu = eval::distance(&target, *p);
+            assert!(
+                (cpu - v[0] as f64).abs() < 2e-5 * (1.0 + cpu.abs()),
+                "at {p}: CPU {cpu} vs GPU {}",
+                v[0]
+            );
+        }
     }
 }
 

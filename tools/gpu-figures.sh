@@ -3,10 +3,12 @@
 # robot.sdf and sphere.sdf at 1080p with every variant `sdfc bench` compares (unrolled
 # and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
 # and the seed sweep with its chart, both walk forms, and once on central differences
-# against forward derivatives. Each bench writes its --json next to its log.
+# against forward derivatives; and the big scenes of `sdfc bench --scale` (groups
+# against the same unions as code, per-tile culling against none). Each bench writes
+# its --json next to its log.
 #
 #   tools/gpu-figures.sh OUT_DIR            # on the GPU machine: everything
-#   tools/gpu-figures.sh OUT_DIR robot sweep   # only these parts (robot sphere csg plate sweep)
+#   tools/gpu-figures.sh OUT_DIR robot sweep   # only these parts (robot sphere csg plate sweep scale)
 #   SIZE=160x90 FRAMES=3 tools/gpu-figures.sh OUT_DIR   # a quick check of the script
 #
 # Build first (cargo build --release); the script runs target/release/sdfc, or $SDFC.
@@ -15,12 +17,12 @@ cd "$(dirname "$0")/.."
 
 out=${1:?usage: tools/gpu-figures.sh OUT_DIR [robot sphere csg plate sweep]}
 shift
-parts=${*:-robot sphere csg plate sweep}
+parts=${*:-robot sphere csg plate sweep scale}
 want() { [[ " $parts " == *" $1 "* ]]; }
 for part in $parts; do
   case $part in
-    robot | sphere | csg | plate | sweep) ;;
-    *) echo "error: unknown part '$part' (robot sphere csg plate sweep)" >&2; exit 2 ;;
+    robot | sphere | csg | plate | sweep | scale) ;;
+    *) echo "error: unknown part '$part' (robot sphere csg plate sweep scale)" >&2; exit 2 ;;
   esac
 done
 size=${SIZE:-1920x1080}
@@ -61,6 +63,15 @@ if want sweep; then
   echo "== seed sweep, unrolled walk, central differences"
   "$sdfc" bench --seed-sweep --walk unrolled --gradients differences --size "$size" --frames "$frames" \
     --json "$out/sweep-differences.json" 2>&1 | tee "$out/sweep-differences.txt"
+fi
+
+
+# Big scenes: cities and scattered spheres, groups against unions as code, tiles
+# against none (docs/performance.md, Big scenes).
+if want scale; then
+  echo "== scale ($size, $frames frames)"
+  "$sdfc" bench --scale --size "$size" --frames "$frames" \
+    --json "$out/scale.json" 2>&1 | tee "$out/scale.txt"
 fi
 
 echo "wrote $out"

@@ -217,15 +217,8 @@ fn primitives_match_the_reference_image() {
 #[test]
 fn the_gl_backend_renders_the_same_picture() {
     // llvmpipe's GL cannot render to 32-bit float targets; the AOVs fall back to 16-bit.
-    let gpu = match gpu::Gpu::new(gpu::Backend::Gl) {
-        Ok(g) => g,
-        Err(e) => {
-            if std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1") {
-                panic!("SDFC_REQUIRE_GPU=1 but the GL backend is missing: {e}");
-            }
-            eprintln!("SKIPPING GPU TEST: {e}");
-            return;
-        }
+    let Some(gpu) = common::gl_for_tests() else {
+        return;
     };
     let src = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/primitives.sdf"),

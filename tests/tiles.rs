@@ -241,15 +241,8 @@ fn tiles_trace_the_same_surface_on_the_gpu() {
 #[test]
 fn tiles_trace_the_same_surface_on_gl() {
     // The `tiles` storage buffer in a fragment shader, on llvmpipe's GL as well.
-    let gpu = match sdfc::gpu::Gpu::new(sdfc::gpu::Backend::Gl) {
-        Ok(g) => g,
-        Err(e) => {
-            if std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1") {
-                panic!("SDFC_REQUIRE_GPU=1 but the GL backend is missing: {e}");
-            }
-            eprintln!("SKIPPING GPU TEST: {e}");
-            return;
-        }
+    let Some(gpu) = common::gl_for_tests() else {
+        return;
     };
     same_surface(&gpu);
 }

@@ -265,48 +265,30 @@ fn measure(
     let (_, frames) = renderer
         .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
         .map_err(fail)?;
-    // The baseline: the same scene, its unions as code (the one compile is not timed).
-    let as_code = if kind == Kind::City && n <= MAX_AS_CODE && seeds == 0 {
-        let code = driver::compile(
-            &analysis,
-            &Options {
-                unions_as_code: true,
-                ..options.clone()
-            },
-        )
-        .map_err(|e| super::compile::report(&name, &source, e))?
-        .module;
-        // A real build: benchmarks measure pipelines, not the cache.
+    // A baseline: the same scene with other options (the one compile is not timed), a
+    // real pipeline build: its WGSL lines, pipeline time and median frame.
+    let baseline = |edit: &dyn Fn(&mut Options)| -> Result<(usize, Duration, Duration), ExitCode> {
+        let mut other = options.clone();
+        edit(&mut other);
+        let module = driver::compile(&analysis, &other)
+            .map_err(|e| super::compile::report(&name, &source, e))?
+            .module;
         gpu.pipelines.clear();
-        let slow = Renderer::new(gpu, &code, Path::new(".")).map_err(fail)?;
-        let (_, frames) = slow
-            .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
-            .map_err(fail)?;
-        Some((
-            code.wgsl.lines().count(),
-            slow.pipeline_time,
-            median(frames),
-        ))
-    } else {
-        None
-    };
-    // The baseline of per-tile culling: the same module without it.
-    let untiled = if module.tiling.is_some() {
-        let plain = driver::compile(
-            &analysis,
-            &Options {
-                tiles: false,
-                ..options.clone()
-            },
-        )
-        .map_err(|e| super::compile::report(&name, &source, e))?
-        .module;
-        gpu.pipelines.clear();
-        let r = Renderer::new(gpu, &plain, Path::new(".")).map_err(fail)?;
+        let r = Renderer::new(gpu, &module, Path::new(".")).map_err(fail)?;
         let (_, frames) = r
             .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
             .map_err(fail)?;
-        Some(median(frames))
+        Ok((module.wgsl.lines().count(), r.pipeline_time, median(frames)))
+    };
+    // Its unions as code.
+    let as_code = if kind == Kind::City && n <= MAX_AS_CODE && seeds == 0 {
+        Some(baseline(&|o| o.unions_as_code = true)?)
+    } else {
+        None
+    };
+    // Without per-tile culling.
+    let untiled = if module.tiling.is_some() {
+        Some(baseline(&|o| o.tiles = false)?.2)
     } else {
         None
     };

@@ -40,8 +40,7 @@ pub struct Binned {
     pub down: u32,
     /// The sun's grid, whose cells follow the screen's tiles.
     pub light: LightGrid,
-    /// Entries (tile, group) that list their leaves, and those that walk the whole tree.
-    pub listed: usize,
+    /// Entries (tile, group) that walk the whole tree.
     pub whole: usize,
     /// Leaves listed, over every entry.
     pub leaves: usize,
@@ -308,7 +307,7 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
     ]);
     let mut next = vec![0u32; entries];
     let mut at = head as u32;
-    let (mut listed, mut whole) = (0, 0);
+    let mut whole = 0;
     for (e, &n) in counts.iter().enumerate() {
         let h = TILES_HEADER as usize + 2 * e;
         if n > cap {
@@ -318,7 +317,6 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
             words[h..h + 2].copy_from_slice(&[at, n]);
             next[e] = at;
             at += n;
-            listed += 1;
         }
     }
     words.resize(at as usize, 0);
@@ -337,7 +335,6 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
         across,
         down,
         light,
-        listed,
         whole,
         leaves,
     }

@@ -295,3 +295,18 @@ pub fn holes(
     }
     (covered, holes)
 }
+
+/// llvmpipe's GL backend for a test, or `None` after saying loudly why the test is
+/// skipped; with `SDFC_REQUIRE_GPU=1` a missing backend is a failure instead.
+pub fn gl_for_tests() -> Option<sdfc::gpu::Gpu> {
+    match sdfc::gpu::Gpu::new(sdfc::gpu::Backend::Gl) {
+        Ok(g) => Some(g),
+        Err(e) => {
+            if std::env::var("SDFC_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+                panic!("SDFC_REQUIRE_GPU=1 but the GL backend is missing: {e}");
+            }
+            eprintln!("SKIPPING GPU TEST: {e}");
+            None
+        }
+    }
+}

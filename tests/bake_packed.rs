@@ -138,17 +138,6 @@ fn grown_charts_conform_and_keep_borders_identical_at_every_level() {
     }
 }
 
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let mut sum = 0.0;
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
-        for k in 0..3 {
-            sum += (pa[k] as f64 - pb[k] as f64).powi(2);
-        }
-    }
-    let mse = sum / (a.len() / 4 * 3) as f64;
-    10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
-}
-
 /// The packed lookup in the mesh renderer (per-vertex chart entry, per-level rectangle,
 /// Eq. 1–2 per cell) draws what the flat layout draws: the same samples, placed
 /// differently. Also at a distance, where coarser levels are read.
@@ -176,11 +165,11 @@ fn the_packed_atlas_renders_as_the_flat_one_does() {
             draw(&packed, ViewMode::Albedo),
             draw(&flat, ViewMode::Albedo),
         );
-        let p = psnr(&a.color, &b.color);
+        let p = common::psnr(&a.color, &b.color);
         eprintln!("packed against flat, albedo, {distance}× the distance: PSNR {p:.1} dB");
         assert!(p >= 40.0, "albedo at {distance}×: PSNR {p:.1} dB");
         let (a, b) = (draw(&packed, ViewMode::Color), draw(&flat, ViewMode::Color));
-        let p = psnr(&a.color, &b.color);
+        let p = common::psnr(&a.color, &b.color);
         eprintln!("packed against flat, colour, {distance}× the distance: PSNR {p:.1} dB");
         assert!(p >= 36.0, "colour at {distance}×: PSNR {p:.1} dB");
     }

@@ -588,7 +588,14 @@ fn naga_errors_map_to_the_scene_definition_that_produced_the_code() {
 fn templates_are_filled_completely_and_validate() {
     use codegen::template;
     assert!(template::placeholders(template::ATLAS).contains(&"walk_steps"));
-    assert_eq!(template::placeholders(template::ENTRY), ["bindings"]);
+    assert_eq!(
+        template::placeholders(template::ENTRY),
+        ["bindings", "atlas_aov"]
+    );
+    assert_eq!(
+        template::placeholders(template::COARSE),
+        ["step", "slots", "reads", "samples"]
+    );
     let m = template::fill(
         "fn a_{{k}}() {}",
         &[("k", "1".into()), ("extra", "2".into())],
@@ -600,9 +607,11 @@ fn templates_are_filled_completely_and_validate() {
     let src = std::fs::read_to_string(dir.join("plate.sdf")).unwrap();
     for walk in [codegen::WalkForm::Unrolled, codegen::WalkForm::Loop] {
         for seed_grid in [codegen::SeedGridChoice::On, codegen::SeedGridChoice::Off] {
+            // With the multi-scale pass's template too.
             let options = codegen::Options {
                 walk,
                 seed_grid,
+                multiscale: seed_grid == codegen::SeedGridChoice::On,
                 ..Default::default()
             };
             let m = generate_with(&src, Some(&dir), &options).unwrap();

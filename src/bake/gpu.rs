@@ -97,6 +97,7 @@ impl BakePass {
             globals: None,
             params: params.as_ref(),
             tiles: None,
+            coarse: None,
         };
         let textures = gpu.scoped(|| scene_group::group(d, bindings, stage, &layout0, &with))??;
         Ok(BakePass {

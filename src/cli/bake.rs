@@ -253,6 +253,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         bounds: sdfc::codegen::Bounds::Off,
         differences: false,
         tiles: false,
+        multiscale: false,
     };
     let (_, analysis, compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &codegen_options) {

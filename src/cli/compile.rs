@@ -97,6 +97,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
         bounds: args.bounds,
         differences: false,
         tiles: false,
+        multiscale: false,
     };
     if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);

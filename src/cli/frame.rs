@@ -51,6 +51,14 @@ pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> 
                 t.tiles_whole
             );
         }
+        if t.coarse_samples > 0 {
+            eprintln!(
+                "multi-scale: {} coarse samples walked first, one pixel in {}x{} (the frame's time includes them)",
+                t.coarse_samples,
+                sdfc::codegen::coarse::STEP,
+                sdfc::codegen::coarse::STEP
+            );
+        }
     }
     eprintln!(
         "wrote {} ({}x{})",

@@ -360,6 +360,11 @@ pub struct RenderArgs {
     /// docs/performance.md, Big scenes).
     #[arg(long)]
     pub no_tiles: bool,
+    /// The multi-scale atlas pass: walk one pixel in 4 × 4 and rebuild the others'
+    /// atlas samples where those agree (see docs/performance.md, "Multi-scale atlas
+    /// pass"), or walk every pixel.
+    #[arg(long, value_parser = choice::<sdfc::gpu::MultiScale>(), default_value = "auto")]
+    pub multiscale: sdfc::gpu::MultiScale,
     /// Prune each walk's field to the union operands within its reach (exact; off by
     /// default, as it measured slower on the software adapter: see docs/performance.md).
     #[arg(long)]

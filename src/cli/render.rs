@@ -75,6 +75,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         bounds: args.bounds,
         differences: args.gradients.differences(),
         tiles: !args.no_tiles,
+        multiscale: args.multiscale.first(),
     };
     let (source, analysis, mut compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &options) {
@@ -99,10 +100,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
     // (code generation and naga's validation, no parse or atlas preparation), where it
     // has an atlas to walk; the loop stays where the unrolled module is too large.
     let walks = !analysis.program.atlases.is_empty();
-    if walks && args.walk.on(&gpu) != options.walk {
+    if walks
+        && (args.walk.on(&gpu) != options.walk || args.multiscale.on(&gpu) != options.multiscale)
+    {
         let again = Instant::now();
         let unrolled = sdfc::codegen::Options {
             walk: args.walk.on(&gpu),
+            multiscale: args.multiscale.on(&gpu),
             ..options.clone()
         };
         match sdfc::driver::compile_shape(&analysis, args.shape.as_deref(), &unrolled) {
@@ -166,6 +170,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
                 String::new()
             }
         );
+        if args.view == ViewMode::Walked {
+            let (walked, rebuilt) = gpu::walked_stats(&frame);
+            t.push_str(&format!(
+                "walked:    {walked} pixels walked an atlas sample, {rebuilt} rebuilt every one ({:.1} % of the pixels that read one walked)\n",
+                100.0 * walked as f64 / (walked + rebuilt).max(1) as f64
+            ));
+        }
         if args.view == ViewMode::Evals {
             let (mean, p95, max) = gpu::eval_stats(&frame);
             t.push_str(&format!(

@@ -23,6 +23,10 @@ pub struct ViewArgs {
     /// adapters; `unrolled` shows what `sdfc render` draws by default.
     #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "loop")]
     pub walk: sdfc::codegen::WalkForm,
+    /// The multi-scale atlas pass, as for `render` (`auto`: on a GPU, not on a software
+    /// adapter).
+    #[arg(long, value_parser = choice::<sdfc::gpu::MultiScale>(), default_value = "auto")]
+    pub multiscale: sdfc::gpu::MultiScale,
     /// The view at start (the number keys switch: colour, normal, checker, seeds,
     /// blend, distortion, seams, status, steps).
     #[arg(long, value_parser = choice::<sdfc::gpu::ViewMode>(), default_value = "color")]
@@ -66,6 +70,7 @@ pub fn run(args: ViewArgs) -> ExitCode {
         backend: args.backend,
         size: args.size,
         walk: args.walk,
+        multiscale: args.multiscale,
         mode: args.view,
         frames: args.frames,
         screenshot: args.screenshot,

@@ -43,6 +43,9 @@ pub enum Resource {
     /// The screen tiles' leaf lists of the render's trace (`codegen::tiles`), which the
     /// runtime bins every frame (`gpu::tiles`).
     Tiles,
+    /// The multi-scale atlas pass's coarse samples (`codegen::coarse`), which
+    /// `cs_coarse` writes and the render entry points read, every frame (`gpu::coarse`).
+    Coarse,
 }
 
 /// A resource binding of the generated module.
@@ -65,8 +68,13 @@ pub const COMPUTE_GROUP: u32 = 1;
 
 /// The table for a module that samples `textures` and, with `tables`, reads the
 /// `tables` storage buffer (`Manifest::tables`); with `tiles`, its render entry points
-/// read the `tiles` buffer (`Options::tiles`).
-pub fn table(textures: &[TextureUse], (tables, tiles): (bool, bool), params: bool) -> Vec<Binding> {
+/// read the `tiles` buffer (`Options::tiles`); with `coarse`, the `coarse` buffer
+/// (`Options::multiscale`).
+pub fn table(
+    textures: &[TextureUse],
+    (tables, tiles, coarse): (bool, bool, bool),
+    params: bool,
+) -> Vec<Binding> {
     let fragment = || vec!["fs_main", "fs_aov", "cs_material", "cs_bake"];
     let mut out = vec![Binding {
         group: RENDER_GROUP,
@@ -145,6 +153,17 @@ pub fn table(textures: &[TextureUse], (tables, tiles): (bool, bool), params: boo
             detail: "array<u32>".into(),
             used_by: vec!["fs_main", "fs_aov"],
             resource: Resource::Tiles,
+        });
+    }
+    if coarse {
+        out.push(Binding {
+            group: RENDER_GROUP,
+            binding: out.len() as u32,
+            name: "coarse".into(),
+            kind: Kind::StorageReadWrite,
+            detail: "array<vec4<f32>>".into(),
+            used_by: vec!["fs_main", "fs_aov", "cs_coarse"],
+            resource: Resource::Coarse,
         });
     }
     let compute = [

@@ -13,6 +13,7 @@
 mod atlas;
 mod atlases;
 pub mod bindings;
+pub mod coarse;
 mod dual;
 mod emit;
 mod field;
@@ -72,6 +73,10 @@ pub struct Module {
     /// The traced groups the runtime bins into screen tiles every frame, when the
     /// module was generated with `Options::tiles` and has some.
     pub tiling: Option<tiles::Tiling>,
+    /// The multi-scale atlas pass's slots (atlases read by materials), when the module
+    /// was generated with `Options::multiscale` and has some: the runtime runs
+    /// `cs_coarse` before every frame (`gpu::coarse`). Zero without the pass.
+    pub coarse_slots: usize,
 }
 
 /// The scene definition a region of generated code came from.
@@ -111,10 +116,12 @@ impl Module {
     pub fn derive_users(&mut self, naga: &naga::Module) {
         let reached = users::entry_bindings(naga);
         let old = bindings::describe(&self.manifest.bindings);
+        let entry_points: Vec<&'static str> =
+            self.manifest.entry_points.iter().map(|e| e.name).collect();
         for b in &mut self.manifest.bindings {
-            b.used_by = ENTRY_POINTS
+            b.used_by = entry_points
                 .iter()
-                .map(|&(name, _)| name)
+                .copied()
                 .filter(|name| {
                     reached
                         .iter()
@@ -220,6 +227,13 @@ pub struct Options {
     /// write modules any host can drive; `sdfc render`, the viewer and the benchmarks
     /// turn it on. No change to a module without such groups.
     pub tiles: bool,
+    /// The multi-scale atlas pass (`codegen::coarse`): materials rebuild a render
+    /// pixel's atlas samples from samples walked once per `coarse::STEP`² pixels by
+    /// `cs_coarse`, where those agree. The module gets a `coarse` binding and the
+    /// `cs_coarse` entry point, which the runtime dispatches before every frame
+    /// (`gpu::coarse`). Off by default, like `tiles`: `sdfc render`, the viewer and
+    /// the benchmarks turn it on. No change to a module whose materials read no atlas.
+    pub multiscale: bool,
 }
 
 crate::choice::choice_enum! {
@@ -322,6 +336,8 @@ pub fn generate(
         guard_cost: options.bounds.min_cost(),
         moving: Vec::new(),
         tiled_masks: std::collections::BTreeSet::new(),
+        multiscale: options.multiscale,
+        reads: coarse::Reads::default(),
     };
     let scale = g.scene_constants(target);
     // Atlases on displaced shapes call their heights in their fields.
@@ -349,6 +365,19 @@ pub fn generate(
     }
     g.atlas_choice(options, plain)?;
     let textures = g.materials(if plain { &[] } else { &program.materials }, uses)?;
+    let pass = if g.multiscale {
+        coarse::code(&g.reads, atlases).map_err(internal)?
+    } else {
+        None
+    };
+    let coarse_slots = if pass.is_some() {
+        g.reads.slots().len()
+    } else {
+        0
+    };
+    if let Some(code) = pass {
+        g.out.push_str(&code);
+    }
     let groups = !g.groups.is_empty();
     g.groups();
     if groups {
@@ -358,17 +387,39 @@ pub fn generate(
     g.out.push_str(&params.wgsl_struct());
     let table = bindings::table(
         &textures,
-        (!g.tables.is_empty(), tiling.is_some()),
+        (!g.tables.is_empty(), tiling.is_some(), coarse_slots > 0),
         !params.fields.is_empty(),
     );
+    // The atlas AOV: with the multi-scale pass, the chosen atlas as materials read it.
+    let chosen = match options.atlas.as_deref() {
+        Some(name) => program.atlases.iter().position(|a| a.name == name),
+        None => (!program.atlases.is_empty()).then_some(0),
+    };
+    let aov = match chosen {
+        Some(k) if coarse_slots > 0 && g.reads.slots().contains(&k) => {
+            format!("atlas_{k}_pixel(p, i32(hit.z + 0.5))")
+        }
+        _ => String::from("scene_atlas(p)"),
+    };
     let entry = template::fill(
         template::ENTRY,
-        &[("bindings", bindings::declarations(&table))],
+        &[
+            ("bindings", bindings::declarations(&table)),
+            ("atlas_aov", aov),
+        ],
     )
     .map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
     let mut module = g.finish(target, scene, table, textures, params);
     module.tiling = tiling;
+    module.coarse_slots = coarse_slots;
+    if coarse_slots > 0 {
+        module.manifest.entry_points.push(EntryPoint {
+            name: "cs_coarse",
+            stage: "compute",
+            workgroup_size: [8, 8, 1],
+        });
+    }
     Ok(module)
 }
 
@@ -391,6 +442,10 @@ struct Generator<'a> {
     moving: Vec<MovingAtlas>,
     /// The kinds masks of the groups traced through tiles: their tiled walkers.
     tiled_masks: std::collections::BTreeSet<u32>,
+    /// `Options::multiscale`.
+    multiscale: bool,
+    /// The atlases each material reads (the multi-scale pass's slots).
+    reads: coarse::Reads,
 }
 
 impl Generator<'_> {
@@ -628,7 +683,8 @@ impl Generator<'_> {
         for (i, m) in materials.iter().enumerate() {
             let start = self.out.len();
             let span = self.program.def(m.def).span;
-            let body = self.material_body(&m.attrs, &mut uses, |what, e| {
+            let case = i as i32 + 1;
+            let body = self.material_body(&m.attrs, case, &mut uses, |what, e| {
                 problems.push(Diagnostic::error(
                     codes::E_CODEGEN,
                     format!(
@@ -641,12 +697,14 @@ impl Generator<'_> {
                     "in this material",
                 ))
             });
-            let _ = writeln!(self.out, "        case {}: {{\n{body}        }}", i + 1);
+            let _ = writeln!(self.out, "        case {case}: {{\n{body}        }}");
+            let read = uses.atlases.iter().map(|a| a.index()).collect();
+            self.reads.by_material.push((case, read));
             let item_span = self.program.def(m.def).item_span;
             self.region(start, Some(item_span), Definition::Material(m.name.clone()));
         }
         // The default material's attributes are constants, which always generate.
-        let body = self.material_body(&MaterialAttrs::default(), &mut uses, |_, _| {});
+        let body = self.material_body(&MaterialAttrs::default(), 0, &mut uses, |_, _| {});
         let _ = writeln!(
             self.out,
             "        default: {{\n{body}        }}\n    }}\n}}\n"
@@ -659,10 +717,12 @@ impl Generator<'_> {
     }
 
     /// The body of one `case` of `scene_material`: the atlas samples it needs and the
-    /// `return`. An attribute that cannot be generated is reported to `problem`.
+    /// `return`. An attribute that cannot be generated is reported to `problem`. `case`
+    /// is the material's id (with the multi-scale pass, its atlas reads say it).
     fn material_body(
         &self,
         m: &MaterialAttrs,
+        case: i32,
         uses: &mut Uses,
         mut problem: impl FnMut(MaterialField, Unsupported),
     ) -> String {
@@ -692,11 +752,15 @@ impl Generator<'_> {
         let samples: String = uses
             .atlases
             .iter()
-            .map(|&k| {
-                format!(
+            .map(|&k| match self.multiscale {
+                true => format!(
+                    "            let atlas_sample_{0} = atlas_{0}_pixel(p, {case});\n",
+                    k.index()
+                ),
+                false => format!(
                     "            let atlas_sample_{0} = atlas_{0}_at(p, true);\n",
                     k.index()
-                )
+                ),
             })
             .collect();
         let lets: String = uses
@@ -807,6 +871,7 @@ impl Generator<'_> {
             source_map,
             moving: self.moving,
             tiling: None,
+            coarse_slots: 0,
         }
     }
 }

@@ -318,6 +318,7 @@ fn run(
             globals: None,
             params: params.as_ref(),
             tiles: None,
+            coarse: None,
         },
     };
     run_raw(gpu, wgsl, &bound, entry_name, &data, per_point)
@@ -425,6 +426,7 @@ pub fn eval_materials(
         globals: None,
         params: params.as_ref(),
         tiles: None,
+        coarse: None,
     };
     let stage = Stage::Compute { textured: true };
     let bindings = &module.manifest.bindings;

@@ -68,6 +68,7 @@ impl SceneRenderer {
             globals: Some(&globals),
             params: params.as_ref(),
             tiles: None,
+            coarse: None,
         };
         let bind_group = scene_group::group(device, bindings, Stage::Render, &layout, &with)
             .map_err(|e| e.to_string())?;

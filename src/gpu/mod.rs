@@ -4,6 +4,7 @@
 
 mod atlas_textures;
 pub mod cache;
+pub mod coarse;
 pub mod compute;
 pub mod embed;
 mod mesh;
@@ -19,8 +20,8 @@ pub use compute::{
 };
 pub use mesh::{check_layout, mesh_bounds, MeshError, MeshFilter, MeshRenderer};
 pub use render::{
-    eval_stats, globals, render, render_timed, scene_values, Frame, Renderer, Targets, Timings,
-    ViewMode,
+    eval_stats, globals, render, render_timed, scene_values, walked_stats, Frame, Renderer,
+    Targets, Timings, ViewMode,
 };
 
 use std::fmt;
@@ -285,6 +286,34 @@ impl WalkChoice {
             WalkChoice::Loop | WalkChoice::Auto => crate::codegen::WalkForm::Loop,
             WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
         }
+    }
+}
+
+crate::choice::choice_enum! {
+/// `render --multiscale`: whether the render walks every pixel's atlas samples or runs
+/// the multi-scale atlas pass (`codegen::coarse`), which walks one pixel in 4 × 4 and
+/// rebuilds the others where those agree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MultiScale {
+    Auto = "auto": "The pass on a GPU; every pixel walks on a software adapter (lavapipe, llvmpipe, SwiftShader, WARP), where the pass measured 0.8-1.2x the per-pixel walk's frame time and twice its pipeline time.",
+    On = "on": "The multi-scale pass.",
+    Off = "off": "Every pixel walks its atlas samples.",
+}
+}
+
+impl MultiScale {
+    /// Whether the pass runs on `gpu`.
+    pub fn on(self, gpu: &Gpu) -> bool {
+        match self {
+            MultiScale::Auto => !gpu.is_software(),
+            other => other.first(),
+        }
+    }
+
+    /// Whether the module compiled before the adapter is known has the pass (`auto`:
+    /// not; a GPU then generates the module again with it).
+    pub fn first(self) -> bool {
+        self == MultiScale::On
     }
 }
 

@@ -29,6 +29,7 @@ pub enum ViewMode {
     Albedo = "albedo": "The unlit base colour, tonemapped as the colour view is (to compare a bake with the scene exactly).",
     Level = "level": "Baked meshes only: the flat atlas's level chosen per fragment (Eq. 2 of the seamless-atlas paper), blue (level 0) to red (the last level).",
     Evals = "evals": "SDF evaluations per pixel (the render target's and the atlases' fields) while shading as the colour view does, as a heat map: black (1) through red to yellow (4096 and more), on a log scale. The normal AOV's w holds the count.",
+    Walked = "walked": "The multi-scale atlas pass: red where a material's atlas sample was walked, green where every one was rebuilt from the coarse samples, grey where no atlas is read, over the albedo's brightness. The normal AOV's w holds the samples walked and, without the atlas AOV, the atlas AOV's x those rebuilt.",
 }
 }
 
@@ -50,6 +51,7 @@ impl ViewMode {
             ViewMode::Albedo => 12.0,
             ViewMode::Level => 13.0,
             ViewMode::Evals => 14.0,
+            ViewMode::Walked => 15.0,
         }
     }
 
@@ -86,6 +88,9 @@ pub struct Timings {
     /// that walk the whole group instead (`gpu::tiles::Binned`).
     pub tile_leaves: usize,
     pub tiles_whole: usize,
+    /// The multi-scale pass's coarse samples (`gpu::coarse`; its time is in `frame`),
+    /// zero where it did not run.
+    pub coarse_samples: usize,
 }
 
 /// SDF evaluations per pixel of a frame rendered in [`ViewMode::Evals`]: mean, 95th
@@ -99,6 +104,16 @@ pub fn eval_stats(frame: &Frame) -> (f64, f64, f64) {
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     let p95 = v[((v.len() - 1) as f64 * 0.95).round() as usize];
     (mean, p95, v[v.len() - 1])
+}
+
+/// Pixels of a frame rendered in [`ViewMode::Walked`] (without the atlas AOV) that
+/// walked some atlas sample, and that rebuilt every one they read.
+pub fn walked_stats(frame: &Frame) -> (usize, usize) {
+    let walked = frame.normal.iter().filter(|n| n[3] > 0.0).count();
+    let rebuilt = (frame.normal.iter().zip(&frame.atlas))
+        .filter(|(n, a)| n[3] == 0.0 && a[0] > 0.0)
+        .count();
+    (walked, rebuilt)
 }
 
 /// A rendered frame: sRGB colour and float AOVs, row-major from the top-left.
@@ -237,6 +252,10 @@ pub struct Renderer {
     /// The traced groups binned into screen tiles every frame (`gpu::tiles`), for a
     /// module generated with `Options::tiles` that has some.
     tiling: Option<crate::codegen::tiles::Tiling>,
+    /// The multi-scale atlas pass, for a module generated with `Options::multiscale`
+    /// that has one, and whether frames run it ([`Renderer::set_multiscale`]).
+    coarse: Option<super::coarse::CoarsePass>,
+    multiscale: std::sync::atomic::AtomicBool,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
@@ -252,6 +271,17 @@ pub struct Targets {
     pub(super) views: Vec<wgpu::TextureView>,
     /// Each target's buffer and its padded row length in bytes.
     readbacks: Vec<(wgpu::Buffer, u32)>,
+}
+
+/// What one frame binds ([`Renderer::prepare`]).
+struct Prepared {
+    group: wgpu::BindGroup,
+    /// The screen tiles' timings and the coarse samples.
+    timings: Timings,
+    /// The frame's size where the multi-scale pass runs.
+    coarse: Option<(u32, u32)>,
+    /// Kept alive until the frame is drawn.
+    _buffers: wgpu::Buffer,
 }
 
 /// The timestamp queries of the measured frames.
@@ -282,13 +312,15 @@ impl Renderer {
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
         let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
-        let ((pipeline, layout), pipeline_cached) =
+        let ((pipeline, layout, coarse), pipeline_cached) =
             gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
                 gpu.scoped(|| {
                     let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
                     let cache = gpu.disk.as_ref().map(|d| &d.cache);
                     let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats, cache);
-                    (pipeline, layout)
+                    let coarse =
+                        super::coarse::CoarsePass::new(&gpu.device, module, &layout, cache);
+                    (pipeline, layout, coarse)
                 })
             })?;
         gpu.wait()?;
@@ -301,6 +333,8 @@ impl Renderer {
             params,
             moving: Default::default(),
             tiling: module.tiling.clone(),
+            coarse,
+            multiscale: std::sync::atomic::AtomicBool::new(true),
             formats,
             pipeline_time: started.elapsed(),
             pipeline_cached,
@@ -339,6 +373,59 @@ impl Renderer {
         Ok(Some(took))
     }
 
+    /// Whether the frames drawn after this run the multi-scale atlas pass (on by
+    /// default, for a module that has it): off, every atlas sample walks, with the same
+    /// pipeline (the baseline the tests and `sdfc bench` compare the pass with).
+    pub fn set_multiscale(&self, on: bool) {
+        self.multiscale
+            .store(on, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Whether the module has the multi-scale atlas pass.
+    pub fn has_multiscale(&self) -> bool {
+        self.coarse.is_some()
+    }
+
+    /// A frame's globals, screen tiles and coarse samples, and the bind group of them:
+    /// with the tiles' timings and whether the multi-scale pass runs.
+    fn prepare(&self, gpu: &Gpu, view: &View, mode: ViewMode) -> Result<Prepared, GpuError> {
+        use wgpu::util::DeviceExt;
+        let d = &gpu.device;
+        let uniforms = globals(view, mode);
+        let globals = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: bytemuck::cast_slice(&uniforms),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let tiles = self.tiles(gpu, view);
+        let size = (view.width.max(1), view.height.max(1));
+        let on = self.multiscale.load(std::sync::atomic::Ordering::Relaxed);
+        let coarse = self
+            .coarse
+            .as_ref()
+            .map(|c| c.buffer(d, size.0, size.1, on));
+        let with = scene_group::Resources {
+            images: &self.textures,
+            tables: self.tables.as_ref(),
+            globals: Some(&globals),
+            params: self.params.as_ref(),
+            tiles: tiles.as_ref().map(|t| &t.0),
+            coarse: coarse.as_ref().map(|c| &c.0),
+        };
+        let group = scene_group::group(d, &self.bindings, Stage::Render, &self.layout, &with)?;
+        let mut timings = tiles.map(|t| t.1).unwrap_or_default();
+        let coarse = coarse.is_some_and(|c| c.1);
+        if coarse {
+            timings.coarse_samples = super::coarse::samples(size.0, size.1);
+        }
+        Ok(Prepared {
+            group,
+            timings,
+            coarse: coarse.then_some(size),
+            _buffers: globals,
+        })
+    }
+
     /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the
     /// time the binning took and what it holds; `None` for a module without tiles.
     fn tiles(&self, gpu: &Gpu, view: &View) -> Option<(wgpu::Buffer, Timings)> {
@@ -363,41 +450,36 @@ impl Renderer {
         Some((buffer, timings))
     }
 
-    /// The render group's bind group, built from the binding table.
-    fn bind_group(
-        &self,
-        gpu: &Gpu,
-        globals: &wgpu::Buffer,
-        tiles: Option<&wgpu::Buffer>,
-    ) -> Result<wgpu::BindGroup, GpuError> {
-        let with = scene_group::Resources {
-            images: &self.textures,
-            tables: self.tables.as_ref(),
-            globals: Some(globals),
-            params: self.params.as_ref(),
-            tiles,
-        };
-        scene_group::group(
-            &gpu.device,
-            &self.bindings,
-            Stage::Render,
-            &self.layout,
-            &with,
-        )
-    }
-
     fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Targets {
         targets(gpu, &self.formats, width, height)
     }
 
-    /// One full-screen pass into every target.
+    /// The multi-scale pass where the frame runs it, then one full-screen pass into
+    /// every target; timed from the first pass's start to the last's end.
     fn draw(
         &self,
         enc: &mut wgpu::CommandEncoder,
         targets: &Targets,
-        bind_group: &wgpu::BindGroup,
-        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+        frame: &Prepared,
+        queries: Option<&wgpu::QuerySet>,
     ) {
+        let mut timestamps = queries.map(|q| wgpu::RenderPassTimestampWrites {
+            query_set: q,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        });
+        if let (Some(pass), Some(size)) = (&self.coarse, frame.coarse) {
+            let writes = queries.map(|q| wgpu::ComputePassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: None,
+            });
+            pass.dispatch(enc, &frame.group, size, writes);
+            if let Some(t) = &mut timestamps {
+                t.beginning_of_pass_write_index = None;
+            }
+        }
+        let bind_group = &frame.group;
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
             .views
             .iter()
@@ -441,31 +523,20 @@ impl Renderer {
         let (w, h) = (view.width.max(1), view.height.max(1));
         // Targets and their readback on the GPU, and the frame on the CPU.
         gpu.check_size(w, h, bytes_per_texel(&self.formats))?;
-        let uniforms = globals(view, mode);
-        let (targets, bind_group, queries, _globals, tiles) = gpu.scoped(|| {
-            use wgpu::util::DeviceExt;
-            let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("globals"),
-                contents: bytemuck::cast_slice(&uniforms),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let tiles = self.tiles(gpu, view);
-            let bind_group = self.bind_group(gpu, &buffer, tiles.as_ref().map(|t| &t.0));
+        let (targets, prepared, queries) = gpu.scoped(|| {
             (
                 self.targets(gpu, w, h),
-                bind_group,
+                self.prepare(gpu, view, mode),
                 queries(gpu),
-                buffer,
-                tiles,
             )
         })?;
-        let bind_group = bind_group?;
+        let prepared = prepared?;
         for _ in 0..warmup {
             gpu.scoped(|| {
                 let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("warm-up"),
                 });
-                self.draw(&mut enc, &targets, &bind_group, None);
+                self.draw(&mut enc, &targets, &prepared, None);
                 gpu.queue.submit([enc.finish()]);
             })?;
             gpu.wait()?;
@@ -480,12 +551,12 @@ impl Renderer {
                 let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame"),
                 });
-                let writes = queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
-                    query_set: &q.set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                });
-                self.draw(&mut enc, &targets, &bind_group, writes);
+                self.draw(
+                    &mut enc,
+                    &targets,
+                    &prepared,
+                    queries.as_ref().map(|q| &q.set),
+                );
                 if let Some(q) = &queries {
                     enc.resolve_query_set(&q.set, 0..2, &q.resolve, 0);
                     enc.copy_buffer_to_buffer(&q.resolve, 0, &q.read, 0, 16);
@@ -511,13 +582,13 @@ impl Renderer {
         frame.timings.pipeline = self.pipeline_time;
         frame.timings.frame = median;
         frame.timings.frame_from_timestamps = from_timestamps;
-        if let Some((_, t)) = tiles {
-            (
-                frame.timings.tiles,
-                frame.timings.tile_leaves,
-                frame.timings.tiles_whole,
-            ) = (t.tiles, t.tile_leaves, t.tiles_whole);
-        }
+        let t = prepared.timings;
+        (
+            frame.timings.tiles,
+            frame.timings.tile_leaves,
+            frame.timings.tiles_whole,
+            frame.timings.coarse_samples,
+        ) = (t.tiles, t.tile_leaves, t.tiles_whole, t.coarse_samples);
         Ok((frame, times))
     }
 
@@ -557,25 +628,15 @@ impl Renderer {
         mode: ViewMode,
         targets: &Targets,
     ) -> Result<Duration, GpuError> {
-        let uniforms = globals(view, mode);
         let started = Instant::now();
         gpu.scoped(|| {
-            use wgpu::util::DeviceExt;
-            let buffer = gpu
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("globals"),
-                    contents: bytemuck::cast_slice(&uniforms),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-            let tiles = self.tiles(gpu, view);
-            let bind_group = self.bind_group(gpu, &buffer, tiles.as_ref().map(|t| &t.0))?;
+            let prepared = self.prepare(gpu, view, mode)?;
             let mut enc = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame"),
                 });
-            self.draw(&mut enc, targets, &bind_group, None);
+            self.draw(&mut enc, targets, &prepared, None);
             gpu.queue.submit([enc.finish()]);
             Ok::<_, GpuError>(())
         })??;

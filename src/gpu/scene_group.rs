@@ -33,16 +33,24 @@ fn slots(bindings: &[Binding], stage: Stage) -> impl Iterator<Item = &Binding> {
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Render) => true,
             (Resource::Texture(_) | Resource::Sampler(_), Stage::Compute { textured }) => textured,
             (Resource::Tables | Resource::Params, _) => true,
-            (Resource::Tiles, Stage::Render) => true,
+            (Resource::Tiles | Resource::Coarse, Stage::Render) => true,
             _ => false,
         })
 }
 
 /// The layout of group 0 for `stage`.
+/// With the multi-scale pass (a `coarse` binding), the render group is also the group of
+/// its compute entry point `cs_coarse`, so every binding is visible to compute too.
 pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::BindGroupLayout {
     let shaders = match stage {
         Stage::Render => wgpu::ShaderStages::FRAGMENT,
         Stage::Compute { .. } => wgpu::ShaderStages::COMPUTE,
+    };
+    let also = match stage {
+        Stage::Render if bindings.iter().any(|b| b.resource == Resource::Coarse) => {
+            wgpu::ShaderStages::COMPUTE
+        }
+        _ => wgpu::ShaderStages::NONE,
     };
     let entries: Vec<wgpu::BindGroupLayoutEntry> = slots(bindings, stage)
         .map(|b| {
@@ -78,6 +86,14 @@ pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::Bin
                         min_binding_size: None,
                     },
                 ),
+                Resource::Coarse => (
+                    shaders,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
                 _ => (
                     shaders,
                     wgpu::BindingType::Texture {
@@ -89,7 +105,7 @@ pub fn layout(d: &wgpu::Device, bindings: &[Binding], stage: Stage) -> wgpu::Bin
             };
             wgpu::BindGroupLayoutEntry {
                 binding: b.binding,
-                visibility,
+                visibility: visibility | also,
                 ty,
                 count: None,
             }
@@ -187,6 +203,8 @@ pub struct Resources<'a> {
     pub params: Option<&'a wgpu::Buffer>,
     /// The frame's screen tiles (`gpu::tiles`), for a module generated with them.
     pub tiles: Option<&'a wgpu::Buffer>,
+    /// The frame's coarse samples (`gpu::coarse`), for a module with the multi-scale pass.
+    pub coarse: Option<&'a wgpu::Buffer>,
 }
 
 /// The bind group of `layout` (made by [`layout`] for the same `stage`); an error when a
@@ -224,6 +242,12 @@ pub fn group(
                     .tiles
                     .ok_or_else(|| {
                         missing("screen tiles (a module generated with Options::tiles is for sdfc's own renderer)")
+                    })?
+                    .as_entire_binding(),
+                Resource::Coarse => with
+                    .coarse
+                    .ok_or_else(|| {
+                        missing("coarse samples (a module generated with Options::multiscale is for sdfc's own renderer)")
                     })?
                     .as_entire_binding(),
                 _ => return Err(missing("compute buffer in the render group")),

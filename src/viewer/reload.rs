@@ -45,7 +45,7 @@ pub struct Reloader<P> {
     access: Access,
     /// The `let` shape shown instead of the render item's target (`--shape`).
     shape: Option<String>,
-    options: codegen::Options,
+    pub(super) options: codegen::Options,
     pub good: Option<Loaded<P>>,
     /// The report of the file as it is, while it does not build: the window is stale.
     pub stale: Option<String>,

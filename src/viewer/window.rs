@@ -32,6 +32,8 @@ pub struct Options {
     pub backend: Backend,
     pub size: Option<(u32, u32)>,
     pub walk: codegen::WalkForm,
+    /// The multi-scale atlas pass (`auto`: on a GPU).
+    pub multiscale: crate::gpu::MultiScale,
     pub mode: ViewMode,
     /// Render this many frames, save the screenshot and quit (tests and scripts).
     pub frames: Option<u32>,
@@ -147,6 +149,8 @@ pub fn run(options: Options) -> Result<(), ViewError> {
     let codegen_options = codegen::Options {
         walk: options.walk,
         tiles: true,
+        // Decided with the adapter (`resumed`).
+        multiscale: false,
         ..Default::default()
     };
     let mut app = App {
@@ -620,6 +624,7 @@ impl ApplicationHandler<Changed> for App {
             }
         }
         eprintln!("adapter: {}", gpu.describe());
+        self.reloader.options.multiscale = self.options.multiscale.on(&gpu);
         self.gpu = Some(gpu);
         self.window = Some(window);
         self.reload(false);

@@ -238,6 +238,18 @@ pub fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
     (sum as f64 / (n * 3.0), bad as f64 / n)
 }
 
+/// The PSNR in dB of two RGBA8 images of equal layout, over the colour channels.
+pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    let mut sum = 0.0;
+    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+        for k in 0..3 {
+            sum += (pa[k] as f64 - pb[k] as f64).powi(2);
+        }
+    }
+    let mse = sum / (a.len() / 4 * 3) as f64;
+    10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
+}
+
 /// The largest difference of any byte (channel) between two images of equal layout.
 pub fn worst_byte_difference(a: &[u8], b: &[u8]) -> u8 {
     a.iter()

@@ -1,0 +1,134 @@
+//! The multi-scale atlas pass (`Options::multiscale`; "multi-scale rendering" of the
+//! Implicit UVs paper's §7): the atlases that materials read are walked once per
+//! [`STEP`] × [`STEP`] pixels by the compute entry point `cs_coarse`, into the `coarse`
+//! storage buffer, and the render's materials rebuild each pixel's sample from the four
+//! coarse samples around it where they agree, walking only where they do not (chart
+//! borders, seams, silhouettes, failed walks, curved or bent uv). The rules are in
+//! `shaders/coarse.wgsl.in`; the runtime side is `gpu::coarse`.
+//!
+//! What this module writes: the template's code, with the slots (the atlases materials
+//! read, in index order), which slots each material reads (`coarse_reads`), the
+//! samples `cs_coarse` walks, and `atlas_K_pixel(p, m)`, which a material of id `m`
+//! calls instead of `atlas_K_at(p, true)`. Everything else (displacements, the atlas
+//! views, the compute entry points) walks as without the pass: `coarse_pixel` is
+//! negative outside `shade_pixel`.
+
+use super::template;
+use crate::uv::Atlas;
+use std::collections::BTreeSet;
+use std::fmt::Write;
+
+/// The coarse grid's spacing in pixels: the pass walks one pixel in `STEP²` (and the
+/// frame's last row and column). Measured on lavapipe (docs/performance.md): 4 rebuilds
+/// most of a curved chart within the tolerance, 8 too few of the examples' pixels.
+pub const STEP: u32 = 4;
+
+/// The rebuilt uv's fit to the coarse samples, as a fraction of the atlas's reach
+/// (`max_distance`): a cell whose four samples an affine map does not fit this well
+/// walks. Measured (tests/multiscale.rs, 320×240): 2e-5 rebuilt 8–35 % of the
+/// examples' textured pixels, 5e-5 13–66 % with every colour PSNR ≥ 46 dB, 1e-4 the
+/// sphere's 83 % at 44.9 dB (under the 45 dB goal).
+pub const TOLERANCE: f64 = 5e-5;
+
+/// The atlases materials read (the slots, by atlas index) and, per material case id,
+/// the atlases it reads.
+#[derive(Debug, Clone, Default)]
+pub struct Reads {
+    pub by_material: Vec<(i32, BTreeSet<usize>)>,
+}
+
+impl Reads {
+    /// The slots: every atlas some material reads, in index order.
+    pub fn slots(&self) -> Vec<usize> {
+        let all: BTreeSet<usize> = self
+            .by_material
+            .iter()
+            .flat_map(|(_, s)| s.iter().copied())
+            .collect();
+        all.into_iter().collect()
+    }
+}
+
+/// The pass's code, or `None` when no material reads an atlas (the module is then as
+/// without the pass). `atlases` are the prepared atlases by index.
+pub fn code(reads: &Reads, atlases: &[Option<Atlas>]) -> Result<Option<String>, String> {
+    let slots = reads.slots();
+    if slots.is_empty() {
+        return Ok(None);
+    }
+    if slots.len() > 31 {
+        return Err(format!(
+            "the multi-scale pass holds at most 31 atlases read by materials, not {}",
+            slots.len()
+        ));
+    }
+    let slot_of = |a: usize| slots.iter().position(|&s| s == a).unwrap_or(0);
+    let mut arms = String::new();
+    for (m, used) in &reads.by_material {
+        if used.is_empty() {
+            continue;
+        }
+        let mask: u32 = used.iter().map(|&a| 1u32 << slot_of(a)).sum();
+        let _ = writeln!(
+            arms,
+            "        case {m}: {{\n            return {mask}u;\n        }}"
+        );
+    }
+    let mut samples = String::new();
+    let mut pixel = String::new();
+    for (k, &a) in slots.iter().enumerate() {
+        let at = 1 + 4 * k;
+        let _ = writeln!(
+            samples,
+            "    if ((reads & {bit}u) != 0u) {{\n        coarse_store(base + {at}u, atlas_{a}_at(p, true));\n    }} else {{\n        coarse[base + {at}u] = vec4<f32>(0.0, 0.0, -1.0, -1.0);\n    }}",
+            bit = 1u32 << k
+        );
+        let reach = atlases
+            .get(a)
+            .and_then(Option::as_ref)
+            .map_or(1.0, |atlas| atlas.params.max_distance);
+        let tolerance = super::literal::lit(TOLERANCE * reach);
+        let _ = write!(
+            pixel,
+            "// Atlas {a}'s sample where a material of id m reads it at p: rebuilt from the
+// multi-scale pass's coarse samples (coarse_rebuild) in a render pixel where they agree,
+// walked elsewhere.
+fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
+    let r = coarse_rebuild({k}u, p, m, {tolerance});
+    if (r.status != f32(COARSE_WALK)) {{
+        return r;
+    }}
+    if (coarse_pixel.x >= 0.0) {{
+        coarse_walks = coarse_walks + 1u;
+    }}
+    return atlas_{a}_at(p, true);
+}}
+
+"
+        );
+    }
+    let filled = template::fill(
+        template::COARSE,
+        &[
+            ("step", STEP.to_string()),
+            ("slots", slots.len().to_string()),
+            ("reads", arms),
+            ("samples", samples),
+        ],
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(Some(format!("{filled}\n{pixel}")))
+}
+
+/// The `coarse` buffer's size in bytes for a `width` × `height` frame of a module with
+/// `slots` slots (what `cs_coarse` writes and `coarse_ready` checks).
+pub fn buffer_bytes(width: u32, height: u32, slots: usize) -> u64 {
+    let (cols, rows) = grid(width, height);
+    cols as u64 * rows as u64 * (1 + 4 * slots as u64) * 16
+}
+
+/// The coarse grid's columns and rows for a frame (`coarse_columns`, `coarse_rows`).
+pub fn grid(width: u32, height: u32) -> (u32, u32) {
+    let axis = |n: u32| (n.max(1) + STEP - 2) / STEP + 1;
+    (axis(width), axis(height))
+}

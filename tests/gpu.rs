@@ -837,4 +837,7 @@ fn the_scene_bench_writes_its_rows_and_ratios() {
         differences > 0.0 && differences.is_finite(),
         "{differences}"
     );
+    // Its material reads the atlas: the multi-scale pass has its row.
+    let multiscale = ratio("multi-scale pass ÷ per-pixel walk, loop");
+    assert!(multiscale > 0.0 && multiscale.is_finite(), "{multiscale}");
 }

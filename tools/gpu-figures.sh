@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The performance figures that need a real GPU (docs/performance.md), in one run:
 # robot.sdf and sphere.sdf at 1080p with every variant `sdfc bench` compares (unrolled
-# and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked),
+# and loop walks, constant uv, pruning, node bounds, seed data in the buffer or baked,
+# the multi-scale atlas pass against the per-pixel walk),
 # and the seed sweep with its chart, both walk forms, and once on central differences
 # against forward derivatives; and the big scenes of `sdfc bench --scale` (groups
 # against the same unions as code, per-tile culling against none). Each bench writes

@@ -195,6 +195,8 @@ struct Forms {
     refined: Vec<Module>,
     /// The walks on central differences where the compiler differentiates forward.
     differenced: Option<Module>,
+    /// The loop walk with the multi-scale atlas pass, where materials read an atlas.
+    multiscaled: Option<Module>,
 }
 
 impl Forms {
@@ -216,6 +218,9 @@ impl Forms {
         let unmapped = unmapped_forms(from)?;
         let refined = refined_forms(from)?;
         let differenced = differenced_form(from)?;
+        // The multi-scale atlas pass (`render --multiscale on`), where it has one.
+        let multiscaled =
+            Some(from.looped(|o| o.multiscale = true)?).filter(|m| m.coarse_slots > 0);
         Ok(Forms {
             plain,
             unrolled,
@@ -229,6 +234,7 @@ impl Forms {
             unmapped,
             refined,
             differenced,
+            multiscaled,
         })
     }
 
@@ -397,6 +403,7 @@ struct Rows<'a> {
     unmapped: Option<(usize, usize)>,
     refined: Option<(usize, usize)>,
     differenced: Option<usize>,
+    multiscaled: Option<usize>,
 }
 
 impl<'a> Rows<'a> {
@@ -466,6 +473,10 @@ impl<'a> Rows<'a> {
             .differenced
             .as_ref()
             .map(|m| push(&[("shaded, loop walk, differences", m)]));
+        let multiscaled = forms
+            .multiscaled
+            .as_ref()
+            .map(|m| push(&[("shaded, loop walk, multi-scale pass", m)]));
         let refined = match &forms.refined[..] {
             [one, two] => {
                 let k = push(&[
@@ -485,6 +496,7 @@ impl<'a> Rows<'a> {
             unmapped,
             refined,
             differenced,
+            multiscaled,
         }
     }
 
@@ -510,6 +522,10 @@ impl<'a> Rows<'a> {
         }
         if let Some(k) = self.differenced {
             pairs.push(("differences ÷ forward derivatives, loop", k, 2));
+        }
+        if let Some(k) = self.multiscaled {
+            pairs.push(("multi-scale pass ÷ per-pixel walk, loop", k, 2));
+            pairs.push(("textured ÷ constant uv, loop, multi-scale pass", k, 4));
         }
         if let Some((plain_costly, costly, all)) = self.bounded {
             pairs.push(("node bounds ÷ none, plain", plain_costly, 0));

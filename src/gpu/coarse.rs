@@ -3,8 +3,8 @@
 //! pixel in `STEP²` into the frame's `coarse` buffer, which the render pass then reads.
 //!
 //! Limit, checked before the work: the buffer must fit the device's largest storage
-//! binding (`max_storage_buffer_binding_size`; 128 MiB by default, about 3,300 × 3,300
-//! pixels with one atlas read). A larger frame, or one drawn with the pass turned off
+//! binding (`max_storage_buffer_binding_size`; 128 MiB by default: 5 bytes a pixel with
+//! one atlas read and 4 more for each other, so a 3840 × 2160 frame with up to three). A larger frame, or one drawn with the pass turned off
 //! ([`super::Renderer::set_multiscale`]), binds a 16-byte buffer instead, which the
 //! shader's `coarse_ready` refuses: every sample walks, as without the pass.
 
@@ -58,7 +58,7 @@ impl CoarsePass {
     pub fn fits(&self, d: &wgpu::Device, width: u32, height: u32) -> bool {
         let limits = d.limits();
         let bytes = buffer_bytes(width, height, self.slots);
-        bytes <= limits.max_storage_buffer_binding_size as u64 && bytes <= limits.max_buffer_size
+        bytes <= limits.max_storage_buffer_binding_size && bytes <= limits.max_buffer_size
     }
 
     /// The `coarse` buffer of a frame: its samples' size when `on` and they fit, else 16

@@ -7,6 +7,7 @@ pub mod cache;
 pub mod coarse;
 pub mod compute;
 pub mod embed;
+pub mod frame;
 mod mesh;
 pub mod overdraw;
 mod render;

@@ -405,29 +405,79 @@ fn the_viewer_window_shows_what_render_draws() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let shot = dir.path().join("view.png");
     let reference = dir.path().join("render.png");
+    // The per-pixel walk, and the multi-scale atlas pass (which must draw the same).
+    for multiscale in ["off", "on"] {
+        let shot = dir.path().join(format!("view-{multiscale}.png"));
+        let out = std::process::Command::new("xvfb-run")
+            .args([
+                "-a",
+                "-s",
+                "-screen 0 640x480x24",
+                env!("CARGO_BIN_EXE_sdfc"),
+                "view",
+            ])
+            .arg("examples/capsule.sdf")
+            .args([
+                "--size",
+                "160x120",
+                "--frames",
+                "2",
+                "--multiscale",
+                multiscale,
+            ])
+            .arg("--screenshot")
+            .arg(&shot)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.code() == Some(4) && !require {
+            eprintln!("SKIPPED: no window or adapter for the viewer:\n{stderr}");
+            return;
+        }
+        assert!(out.status.success(), "sdfc view failed:\n{stderr}");
+        assert!(stderr.contains("saved"), "{stderr}");
+        assert_eq!(
+            stderr.contains("multi-scale atlas pass: on"),
+            multiscale == "on",
+            "{stderr}"
+        );
+        compare_with_render(&shot, &reference, &stderr);
+    }
+    // The pass ran in the window: its map shows rebuilt (green) and walked (red) pixels.
+    let walked = dir.path().join("walked.png");
     let out = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_sdfc"))
         .args([
-            "-a",
-            "-s",
-            "-screen 0 640x480x24",
-            env!("CARGO_BIN_EXE_sdfc"),
             "view",
+            "examples/sphere.sdf",
+            "--size",
+            "160x120",
+            "--frames",
+            "2",
         ])
-        .arg("examples/capsule.sdf")
-        .args(["--size", "160x120", "--frames", "2", "--screenshot"])
-        .arg(&shot)
+        .args(["--view", "walked", "--multiscale", "on", "--screenshot"])
+        .arg(&walked)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if out.status.code() == Some(4) && !require {
-        eprintln!("SKIPPED: no window or adapter for the viewer:\n{stderr}");
-        return;
-    }
-    assert!(out.status.success(), "sdfc view failed:\n{stderr}");
-    assert!(stderr.contains("saved"), "{stderr}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let map = image::open(&walked).unwrap().to_rgba8();
+    let count = |f: fn(&image::Rgba<u8>) -> bool| map.pixels().filter(|p| f(p)).count();
+    let green = count(|p| p[1] as i32 > p[0] as i32 + 60);
+    let red = count(|p| p[0] as i32 > p[1] as i32 + 60);
+    assert!(green > 500 && red > 0, "green {green}, red {red}");
+}
+
+/// The viewer's screenshot `shot` against `sdfc render` of the same view (the
+/// per-pixel walk) into `reference`.
+fn compare_with_render(shot: &Path, reference: &Path, stderr: &str) {
     let (code, _, err) = common::sdfc(&[
         "render",
         "examples/capsule.sdf",
@@ -439,8 +489,8 @@ fn the_viewer_window_shows_what_render_draws() {
         reference.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    let a = image::open(&shot).unwrap().to_rgba8();
-    let b = image::open(&reference).unwrap().to_rgba8();
+    let a = image::open(shot).unwrap().to_rgba8();
+    let b = image::open(reference).unwrap().to_rgba8();
     assert_eq!(a.dimensions(), b.dimensions());
     let (mean, share) = common::image_difference(a.as_raw(), b.as_raw());
     eprintln!(

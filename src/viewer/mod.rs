@@ -21,7 +21,7 @@ pub use window::{run, Options};
 use crate::gpu::ViewMode;
 
 /// The views on the number keys 1 to 9, in order.
-pub const VIEWS: [(ViewMode, &str); 9] = [
+pub const VIEWS: [(ViewMode, &str); 10] = [
     (ViewMode::Color, "colour"),
     (ViewMode::Normal, "normal"),
     (ViewMode::Checker, "uv checker"),
@@ -31,6 +31,7 @@ pub const VIEWS: [(ViewMode, &str); 9] = [
     (ViewMode::Seams, "seams"),
     (ViewMode::Status, "status"),
     (ViewMode::Steps, "steps"),
+    (ViewMode::Walked, "walked"),
 ];
 
 /// The reduction of the resolution while the camera moves: the divisor of each side

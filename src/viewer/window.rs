@@ -625,6 +625,9 @@ impl ApplicationHandler<Changed> for App {
         }
         eprintln!("adapter: {}", gpu.describe());
         self.reloader.options.multiscale = self.options.multiscale.on(&gpu);
+        if self.reloader.options.multiscale {
+            eprintln!("multi-scale atlas pass: on");
+        }
         self.gpu = Some(gpu);
         self.window = Some(window);
         self.reload(false);

@@ -4,7 +4,8 @@
 //! storage buffer, and the render's materials rebuild each pixel's sample from the four
 //! coarse samples around it where they agree, walking only where they do not (chart
 //! borders, seams, silhouettes, failed walks, curved or bent uv). The rules are in
-//! `shaders/coarse.wgsl.in`; the runtime side is `gpu::coarse`.
+//! `shaders/coarse.wgsl.in` and, in f64, `reference::coarse` (with the constants); the
+//! runtime side is `gpu::coarse`.
 //!
 //! What this module writes: the template's code, with the slots (the atlases materials
 //! read, in index order), which slots each material reads (`coarse_reads`), the
@@ -18,17 +19,7 @@ use crate::uv::Atlas;
 use std::collections::BTreeSet;
 use std::fmt::Write;
 
-/// The coarse grid's spacing in pixels: the pass walks one pixel in `STEP²` (and the
-/// frame's last row and column). Measured on lavapipe (docs/performance.md): 4 rebuilds
-/// most of a curved chart within the tolerance, 8 too few of the examples' pixels.
-pub const STEP: u32 = 4;
-
-/// The rebuilt uv's fit to the coarse samples, as a fraction of the atlas's reach
-/// (`max_distance`): a cell whose four samples an affine map does not fit this well
-/// walks. Measured (tests/multiscale.rs, 320×240): 2e-5 rebuilt 8–35 % of the
-/// examples' textured pixels, 5e-5 13–66 % with every colour PSNR ≥ 46 dB, 1e-4 the
-/// sphere's 83 % at 44.9 dB (under the 45 dB goal).
-pub const TOLERANCE: f64 = 5e-5;
+pub use crate::reference::coarse::{CONDITION, FLATNESS, STEP, TOLERANCE};
 
 /// The atlases materials read (the slots, by atlas index) and, per material case id,
 /// the atlases it reads.
@@ -112,6 +103,8 @@ fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
         &[
             ("step", STEP.to_string()),
             ("slots", slots.len().to_string()),
+            ("flatness", super::literal::lit(FLATNESS)),
+            ("condition", super::literal::lit(CONDITION)),
             ("reads", arms),
             ("samples", samples),
         ],

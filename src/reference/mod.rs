@@ -5,6 +5,7 @@
 //! shell-map uv from a scene's prepared atlases and decoded textures ([`Env`]), which
 //! the IR's evaluator takes as an argument ([`crate::ir::Heights`]).
 
+pub mod coarse;
 pub mod material;
 pub mod mesh;
 pub mod surface;

@@ -14,7 +14,8 @@
 //! views, the compute entry points) walks as without the pass: `coarse_pixel` is
 //! negative outside `shade_pixel`.
 
-use super::template;
+use super::{internal, template, Generator, Options};
+use crate::diagnostic::Diagnostic;
 use crate::uv::Atlas;
 use std::collections::BTreeSet;
 use std::fmt::Write;
@@ -37,6 +38,37 @@ impl Reads {
             .flat_map(|(_, s)| s.iter().copied())
             .collect();
         all.into_iter().collect()
+    }
+}
+
+impl Generator<'_> {
+    /// With `Options::multiscale`, the pass's code (after the materials, whose reads it
+    /// needs); returns the slots (zero without the pass) and the atlas AOV's expression:
+    /// with the pass, the chosen atlas as materials read it.
+    pub(super) fn multiscale_pass(
+        &mut self,
+        atlases: &[Option<Atlas>],
+        options: &Options,
+    ) -> Result<(usize, String), Vec<Diagnostic>> {
+        let pass = match self.multiscale {
+            true => code(&self.reads, atlases).map_err(internal)?,
+            false => None,
+        };
+        let Some(pass) = pass else {
+            return Ok((0, String::from("scene_atlas(p)")));
+        };
+        self.out.push_str(&pass);
+        let slots = self.reads.slots();
+        let all = &self.program.atlases;
+        let chosen = match options.atlas.as_deref() {
+            Some(name) => all.iter().position(|a| a.name == name),
+            None => (!all.is_empty()).then_some(0),
+        };
+        let aov = match chosen {
+            Some(k) if slots.contains(&k) => format!("atlas_{k}_pixel(p, i32(hit.z + 0.5))"),
+            _ => String::from("scene_atlas(p)"),
+        };
+        Ok((slots.len(), aov))
     }
 }
 

@@ -32,7 +32,14 @@ fn bake_source(
     .expect("compiles");
     let scene = analysis.scene.as_ref().expect("scene");
     let shape = sdfc::driver::pick_shape(scene, None).expect("shape");
-    pipeline::bake(gpu, &compiled.module, base, shape, options, &Quiet)
+    pipeline::bake(
+        gpu,
+        &compiled.module,
+        base,
+        analysis.field(shape),
+        options,
+        &Quiet,
+    )
 }
 
 /// Every level-0 texel of a bake with its surface point and footprint, in the bake's

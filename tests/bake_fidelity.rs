@@ -101,7 +101,8 @@ fn compare_frames(
         style,
         ..Options::default()
     };
-    let baked = pipeline::bake(&gpu, &compiled.module, base, shape, &options, &Quiet).unwrap();
+    let field = analysis.field(shape);
+    let baked = pipeline::bake(&gpu, &compiled.module, base, field, &options, &Quiet).unwrap();
     let mut view = sdfc::view::View::new(analysis.program.render.as_ref(), shape);
     view.width = w;
     view.height = h;

@@ -48,7 +48,8 @@ fn bake(gpu: &Gpu, style: Style, max_chart: usize) -> Baked {
         max_chart,
         ..Options::default()
     };
-    pipeline::bake(gpu, &compiled.module, dir.path(), shape, &options, &Quiet).unwrap()
+    let field = analysis.field(shape);
+    pipeline::bake(gpu, &compiled.module, dir.path(), field, &options, &Quiet).unwrap()
 }
 
 #[test]

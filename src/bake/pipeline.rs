@@ -416,8 +416,9 @@ fn plan(gpu: &Gpu, shape: &Shape, options: &Options) -> Result<(Grid, usize), Ba
 }
 
 /// Runs the whole bake of `shape` (with the environment of its heights: a shape of a
-/// scene with displacements comes from `driver::Analysis::field`) with the compiled
-/// scene `module`. A bake whose
+/// scene with displacements or shell maps comes from `driver::Analysis::field`; a
+/// bare shape's `Field::plain` has none, and would bake the surface without them)
+/// with the compiled scene `module`. A bake whose
 /// [`estimated_peak_bytes`] is over [`MAX_BAKE_BYTES`] is refused before any GPU work
 /// ([`BakeError::Resource`]): its mesh grid before meshing, the rest once the atlas
 /// is laid out.
@@ -425,11 +426,10 @@ pub fn bake<'s>(
     gpu: &Gpu,
     module: &Module,
     base_dir: &Path,
-    shape: impl Into<crate::ir::Field<'s>>,
+    shape: crate::ir::Field<'s>,
     options: &Options,
     progress: &dyn Progress,
 ) -> Result<Baked, BakeError> {
-    let shape: crate::ir::Field = shape.into();
     let mut report = Report::default();
     let mut clock = Instant::now();
     let mut lap = |report: &mut Report, name: &'static str| {

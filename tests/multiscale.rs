@@ -43,6 +43,7 @@ fn agreement(gpu: &Gpu, example: &str, (w, h): (u32, u32)) -> Agreement {
     assert!(module.coarse_slots > 0, "{example} reads an atlas");
     let reach = a.atlases[0].as_ref().unwrap().params.max_distance;
     let r = Renderer::new(gpu, &module, base).unwrap();
+    assert!(r.has_multiscale());
     let shape = a
         .scene
         .as_ref()

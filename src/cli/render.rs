@@ -123,6 +123,12 @@ pub fn run(args: RenderArgs) -> ExitCode {
         compile_time += again.elapsed();
     }
     let module = &compiled.module;
+    if args.view == ViewMode::Walked && module.coarse_slots == 0 {
+        eprintln!(
+            "note: the multi-scale atlas pass is off here (--multiscale {}), so the walked view shows no rebuilt pixel: every atlas sample walks; --multiscale on runs it",
+            args.multiscale
+        );
+    }
     if let Some(seconds) = args.animate {
         if !args.aov.is_empty() || args.timings {
             eprintln!("error: --animate writes colour frames only (no --aov, no --timings)");

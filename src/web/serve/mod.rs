@@ -208,6 +208,28 @@ fn builder(
     }
 }
 
+/// The most of a refused request's rest that [`linger`] reads, and for how long.
+const LINGER_BYTES: usize = 1 << 20;
+const LINGER_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// A lingering close after a refusal: the answer is sent, the writing side shut, and
+/// the rest of the request (at most [`LINGER_BYTES`], for at most [`LINGER_TIME`]) read
+/// and dropped. Closing a socket with unread input resets the connection, and a reset
+/// can reach the client before it has read the answer (a 431 to an oversized head).
+fn linger(stream: &mut TcpStream) {
+    use std::io::Read;
+    let _ = stream.shutdown(std::net::Shutdown::Write);
+    let _ = stream.set_read_timeout(Some(LINGER_TIME));
+    let started = std::time::Instant::now();
+    let (mut buf, mut read) = ([0u8; 8192], 0);
+    while read < LINGER_BYTES && started.elapsed() < LINGER_TIME {
+        match stream.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => read += n,
+        }
+    }
+}
+
 impl Server {
     /// Reads one request and answers it; errors writing mean the page went away.
     fn answer(&self, mut stream: TcpStream) {
@@ -217,6 +239,7 @@ impl Server {
             Ok(r) => r,
             Err(why) => {
                 let _ = http::refusal(&mut stream, &why);
+                linger(&mut stream);
                 return;
             }
         };

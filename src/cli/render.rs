@@ -176,22 +176,29 @@ pub fn run(args: RenderArgs) -> ExitCode {
                 String::new()
             }
         );
-        if args.view == ViewMode::Walked {
-            let (walked, rebuilt) = gpu::walked_stats(&frame);
-            t.push_str(&format!(
-                "walked:    {walked} pixels walked an atlas sample, {rebuilt} rebuilt every one ({:.1} % of the pixels that read one walked)\n",
-                100.0 * walked as f64 / (walked + rebuilt).max(1) as f64
-            ));
-        }
-        if args.view == ViewMode::Evals {
-            let (mean, p95, max) = gpu::eval_stats(&frame);
-            t.push_str(&format!(
-                "evals:     {mean:.1} per pixel (mean), {p95:.0} (95th percentile), {max:.0} (max)\n"
-            ));
-        }
+        t.push_str(&view_stats(args.view, &frame));
         t
     });
     write_frame(&args, &frame, timings)
+}
+
+/// The `--timings` lines of the views that count something per pixel (walked, evals).
+fn view_stats(view: ViewMode, frame: &gpu::Frame) -> String {
+    let mut out = String::new();
+    if view == ViewMode::Walked {
+        let (walked, rebuilt) = gpu::walked_stats(frame);
+        out.push_str(&format!(
+        "walked:    {walked} pixels walked an atlas sample, {rebuilt} rebuilt every one ({:.1} % of the pixels that read one walked)\n",
+        100.0 * walked as f64 / (walked + rebuilt).max(1) as f64
+        ));
+    }
+    if view == ViewMode::Evals {
+        let (mean, p95, max) = gpu::eval_stats(frame);
+        out.push_str(&format!(
+            "evals:     {mean:.1} per pixel (mean), {p95:.0} (95th percentile), {max:.0} (max)\n"
+        ));
+    }
+    out
 }
 
 /// Whether a path names a baked mesh (`.glb`, any case).

@@ -99,7 +99,7 @@ pub fn rebuild(c: &[Corner; 4], p: DVec3, material: i32, tolerance: f64) -> Opti
     let w = weights(xp);
     // Ties go to the later corner, as the shader's selects do.
     let heaviest = (0..4).fold(0, |best, k| if w[k] >= w[best] { k } else { best });
-    let mut out = c[0].sample.clone();
+    let mut out = c[0].sample;
     out.uv = (0..4).map(|k| w[k] * c[k].sample.uv).sum();
     out.distance = (0..4).map(|k| w[k] * c[k].sample.distance).sum();
     out.weight = (0..4)

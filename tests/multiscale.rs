@@ -44,13 +44,7 @@ fn agreement(gpu: &Gpu, example: &str, (w, h): (u32, u32)) -> Agreement {
     let reach = a.atlases[0].as_ref().unwrap().params.max_distance;
     let r = Renderer::new(gpu, &module, base).unwrap();
     assert!(r.has_multiscale());
-    let shape = a
-        .scene
-        .as_ref()
-        .and_then(|s| s.render.clone())
-        .unwrap_or_default();
-    let mut view = View::new(a.program.render.as_ref(), &shape);
-    (view.width, view.height) = (w, h);
+    let mut view = common::scene_view(&a, (w, h));
     let walked = frame(gpu, &r, &view, ViewMode::Walked, true);
     assert!(walked.timings.coarse_samples > 0);
     view.atlas_aov = true;
@@ -220,14 +214,8 @@ fn the_rebuild_agrees_with_the_f64_reference() {
     };
     let module = driver::compile(&a, &options).unwrap().module;
     let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
-    let shape = a
-        .scene
-        .as_ref()
-        .and_then(|s| s.render.clone())
-        .unwrap_or_default();
-    let mut view = View::new(a.program.render.as_ref(), &shape);
     let (w, h) = (160u32, 120u32);
-    (view.width, view.height) = (w, h);
+    let mut view = common::scene_view(&a, (w, h));
     let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
     view.atlas_aov = true;
     let shown = frame(&gpu, &r, &view, ViewMode::Color, true);

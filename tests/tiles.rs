@@ -34,16 +34,7 @@ fn module(a: &driver::Analysis, tiles: bool) -> sdfc::codegen::Module {
     .module
 }
 
-fn view_of(a: &driver::Analysis, (w, h): (u32, u32)) -> View {
-    let shape = a
-        .scene
-        .as_ref()
-        .and_then(|s| s.render.clone())
-        .unwrap_or_default();
-    let mut view = View::new(a.program.render.as_ref(), &shape);
-    (view.width, view.height) = (w, h);
-    view
-}
+use common::scene_view as view_of;
 
 /// The ray parameter where the ray meets box [lo, hi], if it does at t ≥ 0.
 fn slab(o: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> Option<f64> {

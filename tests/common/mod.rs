@@ -238,6 +238,18 @@ pub fn image_difference(a: &[u8], b: &[u8]) -> (f64, f64) {
     (sum as f64 / (n * 3.0), bad as f64 / n)
 }
 
+/// The view of a checked scene's render item at `w` × `h` pixels.
+pub fn scene_view(a: &sdfc::driver::Analysis, (w, h): (u32, u32)) -> sdfc::view::View {
+    let shape = a
+        .scene
+        .as_ref()
+        .and_then(|s| s.render.clone())
+        .unwrap_or_default();
+    let mut view = sdfc::view::View::new(a.program.render.as_ref(), &shape);
+    (view.width, view.height) = (w, h);
+    view
+}
+
 /// The PSNR in dB of two RGBA8 images of equal layout, over the colour channels.
 pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
     let mut sum = 0.0;

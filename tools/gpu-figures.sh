@@ -13,6 +13,13 @@
 #   SIZE=160x90 FRAMES=3 tools/gpu-figures.sh OUT_DIR   # a quick check of the script
 #
 # Build first (cargo build --release); the script runs target/release/sdfc, or $SDFC.
+#
+# Time: on a machine whose driver has never seen these modules, every pipeline is
+# compiled cold (on an NVIDIA H200, about 5 s for an unrolled module and 0.4-0.7 s
+# for a loop one), and the whole script takes well over 15 minutes; `robot` alone
+# took over 110 s. Each bench prints its table when it ends, so give each part its
+# own time limit rather than killing the whole run (docs/performance.md, Figures
+# from a GPU, says how the 2026-11-28 figures were taken).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -51,11 +58,31 @@ for scene in robot sphere csg plate; do
     --json "$out/$scene.json" 2>&1 | tee "$out/$scene.txt"
 done
 
+# The sweep's chart needs a font (sdfc looks for DejaVu Sans, Liberation Sans or
+# Arial, or SDFC_PLOT_FONT); a machine without one still gets the sweep's tables.
+have_font() {
+  [ -n "${SDFC_PLOT_FONT:-}" ] && return 0
+  local f
+  for f in /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf /usr/share/fonts/dejavu/DejaVuSans.ttf \
+    /usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf /usr/share/fonts/TTF/DejaVuSans.ttf \
+    /usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf \
+    /usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf; do
+    [ -f "$f" ] && return 0
+  done
+  return 1
+}
+
 for walk in unrolled loop; do
   want sweep || continue
   echo "== seed sweep, $walk walk"
+  plot=()
+  if have_font; then
+    plot=(--plot "$out/sweep-$walk.png")
+  else
+    echo "note: no font for the chart (set SDFC_PLOT_FONT to a .ttf file); tables only"
+  fi
   "$sdfc" bench --seed-sweep --walk "$walk" --size "$size" --frames "$frames" \
-    --json "$out/sweep-$walk.json" --plot "$out/sweep-$walk.png" 2>&1 | tee "$out/sweep-$walk.txt"
+    --json "$out/sweep-$walk.json" "${plot[@]}" 2>&1 | tee "$out/sweep-$walk.txt"
 done
 
 # The walk's gradients: forward derivatives (a GPU's default) against central

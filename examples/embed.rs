@@ -4,14 +4,20 @@
 //! queue; this program does all of that itself.
 //!
 //! `cargo run --release --example embed -- examples/capsule.sdf capsule.png [320x240]`
-//! draws what `sdfc render examples/capsule.sdf --size 320x240` draws.
+//! draws what `sdfc render examples/capsule.sdf --size 320x240` draws. With
+//! `--multiscale` last, the module has the multi-scale atlas pass, which the host runs
+//! before the draw (`SceneRenderer::prepare`), as `sdfc render --multiscale on` does.
 
 use std::path::Path;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let multiscale = args.last().is_some_and(|a| a == "--multiscale");
+    if multiscale {
+        args.pop();
+    }
     let (Some(scene), Some(out)) = (args.get(1), args.get(2)) else {
-        eprintln!("usage: embed SCENE OUT.png [WIDTHxHEIGHT]");
+        eprintln!("usage: embed SCENE OUT.png [WIDTHxHEIGHT] [--multiscale]");
         std::process::exit(2);
     };
     // 1. Check and compile the scene (the textures it reads are decoded for the GPU).
@@ -26,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let options = sdfc::Options {
         walk: sdfc::WalkForm::Loop,
+        multiscale,
         ..Default::default()
     };
     let module = sdfc::compile(&analysis, &options)?.module;
@@ -42,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // 3. The scene's pipeline on that device, and the globals from the scene's view.
     let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let scene = sdfc::SceneRenderer::new(&device, &queue, &module, &textures, format)?;
+    let mut scene = sdfc::SceneRenderer::new(&device, &queue, &module, &textures, format)?;
     scene.set_globals(&queue, &sdfc::globals(&view, sdfc::ViewMode::Color));
 
     // 4. Draw into the host's texture with the host's encoder, and read it back.
@@ -69,6 +76,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mapped_at_creation: false,
     });
     let mut encoder = device.create_command_encoder(&Default::default());
+    // The multi-scale pass, where the module has it: before the draw, in this encoder.
+    scene.prepare(&device, &mut encoder, (width, height))?;
     {
         let view = target.create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -19,11 +19,16 @@ fn schema() -> jsonschema::Validator {
 
 /// The manifest `sdfc compile` writes for `scene` (loop walk).
 fn manifest_of(scene: &Path) -> Value {
+    manifest_with(scene, &[])
+}
+
+/// [`manifest_of`], with `extra` arguments to `sdfc compile`.
+fn manifest_with(scene: &Path, extra: &[&str]) -> Value {
     let dir = tempfile::tempdir().unwrap();
     let (wgsl, json) = (dir.path().join("m.wgsl"), dir.path().join("m.json"));
     let (wgsl, json) = (wgsl.to_str().unwrap(), json.to_str().unwrap());
     let args = ["compile", "--walk", "loop", "-o", wgsl, "--manifest", json];
-    let (code, _, err) = common::sdfc(&[&args[..], &[scene.to_str().unwrap()]].concat());
+    let (code, _, err) = common::sdfc(&[&args[..], extra, &[scene.to_str().unwrap()]].concat());
     assert_eq!(code, 0, "{}: {err}", scene.display());
     serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
 }
@@ -64,6 +69,89 @@ fn every_example_manifest_meets_the_schema() {
         );
         let far = scene_values["globals"][8][0].as_f64().unwrap();
         assert!(far > 0.0, "{}: far {far}", scene.display());
+    }
+}
+
+#[test]
+fn a_module_with_the_multiscale_pass_states_its_contract() {
+    use sdfc::codegen::coarse;
+    let m = manifest_with(Path::new("examples/robot.sdf"), &["--multiscale"]);
+    let errors: Vec<String> = schema().iter_errors(&m).map(|e| e.to_string()).collect();
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
+    let c = &m["coarse"];
+    assert_eq!(c["entry_point"], "cs_coarse");
+    assert_eq!(c["step"], coarse::STEP);
+    let slots = c["slots"].as_u64().unwrap();
+    assert!(slots >= 1, "{c}");
+    assert_eq!(c["vec4s_per_sample"].as_u64().unwrap(), 1 + 4 * slots);
+    let side = coarse::WORKGROUP_SIDE;
+    assert_eq!(c["workgroup_size"], serde_json::json!([side, side, 1]));
+    // The entry point and the binding the contract names are the module's.
+    let ep = m["entry_points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["name"] == "cs_coarse")
+        .expect("cs_coarse among the entry points");
+    assert_eq!(ep["workgroup_size"], c["workgroup_size"]);
+    let b = m["bindings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|b| b["name"] == "coarse")
+        .expect("the coarse binding");
+    assert_eq!(
+        (&b["group"], &b["binding"]),
+        (&serde_json::json!(0), &c["binding"])
+    );
+    assert_eq!(b["kind"], "storage-read-write");
+    for user in ["fs_main", "cs_coarse"] {
+        assert!(
+            b["used_by"].as_array().unwrap().iter().any(|u| u == user),
+            "{b}"
+        );
+    }
+    // The steps in words give the runtime's grid, buffer and dispatch at any size.
+    let step = coarse::STEP;
+    for (w, h) in [
+        (1, 1),
+        (2, 3),
+        (5, 4),
+        (160, 90),
+        (641, 479),
+        (1920, 1080),
+        (3840, 2160),
+    ] {
+        let axis = |n: u32| (n.max(1) + step - 2) / step + 1;
+        let (columns, rows) = (axis(w), axis(h));
+        assert_eq!((columns, rows), coarse::grid(w, h), "{w}x{h}");
+        let bytes = columns as u64 * rows as u64 * (1 + 4 * slots) * 16;
+        assert_eq!(bytes, coarse::buffer_bytes(w, h, slots as usize), "{w}x{h}");
+        assert_eq!(
+            (columns.div_ceil(side), rows.div_ceil(side)),
+            coarse::workgroups(w, h),
+            "{w}x{h}"
+        );
+        // The pass covers every pixel: the last column and row reach the frame's edge.
+        assert!((columns - 1) * step >= w - 1 && (rows - 1) * step >= h - 1);
+    }
+    // Without --multiscale, or for a scene whose materials read no atlas: no pass.
+    for (scene, extra) in [
+        ("examples/robot.sdf", &[][..]),
+        ("examples/primitives.sdf", &["--multiscale"][..]),
+    ] {
+        let m = manifest_with(Path::new(scene), extra);
+        assert!(m.get("coarse").is_none(), "{scene} {extra:?}");
+        let names: Vec<&str> = m["entry_points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["name"].as_str().unwrap())
+            .collect();
+        assert!(
+            !names.contains(&"cs_coarse"),
+            "{scene} {extra:?}: {names:?}"
+        );
     }
 }
 
@@ -163,6 +251,11 @@ fn layouts(device: &wgpu::Device, m: &Value, entry: &str) -> Vec<wgpu::BindGroup
         _ => wgpu::ShaderStages::COMPUTE,
     };
     let mut groups: Vec<Vec<wgpu::BindGroupLayoutEntry>> = vec![Vec::new(), Vec::new()];
+    // WebGPU: a writable storage buffer is not visible to the vertex stage.
+    let writable = match visibility {
+        wgpu::ShaderStages::VERTEX_FRAGMENT => wgpu::ShaderStages::FRAGMENT,
+        v => v,
+    };
     for b in m["bindings"].as_array().unwrap() {
         let users = b["used_by"].as_array().unwrap();
         if !users.iter().any(|u| u == entry) {
@@ -191,7 +284,11 @@ fn layouts(device: &wgpu::Device, m: &Value, entry: &str) -> Vec<wgpu::BindGroup
         let group = b["group"].as_u64().unwrap() as usize;
         groups[group].push(wgpu::BindGroupLayoutEntry {
             binding: b["binding"].as_u64().unwrap() as u32,
-            visibility,
+            visibility: if b["kind"] == "storage-read-write" {
+                writable
+            } else {
+                visibility
+            },
             ty,
             count: None,
         });
@@ -214,19 +311,23 @@ fn pipelines_build_with_layouts_from_the_manifest_users_alone() {
     };
     let device = &gpu.device;
     // The examples with textures, tables (seed grids, large unions) and displacement.
-    for name in [
-        "displaced_column",
-        "fit_blob",
-        "robot",
-        "normal_map",
-        "shell_tiles",
+    // The robot also with the multi-scale pass: cs_coarse and the coarse binding.
+    for (name, multiscale) in [
+        ("displaced_column", false),
+        ("fit_blob", false),
+        ("robot", false),
+        ("robot", true),
+        ("normal_map", false),
+        ("shell_tiles", false),
     ] {
         let scene = Path::new("examples").join(format!("{name}.sdf"));
-        let m = manifest_of(&scene);
+        let m = manifest_with(&scene, if multiscale { &["--multiscale"] } else { &[] });
+        assert_eq!(m.get("coarse").is_some(), multiscale, "{name}");
         let source = std::fs::read_to_string(&scene).unwrap();
         let analysis = sdfc::check(&source, scene.parent());
         let options = sdfc::Options {
             walk: sdfc::WalkForm::Loop,
+            multiscale,
             ..Default::default()
         };
         let wgsl = sdfc::compile(&analysis, &options).unwrap().module.wgsl;
@@ -314,6 +415,73 @@ fn decode(path: &std::path::Path) -> image::RgbaImage {
     image::open(path).unwrap().to_rgba8()
 }
 
+/// The embedding example's frame of `scene` at `size`, with `extra` arguments.
+fn embedded(dir: &Path, scene: &str, size: &str, extra: &[&str]) -> image::RgbaImage {
+    let path = dir.join("embed.png");
+    let out = Command::new(example())
+        .args([scene, path.to_str().unwrap(), size])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{scene}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    decode(&path)
+}
+
+/// `sdfc render` of `scene` as the example compiles it (loop walk, and forward
+/// gradients: the library's default).
+fn rendered(dir: &Path, scene: &str, size: &str, extra: &[&str]) -> image::RgbaImage {
+    let path = dir.join("ref.png");
+    let args = [
+        "render",
+        scene,
+        "--walk",
+        "loop",
+        "--gradients",
+        "forward",
+        "--size",
+        size,
+        "-o",
+        path.to_str().unwrap(),
+    ];
+    let (code, _, err) = common::sdfc(&[&args[..], extra].concat());
+    assert_eq!(code, 0, "{scene}: {err}");
+    decode(&path)
+}
+
+#[test]
+fn the_embedding_example_runs_the_multiscale_pass_as_sdfc_render_does() {
+    if sdfc::gpu::gpu_for_tests().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, size) = ("examples/sphere.sdf", "320x240");
+    let mine = embedded(dir.path(), scene, size, &["--multiscale"]);
+    let with = rendered(dir.path(), scene, size, &["--multiscale", "on"]);
+    let without = rendered(dir.path(), scene, size, &["--multiscale", "off"]);
+    // The pass changes some pixels (rebuilt uv near checker edges), so a host that did
+    // not run it would draw `without`.
+    let changed = |a: &image::RgbaImage, b: &image::RgbaImage| {
+        a.pixels()
+            .zip(b.pixels())
+            .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 1))
+            .count()
+    };
+    assert!(
+        changed(&with, &without) > 0,
+        "the pass changed nothing here"
+    );
+    let worst = common::worst_byte_difference(mine.as_raw(), with.as_raw());
+    assert!(
+        worst <= 1,
+        "embedded with the pass against render: up to {worst}/255"
+    );
+    assert_eq!(changed(&mine, &with), 0);
+}
+
 #[test]
 fn the_embedding_example_draws_what_sdfc_render_draws() {
     if sdfc::gpu::gpu_for_tests().is_none() {
@@ -321,33 +489,8 @@ fn the_embedding_example_draws_what_sdfc_render_draws() {
     }
     let dir = tempfile::tempdir().unwrap();
     for scene in ["examples/capsule.sdf", "examples/displaced_column.sdf"] {
-        let (mine, reference) = (dir.path().join("embed.png"), dir.path().join("ref.png"));
-        let out = Command::new(example())
-            .args([scene, mine.to_str().unwrap(), "96x72"])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{scene}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let reference_path = reference.to_str().unwrap();
-        let args = [
-            "render",
-            scene,
-            "--walk",
-            "loop",
-            // The library's default, as the example compiles it.
-            "--gradients",
-            "forward",
-            "--size",
-            "96x72",
-            "-o",
-            reference_path,
-        ];
-        let (code, _, err) = common::sdfc(&args);
-        assert_eq!(code, 0, "{scene}: {err}");
-        let (a, b) = (decode(&mine), decode(&reference));
+        let a = embedded(dir.path(), scene, "96x72", &[]);
+        let b = rendered(dir.path(), scene, "96x72", &[]);
         assert_eq!(a.dimensions(), b.dimensions());
         // A picture, not a cleared target: the shape's shading has many colours.
         let colours: std::collections::HashSet<[u8; 4]> = a.pixels().map(|p| p.0).collect();

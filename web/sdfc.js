@@ -3,11 +3,14 @@
 // --manifest; schemas/manifest.v1.json) and its textures' mip levels, and draws the
 // scene with `vs_main` + `fs_main`, one colour target, under WebGPU's default limits.
 // The bind group layout is built from the manifest's bindings whose `used_by` names
-// the render entry points, and nothing else.
+// the render entry points, and nothing else. A module with the multi-scale atlas pass
+// (the manifest's `coarse`) also gets its compute pipeline, which `prepare` records
+// before each draw, as the manifest says.
 
 const KINDS = {
   "uniform": { buffer: { type: "uniform" } },
   "storage-read": { buffer: { type: "read-only-storage" } },
+  "storage-read-write": { buffer: { type: "storage" } },
   "texture-2d": { texture: { sampleType: "float", viewDimension: "2d" } },
   "sampler": { sampler: { type: "filtering" } },
 };
@@ -27,11 +30,16 @@ export class SdfcScene {
     const used = manifest.bindings.filter(
       (b) => b.group === 0 && b.used_by.some((e) => RENDER.includes(e)),
     );
+    // With the multi-scale pass, the render group is also cs_coarse's: visible to
+    // compute, and its writable `coarse` buffer to the fragment stage (not the vertex).
+    this.coarse = manifest.coarse || null;
+    const also = this.coarse ? GPUShaderStage.COMPUTE : 0;
     const layout = device.createBindGroupLayout({
       label: "sdfc render group",
       entries: used.map((b) => ({
         binding: b.binding,
-        visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT,
+        visibility: (b.kind === "storage-read-write" ? GPUShaderStage.FRAGMENT
+          : GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT) | also,
         ...KINDS[b.kind],
       })),
     });
@@ -85,8 +93,13 @@ export class SdfcScene {
       });
       device.queue.writeBuffer(tables, 0, new Uint32Array(manifest.tables));
     }
-    const resource = (b) => {
+    // The coarse samples: 16 bytes (the pass off, every pixel walks) until `prepare`
+    // sizes them for a frame.
+    const noSamples = this.coarse &&
+      device.createBuffer({ label: "sdfc coarse (off)", size: 16, usage: GPUBufferUsage.STORAGE });
+    const resource = (b, samples) => {
       if (b.name === "globals") return { buffer: this.globals };
+      if (this.coarse && b.binding === this.coarse.binding) return { buffer: samples };
       if (b.name === "tables") return { buffer: tables };
       if (b.name === "params") return { buffer: this.params };
       const t = manifest.textures.findIndex((t) => t.texture_binding === b.binding);
@@ -95,16 +108,59 @@ export class SdfcScene {
       if (s >= 0) return images[s].sampler;
       throw new Error(`no resource for binding ${b.name}`);
     };
-    this.group = device.createBindGroup({
+    this.groupWith = (samples) => device.createBindGroup({
       layout,
-      entries: used.map((b) => ({ binding: b.binding, resource: resource(b) })),
+      entries: used.map((b) => ({ binding: b.binding, resource: resource(b, samples) })),
     });
+    this.group = this.groupWith(noSamples);
+    const pipelineLayout = device.createPipelineLayout({ bindGroupLayouts: [layout] });
     this.pipeline = device.createRenderPipeline({
       label: "sdfc scene",
-      layout: device.createPipelineLayout({ bindGroupLayouts: [layout] }),
+      layout: pipelineLayout,
       vertex: { module: this.module, entryPoint: "vs_main" },
       fragment: { module: this.module, entryPoint: "fs_main", targets: [{ format }] },
     });
+    if (this.coarse) {
+      this.coarsePipeline = device.createComputePipeline({
+        label: "sdfc coarse",
+        layout: pipelineLayout,
+        compute: { module: this.module, entryPoint: this.coarse.entry_point },
+      });
+    }
+    // The frame the coarse samples were last sized for: { size, group }.
+    this.framed = null;
+    this.fresh = false;
+  }
+
+  /// For a module with the multi-scale pass: records `cs_coarse` for a `width` x
+  /// `height` frame into `encoder` (sizing the frame's buffer when the size changed),
+  /// as the manifest's `coarse` says; the next `draw` reads its samples. Returns whether
+  /// the pass runs: not without it, nor past the device's largest storage binding
+  /// (then every pixel walks). A draw not preceded by `prepare` walks every pixel.
+  prepare(encoder, width, height) {
+    const c = this.coarse;
+    this.fresh = false;
+    if (!c) return false;
+    const axis = (n) => Math.floor((Math.max(n, 1) + c.step - 2) / c.step) + 1;
+    const [columns, rows] = [axis(width), axis(height)];
+    const bytes = columns * rows * c.vec4s_per_sample * 16;
+    if (bytes > this.device.limits.maxStorageBufferBindingSize) return false;
+    if (!this.framed || this.framed.size !== `${width}x${height}`) {
+      const samples = this.device.createBuffer({ label: "sdfc coarse", size: bytes, usage: GPUBufferUsage.STORAGE });
+      if (this.framed) this.framed.samples.destroy();
+      this.framed = { size: `${width}x${height}`, samples, group: this.groupWith(samples) };
+    }
+    const pass = encoder.beginComputePass({ label: "sdfc coarse" });
+    pass.setPipeline(this.coarsePipeline);
+    pass.setBindGroup(0, this.framed.group);
+    pass.dispatchWorkgroups(
+      Math.ceil(columns / c.workgroup_size[0]),
+      Math.ceil(rows / c.workgroup_size[1]),
+      1,
+    );
+    pass.end();
+    this.fresh = true;
+    return true;
   }
 
   /// Writes the run-time parameters' block: `values` maps a parameter's name (`time`
@@ -127,10 +183,12 @@ export class SdfcScene {
     this.device.queue.writeBuffer(this.globals, 0, new Float32Array(globals.flat()));
   }
 
-  /// Records the full-screen draw into a render pass.
+  /// Records the full-screen draw into a render pass (with the multi-scale pass, the
+  /// samples of the `prepare` just before it, else every pixel walks).
   draw(pass) {
     pass.setPipeline(this.pipeline);
-    pass.setBindGroup(0, this.group);
+    pass.setBindGroup(0, this.fresh ? this.framed.group : this.group);
+    this.fresh = false;
     pass.draw(3);
   }
 }
@@ -307,6 +365,7 @@ export class SdfcView {
     scene.setGlobals(globals);
     const texture = this.context.getCurrentTexture();
     const encoder = device.createCommandEncoder();
+    scene.prepare(encoder, texture.width, texture.height);
     const pass = encoder.beginRenderPass({
       colorAttachments: [{
         view: texture.createView({ format: this.srgb }),
@@ -345,6 +404,13 @@ export async function show(canvas, base = document.baseURI, size = null) {
   const view = await SdfcView.open(canvas, size);
   const shown = await view.swap(await load(base));
   if (!shown.ok) throw new Error(shown.messages.map((m) => `${m.type}: ${m.message}`).join("\n"));
+  // `?view=N` shows another of the module's views (the manifest's `globals` list them:
+  // 1 normal, 4 uv, 5 checker, 15 walked, ...) instead of the colour.
+  const asked = new URL(location.href).searchParams.get("view");
+  if (asked !== null && Number.isInteger(Number(asked))) {
+    view.globals[7][3] = Number(asked);
+    view.frame();
+  }
   // A scene that reads `time` animates (`?still` keeps its first frame, for tests).
   if (!new URL(location.href).searchParams.has("still")) {
     const start = performance.now();
@@ -378,6 +444,7 @@ export async function readPixels(device, scene, globals) {
   const probe = new SdfcScene(device, scene.code, scene.manifest, scene.textures, "rgba8unorm-srgb");
   probe.setGlobals(globals);
   const encoder = device.createCommandEncoder();
+  probe.prepare(encoder, w, h);
   const pass = encoder.beginRenderPass({
     colorAttachments: [{ view: texture.createView(), loadOp: "clear", storeOp: "store", clearValue: [0, 0, 0, 1] }],
   });

@@ -97,9 +97,13 @@ pub fn run(args: CompileArgs) -> ExitCode {
         bounds: args.bounds,
         differences: false,
         tiles: false,
-        multiscale: false,
+        multiscale: args.multiscale,
     };
-    if args.target == Target::Glsl && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry) {
+    let coarse = args.multiscale && args.entry == "cs_coarse";
+    if args.target == Target::Glsl
+        && !coarse
+        && !codegen::ENTRY_POINTS.iter().any(|(e, _)| *e == args.entry)
+    {
         let names = codegen::ENTRY_POINTS.iter().map(|(e, _)| *e);
         eprintln!(
             "error: the module has no entry point `{}`; {}",

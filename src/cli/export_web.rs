@@ -20,6 +20,11 @@ pub struct ExportWebArgs {
     /// Show this named shape instead of the `render` item's target.
     #[arg(long)]
     pub shape: Option<String>,
+    /// Add the multi-scale atlas pass (as `compile --multiscale`): the page walks the
+    /// atlases at one pixel in 16 first and rebuilds the others where they agree. It
+    /// pays on a GPU, not on a software adapter (SwiftShader).
+    #[arg(long)]
+    pub multiscale: bool,
 }
 
 pub fn run(args: ExportWebArgs) -> ExitCode {
@@ -29,6 +34,7 @@ pub fn run(args: ExportWebArgs) -> ExitCode {
     }
     let options = sdfc::codegen::Options {
         walk: args.walk,
+        multiscale: args.multiscale,
         ..Default::default()
     };
     let (_, analysis, mut compiled) =

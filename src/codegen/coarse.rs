@@ -14,6 +14,7 @@
 //! views, the compute entry points) walks as without the pass: `coarse_pixel` is
 //! negative outside `shade_pixel`.
 
+use super::manifest::{CoarsePass, COARSE_HOW};
 use super::{internal, template, Generator, Options};
 use crate::diagnostic::Diagnostic;
 use crate::uv::Atlas;
@@ -134,6 +135,7 @@ fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
         template::COARSE,
         &[
             ("step", STEP.to_string()),
+            ("side", WORKGROUP_SIDE.to_string()),
             ("slots", slots.len().to_string()),
             ("flatness", super::literal::lit(FLATNESS)),
             ("condition", super::literal::lit(CONDITION)),
@@ -150,6 +152,32 @@ fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
 pub fn buffer_bytes(width: u32, height: u32, slots: usize) -> u64 {
     let (cols, rows) = grid(width, height);
     cols as u64 * rows as u64 * (1 + 4 * slots as u64) * 16
+}
+
+/// The pass's contract in the manifest, for a module with `slots` slots (`None`
+/// without the pass).
+pub fn contract(bindings: &[super::bindings::Binding], slots: usize) -> Option<CoarsePass> {
+    let binding = bindings
+        .iter()
+        .find(|b| b.resource == super::bindings::Resource::Coarse)?;
+    (slots > 0).then(|| CoarsePass {
+        entry_point: "cs_coarse",
+        binding: binding.binding,
+        step: STEP,
+        slots: slots as u32,
+        vec4s_per_sample: 1 + 4 * slots as u32,
+        workgroup_size: [WORKGROUP_SIDE, WORKGROUP_SIDE, 1],
+        how: COARSE_HOW,
+    })
+}
+
+/// The side of `cs_coarse`'s square workgroup (`shaders/coarse.wgsl.in`).
+pub const WORKGROUP_SIDE: u32 = 8;
+
+/// The workgroups of `cs_coarse` for a `width` × `height` frame.
+pub fn workgroups(width: u32, height: u32) -> (u32, u32) {
+    let (cols, rows) = grid(width, height);
+    (cols.div_ceil(WORKGROUP_SIDE), rows.div_ceil(WORKGROUP_SIDE))
 }
 
 /// The coarse grid's columns and rows for a frame (`coarse_columns`, `coarse_rows`).

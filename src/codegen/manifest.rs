@@ -43,7 +43,46 @@ pub struct Manifest {
     /// each parameter's member, offset, type, default and range, and the block's size.
     /// Empty (size 0) for a scene without parameters or `time`.
     pub params: super::params::ParamsLayout,
+    /// The multi-scale atlas pass (`codegen::coarse`): present only in a module
+    /// generated with it (`sdfc compile --multiscale`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coarse: Option<CoarsePass>,
 }
+
+/// How a host runs the multi-scale atlas pass of a module generated with it. Before
+/// each frame's render pass, for a frame of `width` × `height` pixels:
+///
+/// 1. `columns = floor((max(width, 1) + step - 2) / step) + 1`, `rows` likewise from
+///    `height` (one coarse sample every `step` pixels, and the last row and column);
+/// 2. bind a storage buffer of `columns × rows × vec4s_per_sample × 16` bytes as
+///    `binding` of group 0 (the render group, visible to compute too);
+/// 3. dispatch `entry_point` with `ceil(columns / 8) × ceil(rows / 8) × 1` workgroups,
+///    the render group bound, in the same submission before the render pass.
+///
+/// A buffer of 16 bytes turns the pass off: the shader sees it is too small for the
+/// frame and every pixel walks, as in a module without the pass. The buffer must fit
+/// the device's `maxStorageBufferBindingSize` (128 MiB by default: a 3840 × 2160 frame
+/// with up to three atlases read).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct CoarsePass {
+    /// The compute entry point that walks the coarse samples: `cs_coarse`.
+    pub entry_point: &'static str,
+    /// The `coarse` buffer's binding in group 0.
+    pub binding: u32,
+    /// Pixels between coarse samples, along each axis.
+    pub step: u32,
+    /// The atlases materials read, each a slot of the coarse samples.
+    pub slots: u32,
+    /// `vec4<f32>` values per coarse sample: one for the surface point and four per slot.
+    pub vec4s_per_sample: u32,
+    /// The entry point's workgroup size.
+    pub workgroup_size: [u32; 3],
+    /// The steps above, in words.
+    pub how: &'static str,
+}
+
+/// [`CoarsePass::how`].
+pub const COARSE_HOW: &str = "Before each frame's render pass: columns = floor((max(width, 1) + step - 2) / step) + 1 and rows likewise from height; bind a storage buffer of columns * rows * vec4s_per_sample * 16 bytes as `binding` of group 0; dispatch `entry_point` with ceil(columns / 8) x ceil(rows / 8) x 1 workgroups, group 0 bound, before the render pass. A 16-byte buffer turns the pass off (every pixel walks).";
 
 pub const GLOBALS_LAYOUT: &[&str] = &[
     "camera_pos",
@@ -66,7 +105,7 @@ pub const GLOBALS_MEANING: &[&str] = &[
     "xyz: the unit direction towards the sun; w: its intensity",
     "rgb: the sun's colour (linear); w: the ambient strength",
     "rgb: the background colour (linear); w: unused",
-    "x, y: the image size in pixels; z: time in seconds; w: the view (0 colour, 1 normal, 2 depth, 3 steps, 4 uv, 5 checker, 6 status, 7 distance, 8 seeds, 9 blend, 10 distortion, 11 seams, 12 albedo, 14 evals)",
+    "x, y: the image size in pixels; z: time in seconds; w: the view (0 colour, 1 normal, 2 depth, 3 steps, 4 uv, 5 checker, 6 status, 7 distance, 8 seeds, 9 blend, 10 distortion, 11 seams, 12 albedo, 14 evals, 15 walked: the multi-scale pass's rebuilt and walked pixels)",
     "x: the far distance (rays stop beyond it: the distance across the shape's bounds from the camera); y: the hit epsilon (relative to the ray's length); z: the most sphere-tracing steps; w: the scene's scale (offsets of normals and shadows)",
 ];
 

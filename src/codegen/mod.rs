@@ -391,6 +391,7 @@ pub fn generate(
     let mut module = g.finish(target, scene, table, textures, params);
     module.tiling = tiling;
     module.coarse_slots = coarse_slots;
+    module.manifest.coarse = coarse::contract(&module.manifest.bindings, coarse_slots);
     Ok(module)
 }
 
@@ -660,7 +661,7 @@ impl Generator<'_> {
             .iter()
             .any(|b| b.resource == bindings::Resource::Coarse);
         let coarse_entry = if pass {
-            " and cs_coarse (the multi-scale atlas pass: compute, workgroup 8 × 8, dispatched before each frame by sdfc's own renderer)"
+            " and cs_coarse (the multi-scale atlas pass: compute, workgroup 8 × 8, dispatched before each frame's render pass over a buffer sized for the frame, as the manifest's `coarse` says)"
         } else {
             ""
         };
@@ -717,7 +718,7 @@ impl Generator<'_> {
                 .chain(pass.then_some(EntryPoint {
                     name: "cs_coarse",
                     stage: "compute",
-                    workgroup_size: [8, 8, 1],
+                    workgroup_size: [coarse::WORKGROUP_SIDE, coarse::WORKGROUP_SIDE, 1],
                 }))
                 .collect(),
             render_targets: render_targets(),
@@ -744,6 +745,7 @@ impl Generator<'_> {
             textures,
             tables: self.tables,
             params,
+            coarse: None,
         };
         Module {
             wgsl,

@@ -8,7 +8,7 @@
 //! ([`super::Renderer::set_multiscale`]), binds a 16-byte buffer instead, which the
 //! shader's `coarse_ready` refuses: every sample walks, as without the pass.
 
-use crate::codegen::coarse::{buffer_bytes, grid};
+use crate::codegen::coarse::{buffer_bytes, grid, workgroups};
 use crate::codegen::Module;
 
 /// The pass's pipeline; cloned out of the device's pipeline cache with the render
@@ -94,14 +94,14 @@ impl CoarsePass {
         (width, height): (u32, u32),
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        let (cols, rows) = grid(width, height);
+        let (x, y) = workgroups(width, height);
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("coarse"),
             timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(crate::codegen::bindings::RENDER_GROUP, group, &[]);
-        pass.dispatch_workgroups(cols.div_ceil(8), rows.div_ceil(8), 1);
+        pass.dispatch_workgroups(x, y, 1);
     }
 }
 

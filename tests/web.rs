@@ -112,15 +112,12 @@ fn export(scene: &str, dir: &Path) {
 }
 
 fn export_with(scene: &str, dir: &Path, walk: &str) {
-    let args = [
-        "export-web",
-        scene,
-        "--walk",
-        walk,
-        "-o",
-        dir.to_str().unwrap(),
-    ];
-    let (code, _, err) = common::sdfc(&args);
+    export_args(scene, dir, &["--walk", walk]);
+}
+
+fn export_args(scene: &str, dir: &Path, extra: &[&str]) {
+    let args = ["export-web", scene, "-o", dir.to_str().unwrap()];
+    let (code, _, err) = common::sdfc(&[&args[..], extra].concat());
     assert_eq!(code, 0, "{scene}: {err}");
 }
 
@@ -170,6 +167,13 @@ fn every_example_compiles_in_tint_and_builds_from_the_manifest_under_default_lim
         "unrolled",
     );
     names.push("sphere_unrolled".into());
+    // And one with the multi-scale pass: cs_coarse's pipeline from its manifest users.
+    export_args(
+        "examples/robot.sdf",
+        &root.path().join("robot_multiscale"),
+        &["--walk", "loop", "--multiscale"],
+    );
+    names.push("robot_multiscale".into());
     std::fs::write(
         root.path().join("modules.json"),
         serde_json::to_vec(&names).unwrap(),
@@ -299,6 +303,89 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
             }
         }
     }
+}
+
+#[test]
+fn the_exported_page_runs_the_multiscale_pass_as_sdfc_render_does() {
+    if !tools_present("the exported page's multi-scale pass") {
+        return;
+    }
+    let (w, h) = (320u32, 240u32);
+    let size = format!("{w}x{h}");
+    let scene = "examples/sphere.sdf";
+    let dir = tempfile::tempdir().unwrap();
+    let (with, without) = (dir.path().join("with"), dir.path().join("without"));
+    export_args(scene, &with, &["--walk", "loop", "--multiscale"]);
+    export(scene, &without);
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(with.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["coarse"]["entry_point"], "cs_coarse");
+    // A frame of the page in `view` (0 colour, 15 walked), and `sdfc render`'s.
+    let frame = |site: &Path, view: u32| {
+        let base = serve(site.to_path_buf());
+        let raw = dir.path().join("frame.rgba");
+        let url = format!("{base}/index.html?size={size}&still&view={view}");
+        let report = page(&url, Some(&raw));
+        assert!(report["error"].is_null(), "{report}");
+        assert_eq!(
+            report["messages"],
+            serde_json::json!([]),
+            "Tint said something"
+        );
+        std::fs::read(&raw).unwrap()
+    };
+    let render = |view: &str, multiscale: &str| {
+        let out = dir.path().join("ref.png");
+        let args = [
+            "render",
+            scene,
+            "--walk",
+            "loop",
+            "--gradients",
+            "forward",
+            "--size",
+            &size,
+            "--view",
+            view,
+            "--multiscale",
+            multiscale,
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let (code, _, err) = common::sdfc(&args);
+        assert_eq!(code, 0, "{err}");
+        image::open(&out).unwrap().to_rgba8().into_raw()
+    };
+    // The walked view: rebuilt pixels green, walked ones red.
+    let green = |px: &[u8]| {
+        px.chunks(4)
+            .filter(|p| p[1] as i32 > p[0] as i32 + 60)
+            .count()
+    };
+    let red = |px: &[u8]| {
+        px.chunks(4)
+            .filter(|p| p[0] as i32 > p[1] as i32 + 60)
+            .count()
+    };
+    let walked = frame(&with, 15);
+    let reference = render("walked", "on");
+    let (g, r) = (green(&walked), red(&walked));
+    let (g_ref, r_ref) = (green(&reference), red(&reference));
+    eprintln!("walked view: browser {g} rebuilt, {r} walked; sdfc render {g_ref}, {r_ref}");
+    // SwiftShader and lavapipe round differently, so a few decisions differ.
+    assert!(g_ref > 1000, "sdfc render rebuilt {g_ref}");
+    assert!(
+        g.abs_diff(g_ref) * 20 <= g_ref && r.abs_diff(r_ref) * 5 <= r_ref.max(100),
+        "browser {g}/{r}, render {g_ref}/{r_ref}"
+    );
+    // Without the pass every pixel that reads the atlas walks.
+    let plain = frame(&without, 15);
+    assert_eq!(green(&plain), 0, "a page without the pass rebuilt pixels");
+    // The colour with the pass, against sdfc render's with it.
+    let colour = frame(&with, 0);
+    let (mean, share) = common::image_difference(&render("color", "on"), &colour);
+    eprintln!("colour with the pass: browser against sdfc render: mean {mean:.3}/255, share over 16 {share:.4}");
+    assert!(mean <= 1.5 && share <= 0.005, "mean {mean}, share {share}");
 }
 
 /// `sdfc serve` running on a scene, on a free port of 127.0.0.1; killed when dropped.

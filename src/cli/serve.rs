@@ -24,6 +24,10 @@ pub struct ServeArgs {
     /// The walk's form in the page's module (loop by default, as for export-web).
     #[arg(long, value_parser = choice::<sdfc::codegen::WalkForm>(), default_value = "loop")]
     pub walk: sdfc::codegen::WalkForm,
+    /// Add the multi-scale atlas pass to the page's module (as `export-web
+    /// --multiscale`).
+    #[arg(long)]
+    pub multiscale: bool,
 }
 
 pub fn run(args: ServeArgs) -> ExitCode {
@@ -43,6 +47,7 @@ pub fn run(args: ServeArgs) -> ExitCode {
             shape: args.shape,
             options: sdfc::codegen::Options {
                 walk: args.walk,
+                multiscale: args.multiscale,
                 ..Default::default()
             },
         },

@@ -17,7 +17,9 @@ function layouts(device, manifest, entries, visibility) {
   const groups = [[], []];
   for (const b of manifest.bindings) {
     if (b.used_by.some((e) => entries.includes(e))) {
-      groups[b.group].push({ binding: b.binding, visibility, ...KINDS[b.kind] });
+      // WebGPU: a writable storage buffer is not visible to the vertex stage.
+      const seen = b.kind === "storage-read-write" ? visibility & ~GPUShaderStage.VERTEX : visibility;
+      groups[b.group].push({ binding: b.binding, visibility: seen, ...KINDS[b.kind] });
     }
   }
   return groups.map((entries) => device.createBindGroupLayout({ entries }));

@@ -594,7 +594,15 @@ fn templates_are_filled_completely_and_validate() {
     );
     assert_eq!(
         template::placeholders(template::COARSE),
-        ["step", "slots", "flatness", "condition", "reads", "side", "samples"]
+        [
+            "step",
+            "slots",
+            "flatness",
+            "condition",
+            "reads",
+            "side",
+            "samples"
+        ]
     );
     let m = template::fill(
         "fn a_{{k}}() {}",

@@ -269,3 +269,72 @@ fn the_rebuild_agrees_with_the_f64_reference() {
     );
     assert!(worst < 1e-3, "{worst:.2e}");
 }
+
+/// Against the truth: on the sphere, whose log map is known in closed form, the uv
+/// the pass rebuilds is as close to the exact log map as the per-pixel walk's own uv
+/// (measured at 320 × 240 on lavapipe, over the 15,302 rebuilt pixels, of the reach:
+/// median 5.1e-5 against 6.4e-5, p99 1.65e-4 against 1.73e-4, max 2.4e-4 both). The
+/// rebuild's distance from the walk (p99 1.0e-4) is the size of the walk's own error,
+/// which varies from pixel to pixel where the fit is smooth.
+#[test]
+fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
+    use glam::{DVec2, DVec3};
+    let Some(gpu) = gpu_for_tests() else { return };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let a = driver::check(&source, path.parent());
+    let atlas = a.atlases[0].as_ref().unwrap();
+    let reach = atlas.params.max_distance;
+    let seed = atlas.seeds[0].seed;
+    // The unit sphere about the origin: the exact log map at the seed (notes).
+    let exact = |x: DVec3| {
+        let (m0, m) = (seed.p, x.normalize());
+        let d = m0.dot(m).clamp(-1.0, 1.0).acos();
+        let w = m - m0 * m0.dot(m);
+        DVec2::new(w.dot(seed.e1), w.dot(seed.e2)) * (d / w.length())
+    };
+    let options = Options {
+        multiscale: true,
+        ..Default::default()
+    };
+    let module = driver::compile(&a, &options).unwrap().module;
+    let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
+    let mut view = common::scene_view(&a, (320, 240));
+    let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
+    view.atlas_aov = true;
+    let with = frame(&gpu, &r, &view, ViewMode::Color, true);
+    let without = frame(&gpu, &r, &view, ViewMode::Color, false);
+    let (mut walk, mut rebuilt) = (Vec::new(), Vec::new());
+    for i in 0..with.atlas.len() {
+        let is_rebuilt = walked.normal[i][3] == 0.0 && walked.atlas[i][0] > 0.0;
+        if !is_rebuilt || without.atlas[i][3] != 0.0 {
+            continue;
+        }
+        let q = with.position[i];
+        let truth = exact(DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64));
+        let err = |uv: [f32; 4]| (DVec2::new(uv[0] as f64, uv[1] as f64) - truth).length() / reach;
+        walk.push(err(without.atlas[i]));
+        rebuilt.push(err(with.atlas[i]));
+    }
+    assert!(rebuilt.len() > 5000, "{} rebuilt", rebuilt.len());
+    let stats = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let at = |q: f64| v[((v.len() - 1) as f64 * q) as usize];
+        (at(0.5), at(0.99), at(1.0))
+    };
+    let (w50, w99, wmax) = stats(&mut walk);
+    let (r50, r99, rmax) = stats(&mut rebuilt);
+    eprintln!(
+        "{} rebuilt pixels, uv against the exact log map (of the reach): per-pixel walk p50 {w50:.2e} p99 {w99:.2e} max {wmax:.2e}; rebuilt p50 {r50:.2e} p99 {r99:.2e} max {rmax:.2e}",
+        rebuilt.len()
+    );
+    assert!(
+        r50 <= 1.1 * w50,
+        "median: rebuilt {r50:.2e}, walk {w50:.2e}"
+    );
+    assert!(r99 <= 1.1 * w99, "p99: rebuilt {r99:.2e}, walk {w99:.2e}");
+    assert!(
+        rmax <= 1.25 * wmax,
+        "max: rebuilt {rmax:.2e}, walk {wmax:.2e}"
+    );
+}

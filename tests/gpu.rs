@@ -814,6 +814,10 @@ fn the_scene_bench_writes_its_rows_and_ratios() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = report["rows"].as_array().unwrap();
     assert!(rows.len() >= 5, "{out}");
+    // Each row is also said on standard error as it is measured (a run cut short
+    // keeps them).
+    let said = err.lines().filter(|l| l.starts_with("measured: ")).count();
+    assert_eq!(said, rows.len(), "{err}");
     for row in rows {
         let frame = row["frame_ms"].as_f64().unwrap();
         assert!(frame > 0.0 && frame.is_finite(), "{row}");

@@ -17,9 +17,10 @@
 # Time: on a machine whose driver has never seen these modules, every pipeline is
 # compiled cold (on an NVIDIA H200, about 5 s for an unrolled module and 0.4-0.7 s
 # for a loop one), and the whole script takes well over 15 minutes; `robot` alone
-# took over 110 s. Each bench prints its table when it ends, so give each part its
-# own time limit rather than killing the whole run (docs/performance.md, Figures
-# from a GPU, says how the 2026-11-28 figures were taken).
+# took over 110 s. A scene bench prints its table and ratios when it ends (each row
+# also goes to standard error as it is measured, into the part's log), so give each
+# part its own time limit rather than killing the whole run (docs/performance.md,
+# Figures from a GPU, says how the 2026-11-28 figures were taken).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -582,6 +582,13 @@ impl Rig<'_> {
         let mut renderers = Vec::new();
         for &(name, module, mode) in rows {
             let (r, renderer) = self.measure(module, mode)?;
+            // As it goes, on standard error: a run cut short (a device lent for
+            // minutes) keeps the rows it measured; the table follows on stdout.
+            eprintln!(
+                "measured: {name}: pipeline {:.2} ms, frame {:.2} ms",
+                ms(r.pipeline),
+                ms(r.frame)
+            );
             results.push((name, r));
             renderers.push(renderer);
         }

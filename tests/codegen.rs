@@ -60,7 +60,11 @@ fn every_target(name: &str, module: &codegen::Module) {
         names(&full.module),
         "{name}: the module carries library functions that nothing reaches"
     );
-    assert_eq!(v.module.entry_points.len(), codegen::ENTRY_POINTS.len());
+    let pass = module.coarse_slots > 0;
+    assert_eq!(
+        v.module.entry_points.len(),
+        codegen::ENTRY_POINTS.len() + usize::from(pass)
+    );
     for shape in &module.manifest.shapes {
         let f = format!("sdf_{shape}");
         assert!(
@@ -80,14 +84,20 @@ fn every_target(name: &str, module: &codegen::Module) {
             Err(e) => panic!("{name}: {target:?}: {e}"),
         }
     }
-    for entry in ["vs_main", "fs_main", "cs_points", "cs_grid"] {
+    let coarse = pass.then_some("cs_coarse");
+    for entry in ["vs_main", "fs_main", "cs_points", "cs_grid"]
+        .into_iter()
+        .chain(coarse)
+    {
         if let Err(e) = codegen::translate(&v, &module.header, Target::Glsl, entry) {
             panic!("{name}: GLSL {entry}: {e}");
         }
     }
 }
 
-/// Every example compiles, validates and translates to all four targets.
+/// Every example compiles, validates and translates to all four targets, with the
+/// multi-scale atlas pass too (its fragment stage reads a writable storage buffer:
+/// MSL 1.2).
 #[test]
 fn every_example_compiles_at_every_target() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
@@ -101,6 +111,13 @@ fn every_example_compiles_at_every_target() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let module = generate(&src, Some(&dir)).unwrap_or_else(|d| panic!("{name}: {d:?}"));
         every_target(&name, &module);
+        let a = driver::check(&src, Some(&dir));
+        let options = codegen::Options {
+            multiscale: true,
+            ..Default::default()
+        };
+        let module = driver::generate(&a, &options).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+        every_target(&format!("{name} with the multi-scale pass"), &module);
         compiled += 1;
     }
     assert!(compiled >= 5, "only {compiled} examples");

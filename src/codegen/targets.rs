@@ -155,7 +155,12 @@ pub fn translate(
             let (text, _) = naga::back::msl::write_string(
                 &v.module,
                 &v.info,
-                &naga::back::msl::Options::default(),
+                &naga::back::msl::Options {
+                    // 1.2: the multi-scale pass's fragment stage reads a writable
+                    // storage buffer, which MSL 1.0 and 1.1 do not allow.
+                    lang_version: (1, 2),
+                    ..Default::default()
+                },
                 &naga::back::msl::PipelineOptions::default(),
             )
             .map_err(|e| e.to_string())?;

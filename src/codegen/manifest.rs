@@ -56,7 +56,8 @@ pub struct Manifest {
 ///    `height` (one coarse sample every `step` pixels, and the last row and column);
 /// 2. bind a storage buffer of `columns × rows × vec4s_per_sample × 16` bytes as
 ///    `binding` of group 0 (the render group, visible to compute too);
-/// 3. dispatch `entry_point` with `ceil(columns / 8) × ceil(rows / 8) × 1` workgroups,
+/// 3. dispatch `entry_point` with `ceil(columns / workgroup_size[0]) × ceil(rows /
+///    workgroup_size[1]) × 1` workgroups,
 ///    the render group bound, in the same submission before the render pass.
 ///
 /// A buffer of 16 bytes turns the pass off: the shader sees it is too small for the
@@ -82,7 +83,7 @@ pub struct CoarsePass {
 }
 
 /// [`CoarsePass::how`].
-pub const COARSE_HOW: &str = "Before each frame's render pass: columns = floor((max(width, 1) + step - 2) / step) + 1 and rows likewise from height; bind a storage buffer of columns * rows * vec4s_per_sample * 16 bytes as `binding` of group 0; dispatch `entry_point` with ceil(columns / 8) x ceil(rows / 8) x 1 workgroups, group 0 bound, before the render pass. A 16-byte buffer turns the pass off (every pixel walks).";
+pub const COARSE_HOW: &str = "Before each frame's render pass: columns = floor((max(width, 1) + step - 2) / step) + 1 and rows likewise from height; bind a storage buffer of columns * rows * vec4s_per_sample * 16 bytes as `binding` of group 0; dispatch `entry_point` with ceil(columns / workgroup_size[0]) x ceil(rows / workgroup_size[1]) x 1 workgroups, group 0 bound, before the render pass. A 16-byte buffer turns the pass off (every pixel walks).";
 
 pub const GLOBALS_LAYOUT: &[&str] = &[
     "camera_pos",

@@ -660,10 +660,11 @@ impl Generator<'_> {
         let pass = table
             .iter()
             .any(|b| b.resource == bindings::Resource::Coarse);
+        let side = coarse::WORKGROUP_SIDE;
         let coarse_entry = if pass {
-            " and cs_coarse (the multi-scale atlas pass: compute, workgroup 8 × 8, dispatched before each frame's render pass over a buffer sized for the frame, as the manifest's `coarse` says)"
+            format!(" and cs_coarse (the multi-scale atlas pass: compute, workgroup {side} × {side}, dispatched before each frame's render pass over a buffer sized for the frame, as the manifest's `coarse` says)")
         } else {
-            ""
+            String::new()
         };
         let _ = writeln!(header, "//\n// Entry points: vs_main + fs_main (full-screen render, one colour target) or fs_aov (with three rgba32float AOV targets), cs_points, cs_grid, cs_atlas, cs_material and cs_bake (compute, workgroup {WORKGROUP}){coarse_entry}.\n// Bind groups (each with the entry points that use it):");
         header.push_str(&bindings::describe(&table));

@@ -618,7 +618,8 @@ fn templates_are_filled_completely_and_validate() {
             "condition",
             "reads",
             "side",
-            "samples"
+            "samples",
+            "merged"
         ]
     );
     let m = template::fill(

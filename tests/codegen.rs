@@ -618,8 +618,7 @@ fn templates_are_filled_completely_and_validate() {
             "condition",
             "reads",
             "side",
-            "samples",
-            "merged"
+            "samples"
         ]
     );
     let m = template::fill(

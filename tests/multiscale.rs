@@ -93,8 +93,7 @@ fn agreement(gpu: &Gpu, example: &str, (w, h): (u32, u32)) -> Agreement {
 
 /// Every example with atlases, with the pass and without: 45 dB, and the rebuilt uv
 /// within 1e-3 of the reach everywhere and 5e-4 at the 99th percentile (measured:
-/// 1.0–2.7e-4 and up to 8.7e-4: the walk's own pixel-to-pixel error and the affine
-/// fit's blindness to curvature).
+/// 1.0–3.2e-4 and up to 8.7e-4, the affine fit's blindness to curvature).
 /// `uv`: whether to hold the uv to those bounds (GL's AOVs may be half floats, whose
 /// rounding of uv in the tens is larger than the bounds).
 fn every_example(gpu: &Gpu, uv: bool) {
@@ -195,26 +194,16 @@ fn the_coarse_grid_covers_every_pixel() {
 }
 
 /// The GPU's rebuild against the f64 reference (`reference::coarse::rebuild`): the
-/// sphere and the plate (merged seeds, rebuilt across their frontiers) drawn with the
-/// pass, their coarse samples walked again on the CPU at the hits the frame shows
-/// there, and every pixel rebuilt from them in f64. Near the fit's tolerance the f32
-/// and f64 walks may decide differently, so the test asks that most of the GPU's
-/// rebuilt pixels are the CPU's too (all of them, measured: 810 and 2,115), and that
-/// where both rebuild the uv agree (2.3e-7 and 2.4e-5 of the reach, measured).
+/// sphere drawn with the pass, its coarse samples walked again on the CPU at the hits
+/// the frame shows there, and every pixel rebuilt from them in f64. Near the fit's
+/// tolerance the f32 and f64 walks may decide differently, so the test asks that most
+/// of the GPU's rebuilt pixels are the CPU's too (all 810 of them, measured), and that
+/// where both rebuild the uv agree (2.3e-7 of the reach, measured).
 #[test]
 fn the_rebuild_agrees_with_the_f64_reference() {
-    let Some(gpu) = gpu_for_tests() else { return };
-    // The sphere's one seed, and the plate's 64 merged seeds, rebuilt across frontiers.
-    for example in ["sphere.sdf", "plate.sdf"] {
-        reference_agreement(&gpu, example);
-    }
-}
-
-fn reference_agreement(gpu: &Gpu, example: &str) {
     use sdfc::reference::coarse::{rebuild, Corner, STEP, TOLERANCE};
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(example);
+    let Some(gpu) = gpu_for_tests() else { return };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
     let source = std::fs::read_to_string(&path).unwrap();
     let a = driver::check(&source, path.parent());
     let atlas = a.atlases[0].as_ref().unwrap();
@@ -224,12 +213,12 @@ fn reference_agreement(gpu: &Gpu, example: &str) {
         ..Default::default()
     };
     let module = driver::compile(&a, &options).unwrap().module;
-    let r = Renderer::new(gpu, &module, path.parent().unwrap()).unwrap();
+    let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
     let (w, h) = (160u32, 120u32);
     let mut view = common::scene_view(&a, (w, h));
-    let walked = frame(gpu, &r, &view, ViewMode::Walked, true);
+    let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
     view.atlas_aov = true;
-    let shown = frame(gpu, &r, &view, ViewMode::Color, true);
+    let shown = frame(&gpu, &r, &view, ViewMode::Color, true);
     let at = |x: u32, y: u32| (y * w + x) as usize;
     let corner = |i: u32, j: u32| {
         let (x, y) = ((i * STEP).min(w - 1), (j * STEP).min(h - 1));
@@ -262,8 +251,7 @@ fn reference_agreement(gpu: &Gpu, example: &str) {
             let corners = [c(i0, j0), c(i1, j0), c(i0, j1), c(i1, j1)];
             let q = shown.position[i];
             let p = glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64);
-            let merged = |i: usize, j: usize| atlas.merged(i, j);
-            if let Some(s) = rebuild(&corners, p, 1, TOLERANCE * reach, Some(&merged)) {
+            if let Some(s) = rebuild(&corners, p, 1, TOLERANCE * reach) {
                 both += 1;
                 let g = shown.atlas[i];
                 let e = (s.uv - glam::DVec2::new(g[0] as f64, g[1] as f64)).length() / reach;
@@ -272,7 +260,7 @@ fn reference_agreement(gpu: &Gpu, example: &str) {
         }
     }
     eprintln!(
-        "{example}: GPU rebuilt {gpu_rebuilt} pixels; the f64 reference rebuilt {both} of them; largest uv difference {worst:.2e} of the reach"
+        "GPU rebuilt {gpu_rebuilt} pixels; the f64 reference rebuilt {both} of them; largest uv difference {worst:.2e} of the reach"
     );
     assert!(gpu_rebuilt > 500, "{gpu_rebuilt}");
     assert!(
@@ -349,75 +337,4 @@ fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
         rmax <= 1.25 * wmax,
         "max: rebuilt {rmax:.2e}, walk {wmax:.2e}"
     );
-}
-
-/// Across a frontier between merged seeds the pass rebuilds (Alg. 2's blend keeps the
-/// uv, distance and frames continuous there), unless a material reads the atlas's
-/// `seed` or `transport`, which jump there: then it rebuilds only between corners of
-/// one seed, and the seed it gives is the walk's. On the plate (64 merged seeds) the
-/// frontiers are lines of walked pixels with the strict rule, rebuilt without it.
-#[test]
-fn the_pass_rebuilds_across_merged_frontiers_unless_a_material_reads_the_seed() {
-    let Some(gpu) = gpu_for_tests() else { return };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/plate.sdf");
-    let plate = std::fs::read_to_string(&path).unwrap();
-    let checker = "checker(tiles.uv, 1)";
-    assert!(plate.contains(checker));
-    // A colour per seed: the material reads the seed alone.
-    let by_seed = plate.replace(checker, "fract(tiles.seed * 0.37)");
-    let mut shares = Vec::new();
-    for (name, source) in [("plate", &plate), ("plate, colour by seed", &by_seed)] {
-        let a = driver::check(source, path.parent());
-        assert!(a.diagnostics.is_empty(), "{name}: {:?}", a.diagnostics);
-        let options = Options {
-            multiscale: true,
-            ..Default::default()
-        };
-        let module = driver::compile(&a, &options).unwrap().module;
-        let strict = source.contains("tiles.seed");
-        assert!(
-            module.wgsl.contains(&format!("{strict});\n")),
-            "{name}: the rebuild's seed rule"
-        );
-        let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
-        let mut view = common::scene_view(&a, (320, 240));
-        let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
-        view.atlas_aov = true;
-        let with = frame(&gpu, &r, &view, ViewMode::Color, true);
-        let without = frame(&gpu, &r, &view, ViewMode::Color, false);
-        let (mut read, mut rebuilt, mut other_seed) = (0usize, 0usize, 0usize);
-        for i in 0..with.atlas.len() {
-            let (walks, built) = (walked.normal[i][3], walked.atlas[i][0]);
-            if walks + built == 0.0 {
-                continue;
-            }
-            read += 1;
-            if walks == 0.0 {
-                rebuilt += 1;
-            }
-        }
-        // The seed the colour shows: with the strict rule the pass's colour is the
-        // walk's, seed for seed.
-        let psnr = common::psnr(&with.color, &without.color);
-        for (c, d) in with.color.chunks(4).zip(without.color.chunks(4)) {
-            if c.iter().zip(d).any(|(x, y)| x.abs_diff(*y) > 25) {
-                other_seed += 1;
-            }
-        }
-        let share = rebuilt as f64 / read as f64;
-        eprintln!(
-            "{name}: {:.1} % of textured pixels rebuilt, colour {psnr:.1} dB, {other_seed} pixels off by over 25/255",
-            100.0 * share
-        );
-        assert!(psnr >= 45.0, "{name}: {psnr:.1} dB");
-        if strict {
-            assert_eq!(
-                other_seed, 0,
-                "{name}: a rebuilt pixel took another seed's colour"
-            );
-        }
-        shares.push(share);
-    }
-    // The frontiers rebuild only where nothing reads the seed.
-    assert!(shares[0] > shares[1] + 0.1, "{shares:?}");
 }

@@ -28,10 +28,6 @@ pub use crate::reference::coarse::{CONDITION, FLATNESS, STEP, TOLERANCE};
 #[derive(Debug, Clone, Default)]
 pub struct Reads {
     pub by_material: Vec<(i32, BTreeSet<usize>)>,
-    /// The atlases whose `seed` or `transport` a material reads: rebuilt only from
-    /// corners of one seed. The others also rebuild across a frontier between merged
-    /// seeds, whose uv, distance and frames are continuous there (Alg. 2's blend).
-    pub identity: BTreeSet<usize>,
 }
 
 impl Reads {
@@ -104,13 +100,7 @@ pub fn code(reads: &Reads, atlases: &[Option<Atlas>]) -> Result<Option<String>, 
     }
     let mut samples = String::new();
     let mut pixel = String::new();
-    let mut merged = String::new();
     for (k, &a) in slots.iter().enumerate() {
-        let _ = writeln!(
-            merged,
-            "        case {k}u: {{\n            return atlas_{a}_merged(i, j);\n        }}"
-        );
-        let strict = reads.identity.contains(&a);
         let at = 1 + 4 * k;
         let _ = writeln!(
             samples,
@@ -128,7 +118,7 @@ pub fn code(reads: &Reads, atlases: &[Option<Atlas>]) -> Result<Option<String>, 
 // multi-scale pass's coarse samples (coarse_rebuild) in a render pixel where they agree,
 // walked elsewhere.
 fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
-    let r = coarse_rebuild({k}u, p, m, {tolerance}, {strict});
+    let r = coarse_rebuild({k}u, p, m, {tolerance});
     if (r.status != f32(COARSE_WALK)) {{
         return r;
     }}
@@ -150,7 +140,6 @@ fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
             ("flatness", super::literal::lit(FLATNESS)),
             ("condition", super::literal::lit(CONDITION)),
             ("reads", arms),
-            ("merged", merged),
             ("samples", samples),
         ],
     )

@@ -36,9 +36,6 @@ pub struct Uses {
     pub textures: Vec<TextureUse>,
     /// Atlas indices read by the expressions generated since the last reset.
     pub atlases: std::collections::BTreeSet<AtlasId>,
-    /// Atlases whose `seed` or `transport` some expression read (never reset): the
-    /// multi-scale pass rebuilds their samples only between corners of one seed.
-    pub identity: std::collections::BTreeSet<usize>,
     /// While set, atlas uv and position are generated displaced by these WGSL
     /// expressions: the footprint of a pixel, for texture derivatives.
     pub offset: Option<(String, String)>,
@@ -127,9 +124,6 @@ fn field_expr_inner(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
             FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
             FieldExpr::Atlas { atlas, attr } => {
                 tex.atlases.insert(*atlas);
-                if matches!(attr, AtlasAttr::Seed | AtlasAttr::Transport) {
-                    tex.identity.insert(atlas.index());
-                }
                 let name = match attr {
                     AtlasAttr::Uv => "uv",
                     AtlasAttr::Distance => "distance",

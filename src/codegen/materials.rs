@@ -51,7 +51,6 @@ impl Generator<'_> {
             self.out,
             "        default: {{\n{body}        }}\n    }}\n}}\n"
         );
-        self.reads.identity = uses.identity.clone();
         if problems.is_empty() {
             Ok(uses.textures)
         } else {

@@ -4,13 +4,11 @@
 //!
 //! A render pixel's atlas sample is rebuilt from the four coarse samples around it (one
 //! pixel in [`STEP`]² was walked) where they agree: all four hit the pixel's material
-//! and walked without failure to the same nearest seed (or, where no material reads the
-//! atlas's seed or transport, to seeds pairwise merged); they lie with the pixel's point
+//! and walked without failure to the same nearest seed; they lie with the pixel's point
 //! on one patch (within [`FLATNESS`] of its size of the plane across its diagonals);
 //! and an affine map of their positions in that plane fits their uv within
 //! [`TOLERANCE`] of the atlas's reach. The sample is then that least-squares map's at
-//! the pixel's point: uv, and the distance, frames and weight by the same weights; the
-//! seed and transport of the corner that weighs most.
+//! the pixel's point: uv, and the distance, frames and weight by the same weights.
 
 use crate::uv::{Sample, Status};
 use glam::{DVec2, DVec3};
@@ -42,38 +40,16 @@ pub struct Corner {
     pub sample: Sample,
 }
 
-/// How corners of different nearest seeds may rebuild: `None` (strict: a material
-/// reads the atlas's seed or transport) only corners of one seed; `Some(merged)` also
-/// corners whose seeds are pairwise merged (`uv::Atlas::merged`).
-pub type Seeds<'a> = Option<&'a dyn Fn(usize, usize) -> bool>;
-
 /// The rebuilt sample at `p`, a point of material `material`, from the four corners
 /// (in the order (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)), with the uv tolerance
-/// `tolerance` (in uv units: [`TOLERANCE`] times the reach) and the seed rule `seeds`;
-/// `None` where they do not agree and the pixel walks.
-pub fn rebuild(
-    c: &[Corner; 4],
-    p: DVec3,
-    material: i32,
-    tolerance: f64,
-    seeds: Seeds,
-) -> Option<Sample> {
+/// `tolerance` (in uv units: [`TOLERANCE`] times the reach); `None` where they do not
+/// agree and the pixel walks.
+pub fn rebuild(c: &[Corner; 4], p: DVec3, material: i32, tolerance: f64) -> Option<Sample> {
+    let seed = c[0].sample.seed;
     if c.iter()
-        .any(|k| k.material != material || k.sample.status != Status::Ok)
+        .any(|k| k.material != material || k.sample.status != Status::Ok || k.sample.seed != seed)
     {
         return None;
-    }
-    let pair = |a: Option<usize>, b: Option<usize>| match (a, b, seeds) {
-        _ if a == b => true,
-        (Some(a), Some(b), Some(merged)) => merged(a, b),
-        _ => false,
-    };
-    for k in 0..4 {
-        for l in k + 1..4 {
-            if !pair(c[k].sample.seed, c[l].sample.seed) {
-                return None;
-            }
-        }
     }
     let pos: Vec<DVec3> = c.iter().map(|k| k.position).collect();
     let mid = (pos[0] + pos[1] + pos[2] + pos[3]) * 0.25;
@@ -123,7 +99,7 @@ pub fn rebuild(
     let w = weights(xp);
     // Ties go to the later corner, as the shader's selects do.
     let heaviest = (0..4).fold(0, |best, k| if w[k] >= w[best] { k } else { best });
-    let mut out = c[heaviest].sample;
+    let mut out = c[0].sample;
     out.uv = (0..4).map(|k| w[k] * c[k].sample.uv).sum();
     out.distance = (0..4).map(|k| w[k] * c[k].sample.distance).sum();
     out.weight = (0..4)
@@ -132,5 +108,6 @@ pub fn rebuild(
         .clamp(0.0, 1.0);
     out.tangent = (0..4).map(|k| w[k] * c[k].sample.tangent).sum();
     out.bitangent = (0..4).map(|k| w[k] * c[k].sample.bitangent).sum();
+    out.transport = c[heaviest].sample.transport;
     Some(out)
 }

@@ -127,7 +127,7 @@ export class SdfcScene {
         compute: { module: this.module, entryPoint: this.coarse.entry_point },
       });
     }
-    // The frame the coarse samples were last sized for: { size, group }.
+    // The frame the coarse samples were last sized for: { size, samples, group }.
     this.framed = null;
     this.fresh = false;
   }

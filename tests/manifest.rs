@@ -434,22 +434,7 @@ fn embedded(dir: &Path, scene: &str, size: &str, extra: &[&str]) -> image::RgbaI
 /// `sdfc render` of `scene` as the example compiles it (loop walk, and forward
 /// gradients: the library's default).
 fn rendered(dir: &Path, scene: &str, size: &str, extra: &[&str]) -> image::RgbaImage {
-    let path = dir.join("ref.png");
-    let args = [
-        "render",
-        scene,
-        "--walk",
-        "loop",
-        "--gradients",
-        "forward",
-        "--size",
-        size,
-        "-o",
-        path.to_str().unwrap(),
-    ];
-    let (code, _, err) = common::sdfc(&[&args[..], extra].concat());
-    assert_eq!(code, 0, "{scene}: {err}");
-    decode(&path)
+    common::render_as_library(scene, size, extra, &dir.join("ref.png"))
 }
 
 #[test]

@@ -193,6 +193,20 @@ fn the_coarse_grid_covers_every_pixel() {
     }
 }
 
+/// `sphere.sdf` checked, and its renderer with the multi-scale pass.
+fn sphere_with_pass(gpu: &Gpu) -> (driver::Analysis, Renderer) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let a = driver::check(&source, path.parent());
+    let options = Options {
+        multiscale: true,
+        ..Default::default()
+    };
+    let module = driver::compile(&a, &options).unwrap().module;
+    let r = Renderer::new(gpu, &module, path.parent().unwrap()).unwrap();
+    (a, r)
+}
+
 /// The GPU's rebuild against the f64 reference (`reference::coarse::rebuild`): the
 /// sphere drawn with the pass, its coarse samples walked again on the CPU at the hits
 /// the frame shows there, and every pixel rebuilt from them in f64. Near the fit's
@@ -203,17 +217,9 @@ fn the_coarse_grid_covers_every_pixel() {
 fn the_rebuild_agrees_with_the_f64_reference() {
     use sdfc::reference::coarse::{rebuild, Corner, STEP, TOLERANCE};
     let Some(gpu) = gpu_for_tests() else { return };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
-    let source = std::fs::read_to_string(&path).unwrap();
-    let a = driver::check(&source, path.parent());
+    let (a, r) = sphere_with_pass(&gpu);
     let atlas = a.atlases[0].as_ref().unwrap();
     let reach = atlas.params.max_distance;
-    let options = Options {
-        multiscale: true,
-        ..Default::default()
-    };
-    let module = driver::compile(&a, &options).unwrap().module;
-    let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
     let (w, h) = (160u32, 120u32);
     let mut view = common::scene_view(&a, (w, h));
     let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
@@ -280,9 +286,7 @@ fn the_rebuild_agrees_with_the_f64_reference() {
 fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
     use glam::{DVec2, DVec3};
     let Some(gpu) = gpu_for_tests() else { return };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
-    let source = std::fs::read_to_string(&path).unwrap();
-    let a = driver::check(&source, path.parent());
+    let (a, r) = sphere_with_pass(&gpu);
     let atlas = a.atlases[0].as_ref().unwrap();
     let reach = atlas.params.max_distance;
     let seed = atlas.seeds[0].seed;
@@ -293,12 +297,6 @@ fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
         let w = m - m0 * m0.dot(m);
         DVec2::new(w.dot(seed.e1), w.dot(seed.e2)) * (d / w.length())
     };
-    let options = Options {
-        multiscale: true,
-        ..Default::default()
-    };
-    let module = driver::compile(&a, &options).unwrap().module;
-    let r = Renderer::new(&gpu, &module, path.parent().unwrap()).unwrap();
     let mut view = common::scene_view(&a, (320, 240));
     let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
     view.atlas_aov = true;

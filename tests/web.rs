@@ -252,24 +252,8 @@ fn the_exported_page_renders_what_sdfc_render_renders() {
         );
         let browser = std::fs::read(&raw).unwrap();
         assert_eq!(browser.len(), (4 * w * h) as usize);
-        let reference = dir.path().join("ref.png");
         let size = format!("{w}x{h}");
-        let out_path = reference.to_str().unwrap();
-        let args = [
-            "render",
-            scene,
-            "--walk",
-            "loop",
-            "--gradients",
-            "forward",
-            "--size",
-            &size,
-            "-o",
-            out_path,
-        ];
-        let (code, _, err) = common::sdfc(&args);
-        assert_eq!(code, 0, "{scene}: {err}");
-        let reference = image::open(&reference).unwrap().to_rgba8();
+        let reference = common::render_as_library(scene, &size, &[], &dir.path().join("ref.png"));
         let (mean, share) = common::image_difference(reference.as_raw(), &browser);
         eprintln!(
             "{scene}: browser against sdfc render: mean {mean:.3}/255, share over 16 {share:.4}"
@@ -335,26 +319,8 @@ fn the_exported_page_runs_the_multiscale_pass_as_sdfc_render_does() {
         std::fs::read(&raw).unwrap()
     };
     let render = |view: &str, multiscale: &str| {
-        let out = dir.path().join("ref.png");
-        let args = [
-            "render",
-            scene,
-            "--walk",
-            "loop",
-            "--gradients",
-            "forward",
-            "--size",
-            &size,
-            "--view",
-            view,
-            "--multiscale",
-            multiscale,
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        let (code, _, err) = common::sdfc(&args);
-        assert_eq!(code, 0, "{err}");
-        image::open(&out).unwrap().to_rgba8().into_raw()
+        let extra = ["--view", view, "--multiscale", multiscale];
+        common::render_as_library(scene, &size, &extra, &dir.path().join("ref.png")).into_raw()
     };
     // The walked view: rebuilt pixels green, walked ones red.
     let green = |px: &[u8]| {

@@ -334,3 +334,30 @@ pub fn gl_for_tests() -> Option<sdfc::gpu::Gpu> {
         }
     }
 }
+
+/// `sdfc render SCENE` at `size` (WIDTHxHEIGHT) with the loop walk and forward
+/// gradients (the library's default, as `export-web` and the embedding example compile
+/// it) and `extra` arguments, written to `out`; its pixels (RGBA).
+#[allow(dead_code)]
+pub fn render_as_library(
+    scene: &str,
+    size: &str,
+    extra: &[&str],
+    out: &std::path::Path,
+) -> image::RgbaImage {
+    let args = [
+        "render",
+        scene,
+        "--walk",
+        "loop",
+        "--gradients",
+        "forward",
+        "--size",
+        size,
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let (code, _, err) = sdfc(&[&args[..], extra].concat());
+    assert_eq!(code, 0, "{scene}: {err}");
+    image::open(out).unwrap().to_rgba8()
+}

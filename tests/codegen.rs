@@ -609,6 +609,7 @@ fn templates_are_filled_completely_and_validate() {
         template::placeholders(template::ENTRY),
         ["bindings", "atlas_aov"]
     );
+    assert_eq!(template::placeholders(template::TRACE), ["map", "suffix"]);
     assert_eq!(
         template::placeholders(template::COARSE),
         [

@@ -76,14 +76,22 @@ fn screen_lists_are_conservative(a: &driver::Analysis, view: &View) -> usize {
                 let Some(list) = binned.list(tile, slot as u32) else {
                     continue;
                 };
+                let entries = binned.boxes(tile, slot as u32).unwrap();
                 for (b, record) in g.boxes.iter().zip(&g.records) {
                     let far = (b.min - c.eye).abs().max((b.max - c.eye).abs()).length();
                     let margin = view.epsilon * far.max(1.0) + 2.0 * 3f64.sqrt() * tiling.tap;
                     if slab(c.eye, d, b.min - margin, b.max + margin).is_some() {
                         met += 1;
+                        let Ok(at) = list.binary_search(record) else {
+                            panic!("pixel ({x}, {y}) meets record {record} of group {slot}, unlisted in tile {tile}");
+                        };
+                        // The shader's per-ray test (scene_cull) keeps it: the ray meets
+                        // the box the entry holds, in single precision.
+                        let e = entries[at].1.map(f64::from);
+                        let (lo, hi) = (DVec3::new(e[0], e[1], e[2]), DVec3::new(e[3], e[4], e[5]));
                         assert!(
-                            list.binary_search(record).is_ok(),
-                            "pixel ({x}, {y}) meets record {record} of group {slot}, unlisted in tile {tile}"
+                            slab(c.eye, d, lo, hi).is_some(),
+                            "pixel ({x}, {y}) meets record {record}, but not its entry's box"
                         );
                     }
                 }
@@ -131,12 +139,18 @@ fn every_leaf_a_shadow_ray_can_meet_is_in_its_cell() {
         }
         let g = &tiling.groups[0];
         let list = binned.list(cell, 0).expect("no cell is crowded here");
+        let entries = binned.boxes(cell, 0).unwrap();
         for (b, record) in g.boxes.iter().zip(&g.records) {
             if slab(p, l, b.min - threshold, b.max + threshold).is_some() {
                 met += 1;
+                let Ok(at) = list.binary_search(record) else {
+                    panic!("a shadow ray from {p} meets record {record}, unlisted in cell {cell}");
+                };
+                let e = entries[at].1.map(f64::from);
+                let (lo, hi) = (DVec3::new(e[0], e[1], e[2]), DVec3::new(e[3], e[4], e[5]));
                 assert!(
-                    list.binary_search(record).is_ok(),
-                    "a shadow ray from {p} meets record {record}, unlisted in cell {cell}"
+                    slab(p, l, lo, hi).is_some(),
+                    "a shadow ray from {p} meets record {record}, but not its entry's box"
                 );
             }
         }
@@ -175,11 +189,50 @@ fn a_crowded_tile_walks_the_whole_group() {
         "past the limit: the whole tree"
     );
     assert!(binned.whole > 0);
-    // The shader takes that path: the same picture as without tiles.
+    // The shader takes that path (the whole scene for the trace, its normal and the
+    // shadow ray): the same picture as without tiles.
     let Some(gpu) = gpu_for_tests() else { return };
     let [a, b] = both(&gpu, &src, (32, 32), ViewMode::Normal);
     assert!(a.position.iter().filter(|p| p[3] >= 0.0).count() > 100);
     assert!(common::worst_byte_difference(&a.color, &b.color) <= 6);
+    let [a, b] = both(&gpu, &src, (32, 32), ViewMode::Color);
+    assert!(common::worst_byte_difference(&a.color, &b.color) <= 6);
+}
+
+/// 400 scattered spheres over a floor that is no leaf of their group (a smooth union).
+fn cloud_over_a_floor() -> String {
+    scattered(400, 0).replace(
+        "render cloud.paint(checkered)",
+        "render (cloud | smooth_union(box([20, 0.1, 20]), sphere(0.5), 0.3).translate([0, -6, 0])).paint(checkered)",
+    )
+}
+
+#[test]
+fn a_ray_skips_the_listed_leaves_it_misses() {
+    // The module's trace reads, per ray, only the entries whose boxes it meets, and
+    // with nothing but groups in the target, only the span between them.
+    let a = analysis(&scattered(400, 0));
+    let wgsl = module(&a, true).wgsl;
+    for f in [
+        "fn scene_cull(",
+        "fn scene_march_whole(",
+        "fn scene_shadow_march_whole(",
+    ] {
+        assert!(wgsl.contains(f), "{f}");
+    }
+    assert!(
+        wgsl.contains("    return scene_span;"),
+        "the span of a cloud"
+    );
+    // With a floor as code beside the group, the whole ray stays open.
+    let floor = module(&analysis(&cloud_over_a_floor()), true).wgsl;
+    assert!(floor.contains("fn scene_cull("));
+    assert!(floor.contains("    return vec2<f32>(0.0, far);\n}"));
+    assert!(!floor.contains("    return scene_span;"));
+    // The listed walker never calls the tree walk: the crowded tile's rays do instead.
+    let walker = &wgsl[wgsl.find("fn group_tiled_").unwrap()..];
+    let walker = &walker[..walker.find("\n}\n").unwrap()];
+    assert!(!walker.contains("group_walk_"), "{walker}");
 }
 
 #[test]
@@ -242,6 +295,7 @@ fn same_surface(gpu: &sdfc::gpu::Gpu) {
     for (name, src) in [
         ("scattered(400)", scattered(400, 0)),
         ("city(300)", city(300, 0)),
+        ("scattered(400) over a floor as code", cloud_over_a_floor()),
     ] {
         // Normals: the same hits, the same normals up to where in the hit tolerance
         // each trace stopped.

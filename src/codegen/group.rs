@@ -167,41 +167,60 @@ fn group_walk_{mask:x}(at0: u32, nodes: u32, p: vec3<f32>) -> vec2<f32> {{
 /// across, tiles down, groups per tile; the light's grid: cells across and down, its
 /// origin (2) and cell size, its axes u (3) and v (3) (floats as bits); one unused.
 /// Entries (start, count) follow by cell then group: the screen's tiles row by row,
-/// the light's cells row by row, one empty cell.
+/// the light's cells row by row, one empty cell; then the lists, [`TILE_ENTRY`] words
+/// a listed leaf (`start` is the first word, `count` the leaves).
 pub const TILES_HEADER: u32 = 16;
+
+/// Words of one list entry in the `tiles` buffer: the leaf's record, then its box
+/// (min, max) grown by the binning's margins, as f32 bits, for the per-ray test.
+pub const TILE_ENTRY: u32 = 7;
 
 /// A tile's entry count meaning "this tile's list was too long: walk the whole group".
 pub const WHOLE: u32 = u32::MAX;
 
 /// The call of group `g`'s tiled walker in slot `slot` at point `p`, in a function
-/// with the tile in `tile`: (distance, material).
+/// with the tile in `tile`, skipping the entries the current ray's culling skips
+/// (`scene_skip`, `codegen::tiles`): (distance, material).
 pub fn tiled_call(g: &Group, slot: u32, p: &str) -> String {
     format!(
-        "group_tiled_{:x}(GROUP_{}_AT, {}u, {slot}u, tile, {p})",
+        "group_tiled_{:x}(GROUP_{}_AT, {slot}u, tile, scene_skip[{slot}], {p})",
         mask(g),
         g.key,
-        g.tree.len()
     )
 }
 
-/// `fn group_tiled_MASK(at0, nodes, slot, tile, p) -> vec2<f32>`: the union of the
+/// `fn group_tiled_MASK(at0, slot, tile, skip, p) -> vec2<f32>`: the union of the
 /// leaves listed for `tile` and `slot` (ties to the first listed, the lowest record,
-/// as the tree walk's), or the whole tree where the list was too long.
+/// as the tree walk's), less those of the first 32 entries whose bit is set in `skip`
+/// (those whose boxes the ray being traced misses). A crowded tile's list (`WHOLE`)
+/// never reaches it: such rays trace the whole scene (`scene_whole`, `codegen::tiles`).
+/// One loop, no call to the tree walk: on Mesa's software adapter a branch's other
+/// side costs as much as its own, every step.
 pub fn tiled_walker(mask: u32) -> String {
     format!(
         "// A large union over the leaves a screen tile's rays can come near (the `tiles`
-// buffer, binned by the runtime each frame: src/gpu/tiles.rs); the whole tree where
-// the tile's list was too long.
-fn group_tiled_{mask:x}(at0: u32, nodes: u32, slot: u32, tile: u32, p: vec3<f32>) -> vec2<f32> {{
+// buffer, binned by the runtime each frame: src/gpu/tiles.rs), less those the ray
+// being traced misses (`skip`, from scene_cull). A crowded tile (a list too long) is
+// traced over the whole scene instead (scene_whole), and reads as empty here.
+fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: u32, p: vec3<f32>) -> vec2<f32> {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
     let start = tiles[h];
-    let count = tiles[h + 1u];
-    if (count == {WHOLE}u) {{
-        return group_walk_{mask:x}(at0, nodes, p);
-    }}
+    let count = select(tiles[h + 1u], 0u, tiles[h + 1u] == {WHOLE}u);
     var best = vec2<f32>(3.0e38, 0.0);
-    for (var i = 0u; i < count; i = i + 1u) {{
-        let record = tiles[start + i];
+    // The first 32 entries by their bits, in order; then any past them.
+    var bits = select(0xffffffffu, (1u << count) - 1u, count < 32u) & ~skip;
+    var next = 32u;
+    loop {{
+        var i = next;
+        if (bits != 0u) {{
+            i = firstTrailingBit(bits);
+            bits = bits & (bits - 1u);
+        }} else if (next < count) {{
+            next = next + 1u;
+        }} else {{
+            break;
+        }}
+        let record = tiles[start + {TILE_ENTRY}u * i];
         let d = group_leaf_{mask:x}(at0 + record, p);
         if (d < best.x) {{
             best = vec2<f32>(d, tables_f32(at0 + record + 1u));

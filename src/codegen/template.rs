@@ -9,6 +9,8 @@ pub const ATLAS: &str = include_str!("../../shaders/atlas.wgsl.in");
 pub const REFINE: &str = include_str!("../../shaders/refine.wgsl.in");
 /// The scene-independent tail of every module (tracing, normals, entry points).
 pub const ENTRY: &str = include_str!("../../shaders/entry.wgsl.in");
+/// The trace's marches over one field (`codegen::tiles`): `shaders/trace.wgsl.in`.
+pub const TRACE: &str = include_str!("../../shaders/trace.wgsl.in");
 /// The multi-scale atlas pass (`Options::multiscale`): `shaders/coarse.wgsl.in`.
 pub const COARSE: &str = include_str!("../../shaders/coarse.wgsl.in");
 /// A baked mesh's renderer, with the flat layout's constants.

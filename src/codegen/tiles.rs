@@ -14,11 +14,16 @@
 
 use super::emit::Writer;
 use crate::ir::group::Group;
-use crate::ir::{Aabb, NodeId, Shape};
+use crate::ir::{Aabb, NodeId, Op, Shape};
 use std::collections::HashMap;
 use std::fmt::Write;
 
-pub use super::group::{TILES_HEADER, WHOLE};
+pub use super::group::{TILES_HEADER, TILE_ENTRY, WHOLE};
+
+/// The pipeline-overridable constant of a module with per-tile culling that keeps
+/// the whole-scene paths for crowded tiles ([`DISPATCH`]); true unless a pipeline
+/// says otherwise.
+pub const CROWDED: &str = "SCENE_CROWDED";
 
 /// One traced group: its leaves' boxes (world space: nothing above the group moves
 /// it) and their records, in record order.
@@ -94,8 +99,22 @@ fn scene_trace_map(p: vec3<f32>, tile: u32) -> vec2<f32> {
     return scene_map(p);
 }
 
+// The trace of a pixel's ray, the normal at its hit and the sun's visibility from there.
+fn scene_trace(ro: vec3<f32>, rd: vec3<f32>, max_steps: i32, tile: u32) -> vec4<f32> {
+    return scene_march(ro, rd, max_steps, tile, vec2<f32>(0.0, globals.trace.x));
+}
+
+fn scene_trace_normal(p: vec3<f32>, tile: u32) -> vec3<f32> {
+    return scene_listed_normal(p, tile);
+}
+
+fn scene_shadow(p: vec3<f32>, l: vec3<f32>) -> f32 {
+    return scene_shadow_march(p, l, 0u, vec2<f32>(0.0, globals.trace.x));
+}
+
 ",
         );
+        out.push_str(&marches("", "scene_trace_map"));
         return Vec::new();
     }
     let mut w = Writer::new("scene_trace_map");
@@ -128,7 +147,7 @@ fn scene_shadow_cell(p: vec3<f32>) -> u32 {{
     return first + min(u32(c.y), down - 1u) * across + min(u32(c.x), across - 1u);
 }}
 
-{}// The render target as the trace reads it: its traced groups over the leaves of the
+{}{}// The render target as the trace reads it: its traced groups over the leaves of the
 // pixel's tile.
 fn scene_trace_map(p: vec3<f32>, tile: u32) -> vec2<f32> {{
     sdf_evals = sdf_evals + 1u;
@@ -136,7 +155,198 @@ fn scene_trace_map(p: vec3<f32>, tile: u32) -> vec2<f32> {{
 }}
 
 ",
-        w.helpers, w.out
+        cull(slots.len(), only_groups(target)),
+        w.helpers,
+        w.out
     );
+    out.push_str(&marches("", "scene_trace_map"));
+    out.push_str(&marches("_whole", "scene_whole_map"));
+    out.push_str(DISPATCH);
     w.groups
+}
+
+/// `shaders/trace.wgsl.in` over the field `map`, its functions named with `suffix`.
+fn marches(suffix: &str, map: &str) -> String {
+    super::template::fill(
+        super::template::TRACE,
+        &[("suffix", suffix.to_string()), ("map", map.to_string())],
+    )
+    .expect("shaders/trace.wgsl.in names exactly suffix and map")
+}
+
+/// With per-tile culling: the trace, its normal and the shadow ray, each over the
+/// leaves its ray meets, or over the whole scene where a list it reads was too long
+/// (`scene_whole`). The branch is taken once a ray, outside the marches' loops, and
+/// only in a pipeline built with [`CROWDED`] true (its default): the runtime builds
+/// another with it false for the frames where no list is too long (`gpu::render`), in
+/// which the whole-scene paths compile away. (On Mesa's software adapter a branch not
+/// taken still runs, and a loop's body once: 2.5 ms of a 7 ms frame of 1,200
+/// scattered spheres at 160 × 120.)
+const DISPATCH: &str = "// Whether a tile's list may be too long (the whole-scene paths below): the runtime
+// builds the pipeline of a frame without such a list with this false.
+override SCENE_CROWDED: bool = true;
+
+// The whole scene, for rays whose tiles' lists were too long.
+fn scene_whole_map(p: vec3<f32>, tile: u32) -> vec2<f32> {
+    return scene_map(p);
+}
+
+// The trace of a pixel's ray over the leaves it meets in its tile's lists.
+fn scene_trace(ro: vec3<f32>, rd: vec3<f32>, max_steps: i32, tile: u32) -> vec4<f32> {
+    let span = scene_cull(ro, rd, tile, globals.trace.x);
+    if (SCENE_CROWDED && scene_whole) {
+        return scene_march_whole(ro, rd, max_steps, tile, vec2<f32>(0.0, globals.trace.x));
+    }
+    return scene_march(ro, rd, max_steps, tile, span);
+}
+
+// The normal at the hit p of the last scene_trace, over the leaves its ray met.
+fn scene_trace_normal(p: vec3<f32>, tile: u32) -> vec3<f32> {
+    if (SCENE_CROWDED && scene_whole) {
+        return scene_whole_normal(p);
+    }
+    return scene_listed_normal(p, tile);
+}
+
+// scene_normal as a loop over its taps, none unless the ray is whole: on Mesa's
+// software adapter the branch not taken still runs, but a loop's body only once.
+fn scene_whole_normal(p: vec3<f32>) -> vec3<f32> {
+    let h = 1e-3 * SCENE_SCALE;
+    var g = vec3<f32>(0.0);
+    for (var k = 0u; k < select(0u, 4u, scene_whole); k = k + 1u) {
+        // The taps k.xyy, k.yyx, k.yxy, k.xxx of scene_normal, k = (1, -1).
+        let e = vec3<f32>(select(-1.0, 1.0, k == 0u || k == 3u), select(-1.0, 1.0, k >= 2u), select(-1.0, 1.0, k == 1u || k == 3u));
+        g = g + e * scene_map(p + e * h).x;
+    }
+    return normalize(g);
+}
+
+// The sun's visibility from p along l, over the leaves of its light cell the ray meets.
+fn scene_shadow(p: vec3<f32>, l: vec3<f32>) -> f32 {
+    let cell = scene_shadow_cell(p);
+    let span = scene_cull(p, l, cell, globals.trace.x);
+    var seen: f32;
+    if (SCENE_CROWDED && scene_whole) {
+        seen = scene_shadow_march_whole(p, l, cell, vec2<f32>(0.0, globals.trace.x));
+    } else {
+        seen = scene_shadow_march(p, l, cell, span);
+    }
+    scene_cull_none();
+    return seen;
+}
+
+";
+
+/// Whether the render target is its traced groups alone: reached from the root
+/// through hard unions and paints (`ir::group::traced`), with no operands as code
+/// anywhere on the way. Then nothing but the groups' leaves can meet a ray.
+fn only_groups(target: &Shape) -> bool {
+    let mut stack = vec![target.root()];
+    while let Some(id) = stack.pop() {
+        if let Some(g) = target.group(id) {
+            if !g.others.is_empty() || target.is_shared(id) || target[id].dynamic.is_some() {
+                return false;
+            }
+            continue;
+        }
+        match &target[id].op {
+            Op::Csg { a, b, .. } if crate::ir::group::is_hard_union(&target[id].op) => {
+                stack.push(*b);
+                stack.push(*a);
+            }
+            Op::Paint { child, .. } => stack.push(*child),
+            _ => return false,
+        }
+    }
+    true
+}
+
+/// `scene_cull(ro, rd, tile, far) -> f32`: which of the first 32 entries of each
+/// traced group's list in `tile` the ray `ro + t rd`, 0 <= t <= far, misses (a slab
+/// test against the entry's grown box), into `scene_skip`, which the tiled walkers
+/// read; `scene_cull_none()` clears it for everything else (normals, materials). A ray
+/// that misses a leaf's grown box never comes within the trace's tolerance of it, nor
+/// within the normal's taps (`gpu::tiles`), so skipping it changes no hit. Returns
+/// the span of the ray where it may meet the surface: with `only` (the target is its
+/// groups alone, [`only_groups`]), from the nearest entry into a box it meets to the
+/// farthest exit (empty, start past end, where it meets none), else `(0, far)`.
+fn cull(slots: usize, only: bool) -> String {
+    let mut set = String::new();
+    let mut clear = String::new();
+    for k in 0..slots {
+        let _ = writeln!(
+            set,
+            "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far);"
+        );
+        let _ = writeln!(clear, "    scene_skip[{k}] = 0u;");
+    }
+    let (first, span) = if only {
+        (
+            " (the target is its traced groups alone: from the nearest entry into a box\n// to the farthest exit, empty where it meets none)",
+            "scene_span",
+        )
+    } else {
+        (
+            " (all of it: the target has operands as code)",
+            "vec2<f32>(0.0, far)",
+        )
+    };
+    format!(
+        "// Per traced group, the entries of the tile's list the ray being traced misses.
+var<private> scene_skip: array<u32, {slots}>;
+
+// The nearest entry of the ray into a box it meets and its farthest exit from one,
+// over the lists culled so far (0 and far where a list was not culled whole).
+var<private> scene_span: vec2<f32>;
+
+// Whether a list the ray reads was too long (`WHOLE`): it then traces the whole scene.
+var<private> scene_whole: bool;
+
+// Bit i set where the ray ro + t / inv (0 <= t <= far) misses entry i's box, for the
+// first 32 entries of `tile`'s list of group `slot`.
+fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32) -> u32 {{
+    let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
+    let start = tiles[h];
+    let count = tiles[h + 1u];
+    if (count == {WHOLE}u || count > 32u) {{
+        scene_span = vec2<f32>(0.0, far);
+    }}
+    if (count == {WHOLE}u) {{
+        scene_whole = true;
+        return 0u;
+    }}
+    var skip = 0u;
+    for (var i = 0u; i < min(count, 32u); i = i + 1u) {{
+        let e = start + {TILE_ENTRY}u * i;
+        let lo = vec3<f32>(bitcast<f32>(tiles[e + 1u]), bitcast<f32>(tiles[e + 2u]), bitcast<f32>(tiles[e + 3u]));
+        let hi = vec3<f32>(bitcast<f32>(tiles[e + 4u]), bitcast<f32>(tiles[e + 5u]), bitcast<f32>(tiles[e + 6u]));
+        let a = (lo - ro) * inv;
+        let b = (hi - ro) * inv;
+        let near = max(max(min(a.x, b.x), min(a.y, b.y)), max(min(a.z, b.z), 0.0));
+        let far_side = min(min(max(a.x, b.x), max(a.y, b.y)), min(max(a.z, b.z), far));
+        if (near > far_side) {{
+            skip = skip | (1u << i);
+        }} else {{
+            scene_span = vec2<f32>(min(scene_span.x, near), max(scene_span.y, far_side));
+        }}
+    }}
+    return skip;
+}}
+
+// Culls the tiles' lists to the ray ro + t rd, 0 <= t <= far (rd need not be unit);
+// returns the span of the ray where it may meet the surface{first}.
+fn scene_cull(ro: vec3<f32>, rd: vec3<f32>, tile: u32, far: f32) -> vec2<f32> {{
+    // A direction component of 0 becomes a tiny one: the slab is then all or nothing.
+    let inv = 1.0 / select(rd, vec3<f32>(1e-30), abs(rd) < vec3<f32>(1e-30));
+    scene_span = vec2<f32>(2.0 * far + 1.0, 0.0);
+    scene_whole = false;
+{set}    return {span};
+}}
+
+// Every listed entry again (normals, materials, anything off the culled ray).
+fn scene_cull_none() {{
+{clear}}}
+
+"
+    )
 }

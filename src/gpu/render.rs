@@ -117,7 +117,13 @@ pub fn render_timed(
 /// A generated module's render pipeline with its textures, built once and used for
 /// any number of frames, views and sizes (`sdfc render`, `sdfc bench`, the tests).
 pub struct Renderer {
+    /// With per-tile culling, built for frames where no tile's list is too long
+    /// (`codegen::tiles::CROWDED` false); `crowded` is the pipeline for the others,
+    /// built at the first such frame.
     pipeline: wgpu::RenderPipeline,
+    crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
+    /// The module's WGSL, for the crowded pipeline.
+    wgsl: String,
     /// What the binding table of the manifest binds, slot by slot.
     bindings: Vec<crate::codegen::Binding>,
     /// The render group's layout, from the binding table.
@@ -156,6 +162,8 @@ pub struct Targets {
 /// What one frame binds ([`Renderer::prepare`]).
 struct Prepared {
     group: wgpu::BindGroup,
+    /// The crowded pipeline, for a frame where a tile's list was too long.
+    crowded: Option<wgpu::RenderPipeline>,
     /// The screen tiles' timings and the coarse samples.
     timings: Timings,
     /// The frame's size where the multi-scale pass runs.
@@ -192,12 +200,21 @@ impl Renderer {
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
         let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
+        // With tiles, frames without a crowded tile compile the whole-scene paths away.
+        let lean = [(crate::codegen::tiles::CROWDED, 0.0)];
+        let constants: &[(&str, f64)] = if module.tiling.is_some() { &lean } else { &[] };
         let ((pipeline, layout, coarse), pipeline_cached) =
             gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
                 gpu.scoped(|| {
                     let layout = scene_group::layout(&gpu.device, &bindings, Stage::Render);
                     let cache = gpu.disk.as_ref().map(|d| &d.cache);
-                    let pipeline = pipeline(&gpu.device, &module.wgsl, &layout, &formats, cache);
+                    let pipeline = pipeline(
+                        &gpu.device,
+                        (&module.wgsl, constants),
+                        &layout,
+                        &formats,
+                        cache,
+                    );
                     let coarse =
                         super::coarse::CoarsePass::new(&gpu.device, module, &layout, cache);
                     (pipeline, layout, coarse)
@@ -206,6 +223,8 @@ impl Renderer {
         gpu.wait()?;
         Ok(Renderer {
             pipeline,
+            crowded: Default::default(),
+            wgsl: module.wgsl.clone(),
             bindings,
             layout,
             textures,
@@ -294,16 +313,51 @@ impl Renderer {
         };
         let group = scene_group::group(d, &self.bindings, Stage::Render, &self.layout, &with)?;
         let mut timings = tiles.map(|t| t.1).unwrap_or_default();
+        let crowded = if timings.tiles_whole > 0 {
+            Some(self.crowded_pipeline(gpu)?)
+        } else {
+            None
+        };
         let coarse = coarse.is_some_and(|c| c.1);
         if coarse {
             timings.coarse_samples = super::coarse::samples(size.0, size.1);
         }
         Ok(Prepared {
             group,
+            crowded,
             timings,
             coarse: coarse.then_some(size),
             _buffers: globals,
         })
+    }
+
+    /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
+    /// frame has one (its time is not in `pipeline_time`).
+    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline, GpuError> {
+        let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = built.as_ref() {
+            return Ok(p.clone());
+        }
+        let key = super::cache::key(
+            "render, crowded",
+            (&self.bindings, self.formats),
+            &self.wgsl,
+        );
+        let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+            gpu.scoped(|| {
+                let cache = gpu.disk.as_ref().map(|d| &d.cache);
+                pipeline(
+                    &gpu.device,
+                    (&self.wgsl, &[]),
+                    &self.layout,
+                    &self.formats,
+                    cache,
+                )
+            })
+        })?;
+        gpu.wait()?;
+        *built = Some(p.clone());
+        Ok(p)
     }
 
     /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the
@@ -383,7 +437,7 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(frame.crowded.as_ref().unwrap_or(&self.pipeline));
         pass.set_bind_group(RENDER_GROUP, bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
@@ -545,10 +599,10 @@ pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
 }
 
 /// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
-/// the targets' formats.
+/// the targets' formats, with its pipeline-overridable constants.
 fn pipeline(
     d: &wgpu::Device,
-    wgsl: &str,
+    (wgsl, constants): (&str, &[(&str, f64)]),
     group0: &wgpu::BindGroupLayout,
     formats: &[wgpu::TextureFormat; 4],
     cache: Option<&wgpu::PipelineCache>,
@@ -578,7 +632,10 @@ fn pipeline(
         vertex: wgpu::VertexState {
             module: &module,
             entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             buffers: &[],
         },
         primitive: wgpu::PrimitiveState::default(),
@@ -587,7 +644,10 @@ fn pipeline(
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_aov"),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             targets: &targets,
         }),
         multiview_mask: None,

@@ -13,12 +13,21 @@
 //! point, with the same material and normal, in steps no shorter than the whole
 //! union's. A box that reaches behind the eye is listed in every tile.
 //!
+//! Within a tile, each ray goes further (`codegen::tiles::cull`): a list entry holds
+//! the leaf's grown box as well as its record, and the shader skips, for the whole
+//! trace of one ray, the first 32 entries whose boxes that ray misses, the same test
+//! as the binning's done exactly per ray; where the render target is its groups
+//! alone, the ray is traced only between its first entry into a box and its last
+//! exit. The boxes are grown by the larger of the screen's and the light's margins
+//! and a little more for single precision (`tests/tiles.rs` checks that every ray
+//! that meets a leaf's margins meets its entry's box).
+//!
 //! Limits, checked before the work: a tile lists at most [`MAX_PER_TILE`] leaves of
 //! a group (past that the shader walks the group's whole tree there, which is what it
 //! does without tiles), and the lists of a frame hold at most [`MAX_WORDS`] words
 //! (past that the per-tile limit is halved until they fit).
 
-use crate::codegen::tiles::{Tiling, TILES_HEADER, WHOLE};
+use crate::codegen::tiles::{Tiling, TILES_HEADER, TILE_ENTRY, WHOLE};
 use crate::view::View;
 use glam::{DMat3, DVec3};
 
@@ -28,7 +37,8 @@ pub const TILE: u32 = 4;
 /// The most leaves of one group a tile lists; past it the tile walks the whole tree.
 pub const MAX_PER_TILE: u32 = 256;
 
-/// The most words of leaf lists in a frame's `tiles` buffer (16 MiB).
+/// The most words of leaf lists in a frame's `tiles` buffer (16 MiB: 599,186 listed
+/// leaves, [`TILE_ENTRY`] words each).
 pub const MAX_WORDS: usize = 1 << 22;
 
 /// A frame's `tiles` buffer, with what it holds.
@@ -48,11 +58,22 @@ pub struct Binned {
 
 impl Binned {
     /// The entry of `tile` and `slot`: its leaf records, or `None` for the whole tree.
-    pub fn list(&self, tile: u32, slot: u32) -> Option<&[u32]> {
+    pub fn list(&self, tile: u32, slot: u32) -> Option<Vec<u32>> {
+        self.boxes(tile, slot)
+            .map(|l| l.into_iter().map(|(record, _)| record).collect())
+    }
+
+    /// The entry of `tile` and `slot`: its leaves' records with the boxes the shader
+    /// tests rays against (min, max), or `None` for the whole tree.
+    pub fn boxes(&self, tile: u32, slot: u32) -> Option<Vec<(u32, [f32; 6])>> {
         let groups = self.words[3];
         let h = (TILES_HEADER + 2 * (tile * groups + slot)) as usize;
         let (start, count) = (self.words[h] as usize, self.words[h + 1]);
-        (count != WHOLE).then(|| &self.words[start..start + count as usize])
+        let at = |i: usize| {
+            let e = &self.words[start + i * TILE_ENTRY as usize..][..TILE_ENTRY as usize];
+            (e[0], std::array::from_fn(|k| f32::from_bits(e[1 + k])))
+        };
+        (count != WHOLE).then(|| (0..count as usize).map(at).collect())
     }
 
     /// The tile of the pixel at integer position (`x`, `y`).
@@ -167,12 +188,21 @@ impl LightGrid {
 /// The most light cells across and down.
 pub const MAX_LIGHT_CELLS: u32 = 256;
 
-/// Every leaf's cells as (slot, record, first cell, rectangle of cells: first and last
-/// across, first and last down), slot by slot in record order, the screen's tiles
-/// before the light's cells; the light's grid.
+/// Every leaf's cells as (slot, leaf: an index into [`Leaves`], first cell, rectangle
+/// of cells: first and last across, first and last down), slot by slot in record
+/// order, the screen's tiles before the light's cells; the light's grid.
 type Rect = (u32, u32, u32, [u32; 4]);
 
-fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<Rect>, LightGrid) {
+/// Every leaf's record and its box grown by the larger of its two margins (the
+/// screen's and the light's), as a list entry holds them: the shader's per-ray test
+/// (`scene_cull`) reads the box.
+type Leaves = Vec<(u32, [f64; 6])>;
+
+fn leaf_cells(
+    tiling: &Tiling,
+    view: &View,
+    (across, down): (u32, u32),
+) -> (Vec<Rect>, Leaves, LightGrid) {
     let (w, h) = (view.width.max(1), view.height.max(1));
     let c = &view.camera;
     let basis = DMat3::from_cols(c.forward, c.right, c.up);
@@ -183,8 +213,10 @@ fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<
     let v = l.cross(u);
     let mut rects: Vec<Rect> = Vec::new();
     let mut spans: Vec<(u32, u32, [f64; 4])> = Vec::new();
+    let mut leaves: Leaves = Vec::new();
     for (slot, g) in tiling.groups.iter().enumerate() {
         for (b, &record) in g.boxes.iter().zip(&g.records) {
+            let leaf = leaves.len() as u32;
             let far = [b.min, b.max]
                 .iter()
                 .map(|&q| (q - c.eye).abs())
@@ -198,13 +230,18 @@ fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<
             };
             if let Some([x0, x1, y0, y1]) = pixels {
                 let rect = [x0 / TILE, x1 / TILE, y0 / TILE, y1 / TILE];
-                rects.push((slot as u32, record, 0, rect));
+                rects.push((slot as u32, leaf, 0, rect));
             }
             // Shadow rays stop at 1e-4 × SCENE_SCALE (scene_shadow); single precision
             // rounds a point's projection by about 1e-6 of its distance from the origin,
             // and the ray's direction by about 1e-7 of the distance it travels.
             let size = b.min.abs().max(b.max.abs()).length();
             let grow = 1.01e-4 * scale + 4e-6 * (1.0 + size) + 2e-7 * view.far + 1e-6;
+            // The shader tests rays against this box in single precision: a little
+            // more for its rounding (about 1e-7 of the distances it subtracts).
+            let m = margin.max(grow) + 1e-6 * (size + view.far);
+            let (lo, hi) = (b.min - m, b.max + m);
+            leaves.push((record, [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]));
             let mut span = [f64::MAX, f64::MIN, f64::MAX, f64::MIN];
             for i in 0..8 {
                 let q = DVec3::new(
@@ -226,13 +263,13 @@ fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<
                 span[2] - grow,
                 span[3] + grow,
             ];
-            spans.push((slot as u32, record, span));
+            spans.push((slot as u32, leaf, span));
         }
     }
     let only: Vec<[f64; 4]> = spans.iter().map(|s| s.2).collect();
     let light = LightGrid::over(&only, u, v);
     let first = across * down;
-    for &(slot, record, s) in &spans {
+    for &(slot, leaf, s) in &spans {
         let cell =
             |x: f64, o: f64, n: u32| (((x - o) / light.cell).floor().max(0.0) as u32).min(n - 1);
         let (ou, ov) = (light.origin[0], light.origin[1]);
@@ -242,9 +279,9 @@ fn leaf_cells(tiling: &Tiling, view: &View, (across, down): (u32, u32)) -> (Vec<
             cell(s[2], ov, light.down),
             cell(s[3], ov, light.down),
         ];
-        rects.push((slot, record, first, r));
+        rects.push((slot, leaf, first, r));
     }
-    (rects, light)
+    (rects, leaves, light)
 }
 
 /// Bins `tiling`'s leaves into the screen tiles of `view` and the cells of its sun's
@@ -253,7 +290,7 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
     let (w, h) = (view.width.max(1), view.height.max(1));
     let (across, down) = (w.div_ceil(TILE), h.div_ceil(TILE));
     let groups = tiling.groups.len() as u32;
-    let (rects, light) = leaf_cells(tiling, view, (across, down));
+    let (rects, leaves, light) = leaf_cells(tiling, view, (across, down));
     let (u, v) = (light.u, light.v);
     // Cells: the screen's tiles, the light's cells, and one empty cell past the grid.
     let cells = across * down + light.across * light.down + 1;
@@ -278,7 +315,7 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
         counts
             .iter()
             .filter(|&&n| n <= cap)
-            .map(|&n| n as usize)
+            .map(|&n| n as usize * TILE_ENTRY as usize)
             .sum()
     };
     while cap > 0 && listed_words(cap) > MAX_WORDS {
@@ -316,20 +353,27 @@ pub fn bin(tiling: &Tiling, view: &View) -> Binned {
         } else {
             words[h..h + 2].copy_from_slice(&[at, n]);
             next[e] = at;
-            at += n;
+            at += n * TILE_ENTRY;
         }
     }
     words.resize(at as usize, 0);
-    // In slot order, then record order: each list ascends, as ties need.
-    for (slot, record, base, rect) in &rects {
+    // In slot order, then record order: each list ascends, as ties need. An entry is
+    // the leaf's record and its box (min, max, as f32 bits).
+    for (slot, leaf, base, rect) in &rects {
+        let (record, b) = leaves[*leaf as usize];
+        let mut entry = [record; TILE_ENTRY as usize];
+        for k in 0..6 {
+            entry[1 + k] = (b[k] as f32).to_bits();
+        }
         each((*slot, *base, rect), &mut |e| {
             if counts[e] <= cap {
-                words[next[e] as usize] = *record;
-                next[e] += 1;
+                let n = next[e] as usize;
+                words[n..n + TILE_ENTRY as usize].copy_from_slice(&entry);
+                next[e] += TILE_ENTRY;
             }
         });
     }
-    let leaves = at as usize - head;
+    let leaves = (at as usize - head) / TILE_ENTRY as usize;
     Binned {
         words,
         across,

@@ -125,7 +125,7 @@ fn leaf(shape: &Shape, id: NodeId) -> Option<Leaf> {
     }
 }
 
-fn is_hard_union(op: &Op) -> bool {
+pub(crate) fn is_hard_union(op: &Op) -> bool {
     matches!(
         op,
         Op::Csg {

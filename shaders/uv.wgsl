@@ -112,15 +112,14 @@ fn uv_arc_length(tau: f32, kappa: f32) -> f32 {
 // Eq. 31: the smallest rotation taking unit a to unit b.
 fn uv_rotation_between(a: vec3<f32>, b: vec3<f32>) -> mat3x3<f32> {
     let c = dot(a, b);
-    let identity = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
-    if (c <= -0.999999) {
-        return identity;
-    }
     let k = cross(a, b);
     let j = mat3x3<f32>(vec3<f32>(0.0, k.z, -k.y), vec3<f32>(-k.z, 0.0, k.x), vec3<f32>(k.y, -k.x, 0.0));
-    let j2 = j * j;
-    let s = 1.0 / (1.0 + c);
-    return mat3x3<f32>(identity[0] + j[0] + j2[0] * s, identity[1] + j[1] + j2[1] * s, identity[2] + j[2] + j2[2] * s);
+    // Opposite vectors: the identity. (No early return: naga's pipeline-constant pass
+    // rejects a constant matrix used on both sides of one, ExpressionAlreadyInScope.)
+    let opposite = c <= -0.999999;
+    let s = select(1.0 / (1.0 + c), 0.0, opposite);
+    let identity = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
+    return identity + j * select(1.0, 0.0, opposite) + (j * j) * s;
 }
 
 // A rotation matrix as a unit quaternion (x, y, z, w).

@@ -332,3 +332,41 @@ fn same_surface(gpu: &sdfc::gpu::Gpu) {
         );
     }
 }
+
+#[test]
+fn the_lean_pipeline_form_is_validated_with_the_module() {
+    // naga's pipeline-constant pass rejects a constant used on both sides of an early
+    // return (ExpressionAlreadyInScope) that the plain module passes: sdfc's validation
+    // builds that form too, so the runtime never meets it first.
+    let wgsl = "override SCENE_CROWDED: bool = true;
+fn f(a: vec3<f32>, b: vec3<f32>) -> mat3x3<f32> {
+    let c = dot(a, b);
+    let identity = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
+    if (c <= -0.999999) {
+        return identity;
+    }
+    let k = cross(a, b);
+    let j = mat3x3<f32>(vec3<f32>(0.0, k.z, -k.y), vec3<f32>(-k.z, 0.0, k.x), vec3<f32>(k.y, -k.x, 0.0));
+    return mat3x3<f32>(identity[0] + j[0], identity[1] + j[1], identity[2] + j[2]);
+}
+@compute @workgroup_size(1)
+fn main() {
+    if (SCENE_CROWDED) {
+        let x = f(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0));
+    }
+}
+";
+    let e = sdfc::codegen::validate(wgsl)
+        .err()
+        .expect("the lean form is rejected");
+    assert!(e.message.contains("SCENE_CROWDED = false"), "{}", e.message);
+    // Without the override, the same module passes.
+    let plain = wgsl.replace(
+        "override SCENE_CROWDED: bool = true;",
+        "const SCENE_CROWDED = true;",
+    );
+    assert!(sdfc::codegen::validate(&plain).is_ok());
+    // Every module with tiles passes in both forms (here with an atlas's walk).
+    let a = analysis(&city(300, 1));
+    assert!(module(&a, true).wgsl.contains("override SCENE_CROWDED"));
+}

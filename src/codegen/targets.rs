@@ -111,7 +111,40 @@ pub fn validate(wgsl: &str) -> Result<Validated, NagaError> {
         message: e.emit_to_string(wgsl),
         offset: e.location(wgsl).map(|l| l.offset as usize),
     })?;
+    overridden(&module, &info, wgsl)?;
     Ok(Validated { module, info })
+}
+
+/// A module with per-tile culling is also built with `SCENE_CROWDED` false (the
+/// runtime's pipeline for frames without a crowded tile, `gpu::render`): naga's
+/// pipeline-constant pass validates that form again, and rejects some constructs the
+/// plain module passes (a constant matrix used on both sides of an early return).
+fn overridden(
+    module: &naga::Module,
+    info: &naga::valid::ModuleInfo,
+    wgsl: &str,
+) -> Result<(), NagaError> {
+    let crowded = super::tiles::CROWDED;
+    if !module
+        .overrides
+        .iter()
+        .any(|(_, o)| o.name.as_deref() == Some(crowded))
+    {
+        return Ok(());
+    }
+    let mut constants = naga::back::PipelineConstants::default();
+    constants.insert(crowded.to_string(), 0.0);
+    naga::back::pipeline_constants::process_overrides(module, info, None, &constants)
+        .map(|_| ())
+        .map_err(|e| NagaError {
+            message: format!("with {crowded} = false: {e:?}"),
+            offset: match &e {
+                naga::back::pipeline_constants::PipelineConstantError::ValidationError(v) => {
+                    v.location(wgsl).map(|l| l.offset as usize)
+                }
+                _ => None,
+            },
+        })
 }
 
 /// Translated output: text, or SPIR-V bytes.

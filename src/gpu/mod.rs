@@ -11,6 +11,7 @@ pub mod frame;
 mod mesh;
 pub mod overdraw;
 mod render;
+mod render_pipeline;
 pub mod scene_group;
 pub mod texture;
 pub mod tiles;

@@ -1,6 +1,7 @@
 //! Headless rendering: the generated fragment shader into an offscreen target,
 //! read back with its AOVs (position + depth, normal + steps).
 
+use super::render_pipeline::pipeline;
 use super::scene_group::{self, Stage};
 use super::texture::{load_texture, sampler};
 use super::{Gpu, GpuError};
@@ -121,13 +122,13 @@ pub struct Renderer {
     /// (`codegen::tiles::CROWDED` false); `crowded` is the pipeline for the others,
     /// built at the first such frame.
     pipeline: wgpu::RenderPipeline,
-    crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
+    pub(super) crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
     /// The module's WGSL, for the crowded pipeline.
-    wgsl: String,
+    pub(super) wgsl: String,
     /// What the binding table of the manifest binds, slot by slot.
-    bindings: Vec<crate::codegen::Binding>,
+    pub(super) bindings: Vec<crate::codegen::Binding>,
     /// The render group's layout, from the binding table.
-    layout: wgpu::BindGroupLayout,
+    pub(super) layout: wgpu::BindGroupLayout,
     textures: Vec<(wgpu::TextureView, wgpu::Sampler)>,
     /// The module's `tables` storage buffer, when it has one.
     tables: Option<wgpu::Buffer>,
@@ -142,7 +143,7 @@ pub struct Renderer {
     /// that has one, and whether frames run it ([`Renderer::set_multiscale`]).
     coarse: Option<super::coarse::CoarsePass>,
     multiscale: std::sync::atomic::AtomicBool,
-    formats: [wgpu::TextureFormat; 4],
+    pub(super) formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
     /// Whether the pipeline came from the device's cache (`gpu::cache`).
@@ -329,35 +330,6 @@ impl Renderer {
             coarse: coarse.then_some(size),
             _buffers: globals,
         })
-    }
-
-    /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
-    /// frame has one (its time is not in `pipeline_time`).
-    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline, GpuError> {
-        let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = built.as_ref() {
-            return Ok(p.clone());
-        }
-        let key = super::cache::key(
-            "render, crowded",
-            (&self.bindings, self.formats),
-            &self.wgsl,
-        );
-        let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
-            gpu.scoped(|| {
-                let cache = gpu.disk.as_ref().map(|d| &d.cache);
-                pipeline(
-                    &gpu.device,
-                    (&self.wgsl, &[]),
-                    &self.layout,
-                    &self.formats,
-                    cache,
-                )
-            })
-        })?;
-        gpu.wait()?;
-        *built = Some(p.clone());
-        Ok(p)
     }
 
     /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the
@@ -596,63 +568,6 @@ pub(super) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
         height,
         depth_or_array_layers: 1,
     }
-}
-
-/// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
-/// the targets' formats, with its pipeline-overridable constants.
-fn pipeline(
-    d: &wgpu::Device,
-    (wgsl, constants): (&str, &[(&str, f64)]),
-    group0: &wgpu::BindGroupLayout,
-    formats: &[wgpu::TextureFormat; 4],
-    cache: Option<&wgpu::PipelineCache>,
-) -> wgpu::RenderPipeline {
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("scene"),
-        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-    });
-    let targets: Vec<Option<wgpu::ColorTargetState>> = formats
-        .iter()
-        .map(|f| {
-            Some(wgpu::ColorTargetState {
-                format: *f,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        })
-        .collect();
-    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("scene"),
-        bind_group_layouts: &[Some(group0)],
-        immediate_size: 0,
-    });
-    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("scene"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants,
-                ..Default::default()
-            },
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_aov"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants,
-                ..Default::default()
-            },
-            targets: &targets,
-        }),
-        multiview_mask: None,
-        cache,
-    })
 }
 
 /// The bytes per texel of targets of `formats` with their readback, and of the frame

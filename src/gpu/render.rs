@@ -122,13 +122,13 @@ pub struct Renderer {
     /// (`codegen::tiles::CROWDED` false); `crowded` is the pipeline for the others,
     /// built at the first such frame.
     pipeline: wgpu::RenderPipeline,
-    pub(super) crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
+    crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
     /// The module's WGSL, for the crowded pipeline.
-    pub(super) wgsl: String,
+    wgsl: String,
     /// What the binding table of the manifest binds, slot by slot.
-    pub(super) bindings: Vec<crate::codegen::Binding>,
+    bindings: Vec<crate::codegen::Binding>,
     /// The render group's layout, from the binding table.
-    pub(super) layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
     textures: Vec<(wgpu::TextureView, wgpu::Sampler)>,
     /// The module's `tables` storage buffer, when it has one.
     tables: Option<wgpu::Buffer>,
@@ -143,7 +143,7 @@ pub struct Renderer {
     /// that has one, and whether frames run it ([`Renderer::set_multiscale`]).
     coarse: Option<super::coarse::CoarsePass>,
     multiscale: std::sync::atomic::AtomicBool,
-    pub(super) formats: [wgpu::TextureFormat; 4],
+    formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
     /// Whether the pipeline came from the device's cache (`gpu::cache`).
@@ -330,6 +330,35 @@ impl Renderer {
             coarse: coarse.then_some(size),
             _buffers: globals,
         })
+    }
+
+    /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
+    /// frame has one (its time is not in `pipeline_time`).
+    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline, GpuError> {
+        let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = built.as_ref() {
+            return Ok(p.clone());
+        }
+        let key = super::cache::key(
+            "render, crowded",
+            (&self.bindings, self.formats),
+            &self.wgsl,
+        );
+        let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+            gpu.scoped(|| {
+                let cache = gpu.disk.as_ref().map(|d| &d.cache);
+                pipeline(
+                    &gpu.device,
+                    (&self.wgsl, &[]),
+                    &self.layout,
+                    &self.formats,
+                    cache,
+                )
+            })
+        })?;
+        gpu.wait()?;
+        *built = Some(p.clone());
+        Ok(p)
     }
 
     /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the

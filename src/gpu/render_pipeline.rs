@@ -1,40 +1,5 @@
-//! The render pipeline of a generated module (`gpu::Renderer`), and the second one a
-//! module with per-tile culling needs for frames with a crowded tile
-//! (`codegen::tiles::CROWDED`).
-
-use super::render::Renderer;
-use super::{Gpu, GpuError};
-
-impl Renderer {
-    /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
-    /// frame has one (its time is not in `pipeline_time`).
-    pub(super) fn crowded_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline, GpuError> {
-        let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = built.as_ref() {
-            return Ok(p.clone());
-        }
-        let key = super::cache::key(
-            "render, crowded",
-            (&self.bindings, self.formats),
-            &self.wgsl,
-        );
-        let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
-            gpu.scoped(|| {
-                let cache = gpu.disk.as_ref().map(|d| &d.cache);
-                pipeline(
-                    &gpu.device,
-                    (&self.wgsl, &[]),
-                    &self.layout,
-                    &self.formats,
-                    cache,
-                )
-            })
-        })?;
-        gpu.wait()?;
-        *built = Some(p.clone());
-        Ok(p)
-    }
-}
+//! The render pipeline of a generated module (`gpu::Renderer`), with its
+//! pipeline-overridable constants (`codegen::tiles::CROWDED`).
 
 /// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
 /// the targets' formats, with its pipeline-overridable constants.

@@ -261,10 +261,11 @@ fn only_groups(target: &Shape) -> bool {
     true
 }
 
-/// `scene_cull(ro, rd, tile, far) -> f32`: which of the first 32 entries of each
+/// `scene_cull(ro, rd, tile, far) -> vec2<f32>`: which of the first 32 entries of each
 /// traced group's list in `tile` the ray `ro + t rd`, 0 <= t <= far, misses (a slab
 /// test against the entry's grown box), into `scene_skip`, which the tiled walkers
-/// read; `scene_cull_none()` clears it for everything else (normals, materials). A ray
+/// read (the trace, then the normal at its hit); `scene_cull_none()` clears it after
+/// the shadow ray, so that a call off any culled ray reads whole lists. A ray
 /// that misses a leaf's grown box never comes within the trace's tolerance of it, nor
 /// within the normal's taps (`gpu::tiles`), so skipping it changes no hit. Returns
 /// the span of the ray where it may meet the surface: with `only` (the target is its
@@ -343,7 +344,8 @@ fn scene_cull(ro: vec3<f32>, rd: vec3<f32>, tile: u32, far: f32) -> vec2<f32> {{
 {set}    return {span};
 }}
 
-// Every listed entry again (normals, materials, anything off the culled ray).
+// Every listed entry again, for any call off a culled ray (scene_shadow ends with it,
+// so the shadow ray's masks never reach a later normal).
 fn scene_cull_none() {{
 {clear}}}
 

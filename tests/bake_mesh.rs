@@ -6,7 +6,9 @@
 //! Two examples have detail finer than the default grid's cell and do not meet it
 //! (issue 40): they are named in [`FINER_THAN_A_CELL`] with their reasons and held to
 //! today's figures, so that they cannot get worse unseen; every other example meets
-//! the goal. Today's figures are in docs/baking.md ("The mesh against the zero set");
+//! the goal, and `capsule.sdf`, whose drilled rim had teeth, is held to a tenth of a
+//! cell ([`HELD_TIGHTER`]). A drilled rim is also measured against its analytic
+//! crease at several grid origins. Today's figures are in docs/baking.md ("The mesh against the zero set");
 //! `--nocapture` prints them.
 
 mod common;
@@ -232,6 +234,15 @@ const FINER_THAN_A_CELL: [(&str, &str, f64, f64, f64); 2] = [
     ),
 ];
 
+/// Examples held tighter than the goal where the issue saw a defect: (name, why, mesh →
+/// surface and surface → mesh ceilings in cells).
+const HELD_TIGHTER: [(&str, &str, f64, f64); 1] = [(
+    "capsule.sdf",
+    "the drilled rim, where the red team saw teeth: 0.120 / 0.135 cells with the QEF's minimizer clamped to the cell, 0.068 / 0.046 minimized within it",
+    0.1,
+    0.1,
+)];
+
 #[test]
 fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
     let Some(gpu) = gpu_for_tests() else { return };
@@ -262,10 +273,20 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
                 excepted.push(name.clone());
                 (turned, to, from)
             }
-            None => (0.001, 0.5, 0.5),
+            None => match HELD_TIGHTER.iter().find(|e| e.0 == name) {
+                Some(&(_, _, to, from)) => (0.001, to, from),
+                None => (0.001, 0.5, 0.5),
+            },
         };
         // (An exception is never held tighter than the goal.)
-        if share >= limits.0.max(0.001) || to >= limits.1.max(0.5) || from >= limits.2.max(0.5) {
+        let goal = |limit: f64| {
+            if excepted.contains(&name) {
+                limit.max(0.5)
+            } else {
+                limit
+            }
+        };
+        if share >= limits.0.max(0.001) || to >= goal(limits.1) || from >= goal(limits.2) {
             failures.push(format!(
                 "{name}: {:.3} % turned, {to:.3} / {from:.3} cells",
                 100.0 * share
@@ -279,4 +300,113 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
         "an exception was not measured (renamed?): {excepted:?}"
     );
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A drilled rim against its analytic crease: a capsule (radius 0.5 along y) drilled
+/// through by a cylinder (radius 0.2 along z), twisted about y as `capsule.sdf` is,
+/// meshed at the default grid's cell from several grid origins. The rim is the curve
+/// (0.2 cos θ, 0.2 sin θ, ±√(0.25 − 0.04 cos² θ)), twisted, where the hole's wall meets
+/// the body at 66° to 90°. A mesh whose vertices there leave the crease cuts across it
+/// in teeth (issue 40: the drilled capsule's rim in Blender). Returns the farthest rim
+/// point from the mesh, in cells, for each origin.
+fn rim_distances(twist: f64, head: bool) -> Vec<(f64, f64)> {
+    use sdfc::bake::images::split_along_02;
+    use sdfc::bake::mesh::{dual_contour, Grid};
+    let text = format!(
+        "let body = capsule(a: [0, -1, 0], b: [0, 1, 0], radius: 0.5);\n\
+         let hole = cylinder(radius: 0.2, height: 4).rotate_x(90deg);\n\
+         material m {{ color = [1, 1, 1]; }}\n\
+         let head = sphere(0.6).translate([0, 1.2, 0]);\n\
+         render ({}).twist(axis: [0, 1, 0], rate: {twist}).paint(m) {{ }}\n",
+        if head {
+            "smooth_union(body, head, 0.15) - hole"
+        } else {
+            "body - hole"
+        }
+    );
+    let analysis = sdfc::driver::check(&text, None);
+    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
+    let scene = analysis.scene.as_ref().unwrap();
+    let shape = sdfc::driver::pick_shape(scene, None).unwrap();
+    let field = analysis.field(shape);
+    let bounds = shape.root_node().bounds;
+    let base = Grid::over(bounds, 48);
+    let mut out = Vec::new();
+    for k in 0..6 {
+        // Origins a sixth of a cell apart along a direction on no grid plane.
+        let shift = DVec3::new(1.0, 0.7, 0.3) * (k as f64 / 6.0) * base.cell;
+        let grid = Grid {
+            origin: base.origin - shift,
+            dims: base.dims.map(|d| d + 1),
+            ..base
+        };
+        let mesh = dual_contour(field, &grid, 1e-5 * (bounds.max - bounds.min).max_element());
+        let mut tris = Vec::new();
+        for q in &mesh.quads {
+            let p = q.map(|i| mesh.vertices[i as usize]);
+            if split_along_02(p) {
+                tris.extend([[p[0], p[1], p[2]], [p[0], p[2], p[3]]]);
+            } else {
+                tris.extend([[p[0], p[1], p[3]], [p[1], p[2], p[3]]]);
+            }
+        }
+        let mut worst = 0.0f64;
+        let mut rim_points = Vec::new();
+        for i in 0..720 {
+            let theta = i as f64 * std::f64::consts::PI / 360.0;
+            let (x, y) = (0.2 * theta.cos(), 0.2 * theta.sin());
+            for side in [-1.0, 1.0] {
+                let flat = DVec3::new(x, y, side * (0.25 - x * x).sqrt());
+                let rim = glam::DQuat::from_rotation_y(twist * y).mul_vec3(flat);
+                rim_points.push(rim);
+                // On the zero set: both the body and the hole are 0 there.
+                assert!(eval::distance(field, rim).abs() < 1e-9, "{rim}");
+                let near = tris
+                    .iter()
+                    .map(|[a, b, c]| to_triangle(rim, *a, *b, *c))
+                    .fold(f64::INFINITY, f64::min);
+                worst = worst.max(near);
+            }
+        }
+        // The mesh near the rim (triangles within a cell of it) against the zero set.
+        let mut off = 0.0f64;
+        for [a, b, c] in &tris {
+            let centroid = (*a + *b + *c) / 3.0;
+            if rim_points
+                .iter()
+                .all(|r| (*r - centroid).length() > grid.cell)
+            {
+                continue;
+            }
+            for q in [centroid, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
+                off = off.max(to_zero_set(field, q, 2.0 * grid.cell, off));
+            }
+        }
+        out.push((worst / grid.cell, off / grid.cell));
+    }
+    out
+}
+
+/// The rim at every grid origin stays within the goal's half cell, and the mesh near
+/// it within three tenths of a cell of the surface. Where the hole's wall meets the
+/// body at 66°, a wedge of solid thinner than a cell can pass between the grid's
+/// corners, and the cells beside it see one plane each: the mesh then cuts the rim by
+/// up to 0.43 cells (two of the six origins). Measured (rim → mesh, mesh near the rim →
+/// surface, in cells, worst origin): untwisted 0.422 / 0.295, twisted 0.426 / 0.291,
+/// `capsule.sdf`'s shape 0.355 / 0.268; at `capsule.sdf`'s own grid 0.139 / 0.068
+/// (0.148 / 0.120 with the clamped QEF, whose teeth the issue saw).
+#[test]
+fn a_drilled_rim_follows_its_crease() {
+    for (twist, head) in [(0.0, false), (0.4, false), (0.4, true)] {
+        let d = rim_distances(twist, head);
+        eprintln!(
+            "twist {twist}, head {head}: by grid origin, (rim → mesh, mesh near the rim → surface): {d:.3?} cells"
+        );
+        for (k, (rim, off)) in d.into_iter().enumerate() {
+            assert!(
+                rim < 0.45 && off < 0.3,
+                "twist {twist}, head {head}, origin {k}: the rim lies {rim:.3} cells from the mesh, the mesh near it {off:.3} cells from the surface"
+            );
+        }
+    }
 }

@@ -1,6 +1,7 @@
 //! Stage 6: the atlas images (flat §3.3, packed §3.4) and the exported mesh.
 
 use super::charts::{bilinear, side_texel, ChartTable, Samples};
+pub use super::mesh::split_along_02;
 use super::mesh::QuadMesh;
 use super::mips::{Texel, CHANNELS};
 use super::{ChartLayout, FlatLayout, MeshData, Patches, Textures};
@@ -293,41 +294,6 @@ pub fn vertex_grid(
         },
         |c, s, t| project(bilinear(table.corners[c].map(|i| v[i as usize]), s, t)).to_array(),
     )
-}
-
-/// Whether a quad with corners `p` (in (0,0), (1,0), (1,1), (0,1) order) is split along
-/// its diagonal 0–2 (else 1–3): along the shorter one, unless that folds a triangle
-/// over, turning it more than 60° from the quad's own normal (its area vector, the
-/// cross product of the diagonals) while the other diagonal keeps both nearer; then
-/// along the one whose worse triangle turns less. Near a crease or a rim a dual
-/// contouring quad can be far from flat, and the shorter diagonal then makes a sliver
-/// facing away from the surface. [`mesh_data`] and [`split_weights`] both read it, so
-/// texels lie on the triangles that are exported.
-pub fn split_along_02(p: [DVec3; 4]) -> bool {
-    let shorter = (p[2] - p[0]).length() <= (p[3] - p[1]).length();
-    let normal = (p[2] - p[0]).cross(p[3] - p[1]).normalize_or_zero();
-    if normal == DVec3::ZERO {
-        // Parallel diagonals: no normal to fold against.
-        return shorter;
-    }
-    let facing = |a: usize, b: usize, c: usize| {
-        let n = (p[b] - p[a]).cross(p[c] - p[a]).normalize_or_zero();
-        if n == DVec3::ZERO {
-            // A degenerate triangle turns nowhere.
-            1.0
-        } else {
-            n.dot(normal)
-        }
-    };
-    let along_02 = facing(0, 1, 2).min(facing(0, 2, 3));
-    let along_13 = facing(0, 1, 3).min(facing(1, 2, 3));
-    const FOLDED: f64 = 0.5;
-    match (shorter, along_02 < FOLDED, along_13 < FOLDED) {
-        (true, true, false) => false,
-        (false, false, true) => true,
-        (_, true, true) => along_02 >= along_13,
-        _ => shorter,
-    }
 }
 
 /// The barycentric weights of `(s, t)` in the triangle that holds it, of a quad with

@@ -4,9 +4,11 @@
 //! grid edge whose ends have opposite signs gets one quad, joining the vertices of the
 //! four cells around it; every cell with a sign change gets one vertex, placed at the
 //! minimizer of the quadric error (QEF) of the tangent planes at its edge crossings
-//! (Ju et al. 2002), which keeps sharp edges and corners where the grid allows. The
-//! vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale). Vertices joined
-//! by a quad side under a tenth of a cell then share one point ([`merge_close`]).
+//! (Ju et al. 2002) within the cell, which keeps sharp edges and corners where the grid
+//! allows. The vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale).
+//! A quad that placement folds takes its corners' clamped placement back ([`unfold`]);
+//! vertices joined by a quad side under a tenth of a cell then share one point
+//! ([`merge_close`]).
 
 use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
@@ -85,7 +87,7 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
     for (v, &c) in active.iter().enumerate() {
         index[c] = v as u32;
     }
-    let placed: Vec<(DVec3, DVec3)> = active
+    let mut placed: Vec<Placed> = active
         .par_iter()
         .map(|&c| {
             let (i, j, k) = (c % nx, (c / nx) % ny, c / (nx * ny));
@@ -133,9 +135,10 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
             }
         }
     }
+    unfold(shape, &mut placed, &quads, grid.cell);
     let mut mesh = QuadMesh {
-        vertices: placed.iter().map(|p| p.0).collect(),
-        normals: placed.iter().map(|p| p.1).collect(),
+        vertices: placed.iter().map(|p| p.p).collect(),
+        normals: placed.iter().map(|p| p.n).collect(),
         quads,
         cell: grid.cell,
     };
@@ -223,15 +226,15 @@ fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: 
     }
 }
 
-/// The vertex of one cell: the QEF minimizer of its edge crossings' tangent planes,
-/// clamped to the cell, then projected onto the surface.
+/// The vertex of one cell: the QEF minimizer of its edge crossings' tangent planes
+/// within the cell ([`solve_qef`]), then projected onto the surface.
 fn place_vertex<'s>(
     shape: impl Into<Field<'s>>,
     grid: &Grid,
     field: &[f64],
     [i, j, k]: [usize; 3],
     tolerance: f64,
-) -> (DVec3, DVec3) {
+) -> Placed {
     let shape: Field = shape.into();
     let [nx, ny, _] = grid.dims;
     let at = |i: usize, j: usize, k: usize| field[i + (nx + 1) * (j + (ny + 1) * k)];
@@ -267,23 +270,128 @@ fn place_vertex<'s>(
     let mass = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
     let lo = grid.corner(i, j, k);
     let hi = lo + DVec3::splat(grid.cell);
-    let qef = solve_qef(&points, &normals, mass, grid.cell).clamp(lo, hi);
-    // Project; where that fails (a flat gradient), keep the mass point's projection or the mass point.
-    let p = eval::project(shape, qef, tolerance)
-        .filter(|p| (*p - qef).length() < 2.0 * grid.cell)
-        .or_else(|| eval::project(shape, mass, tolerance))
-        .unwrap_or(mass);
-    let n = eval::gradient(shape, p).normalize_or_zero();
-    let n = if n == DVec3::ZERO {
-        normals
-            .iter()
-            .copied()
-            .sum::<DVec3>()
-            .normalize_or(DVec3::Y)
-    } else {
-        n
+    let (qef, clamped) = solve_qef(&points, &normals, mass, lo, hi);
+    let on_surface = |x: DVec3| {
+        // Project; where that fails (a flat gradient), keep the mass point's projection or the mass point.
+        let p = eval::project(shape, x, tolerance)
+            .filter(|p| (*p - x).length() < 2.0 * grid.cell)
+            .or_else(|| eval::project(shape, mass, tolerance))
+            .unwrap_or(mass);
+        let n = eval::gradient(shape, p).normalize_or_zero();
+        let n = if n == DVec3::ZERO {
+            normals
+                .iter()
+                .copied()
+                .sum::<DVec3>()
+                .normalize_or(DVec3::Y)
+        } else {
+            n
+        };
+        (p, n)
     };
-    (p, n)
+    let (p, n) = on_surface(qef);
+    Placed {
+        p,
+        n,
+        clamped: clamped.map(on_surface),
+    }
+}
+
+/// A cell's vertex on the surface with its normal, and where the QEF's free minimizer
+/// left the cell, the vertex its clamp to the cell would give ([`unfold`] falls back
+/// on it).
+struct Placed {
+    p: DVec3,
+    n: DVec3,
+    clamped: Option<(DVec3, DVec3)>,
+}
+
+/// Takes back the constrained placement ([`solve_qef`]) of every vertex of a quad that
+/// it folds: a quad either of whose triangles (split as the export splits it) turns
+/// more than 45° from the field's gradient at its centroid gets the clamped
+/// placement at those of its corners that have one, until no quad changes (a few
+/// passes). A triangle with a side that [`merge_close`] joins is left out: it loses its
+/// area. Where a crease runs along a cell's face, two cells' constrained vertices
+/// can land on the face in the wrong order and fold the quad between them (`csg.sdf`'s
+/// crown, `twisted_bar.sdf`'s rounded edges); clamped, they did not.
+fn unfold<'s>(shape: Field<'s>, placed: &mut [Placed], quads: &[[u32; 4]], cell: f64) {
+    let cos45 = std::f64::consts::FRAC_1_SQRT_2;
+    let short = MERGE_CELLS * cell;
+    let folded = |placed: &[Placed], q: &[u32; 4]| {
+        let p = q.map(|i| placed[i as usize].p);
+        let tris = if split_along_02(p) {
+            [[0, 1, 2], [0, 2, 3]]
+        } else {
+            [[0, 1, 3], [1, 2, 3]]
+        };
+        tris.iter().any(|t| {
+            let (a, b, c) = (p[t[0]], p[t[1]], p[t[2]]);
+            // A side [`merge_close`] joins leaves no triangle to turn.
+            if [(a, b), (b, c), (c, a)]
+                .iter()
+                .any(|(u, v)| (*u - *v).length() < short)
+            {
+                return false;
+            }
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            let g = eval::gradient(shape, (a + b + c) / 3.0).normalize_or_zero();
+            n != DVec3::ZERO && g != DVec3::ZERO && n.dot(g) < cos45
+        })
+    };
+    for _ in 0..4 {
+        let revert: Vec<u32> = quads
+            .par_iter()
+            .filter(|q| q.iter().any(|&i| placed[i as usize].clamped.is_some()))
+            .filter(|q| folded(placed, q))
+            .flat_map_iter(|q| q.iter().copied())
+            .collect();
+        let mut changed = false;
+        for i in revert {
+            if let Some((p, n)) = placed[i as usize].clamped.take() {
+                (placed[i as usize].p, placed[i as usize].n) = (p, n);
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+/// Whether a quad with corners `p` (in (0,0), (1,0), (1,1), (0,1) order) is split along
+/// its diagonal 0–2 (else 1–3): along the shorter one, unless that folds a triangle
+/// over, turning it more than 60° from the quad's own normal (its area vector, the
+/// cross product of the diagonals) while the other diagonal keeps both nearer; then
+/// along the one whose worse triangle turns less. Near a crease or a rim a dual
+/// contouring quad can be far from flat, and the shorter diagonal then makes a sliver
+/// facing away from the surface. The bake's `images::mesh_data` and texel placement
+/// both read it, so texels lie on the triangles that are exported, and [`unfold`]
+/// tests the triangles it makes.
+pub fn split_along_02(p: [DVec3; 4]) -> bool {
+    let shorter = (p[2] - p[0]).length() <= (p[3] - p[1]).length();
+    let normal = (p[2] - p[0]).cross(p[3] - p[1]).normalize_or_zero();
+    if normal == DVec3::ZERO {
+        // Parallel diagonals: no normal to fold against.
+        return shorter;
+    }
+    let facing = |a: usize, b: usize, c: usize| {
+        let n = (p[b] - p[a]).cross(p[c] - p[a]).normalize_or_zero();
+        if n == DVec3::ZERO {
+            // A degenerate triangle turns nowhere.
+            1.0
+        } else {
+            n.dot(normal)
+        }
+    };
+    let along_02 = facing(0, 1, 2).min(facing(0, 2, 3));
+    let along_13 = facing(0, 1, 3).min(facing(1, 2, 3));
+    const FOLDED: f64 = 0.5;
+    match (shorter, along_02 < FOLDED, along_13 < FOLDED) {
+        (true, true, false) => false,
+        (false, false, true) => true,
+        (_, true, true) => along_02 >= along_13,
+        _ => shorter,
+    }
 }
 
 /// Where the surface crosses the segment a–b (opposite signs): a few steps of
@@ -315,40 +423,137 @@ fn crossing<'s>(
     x
 }
 
-/// The point minimizing Σ (n_i · (x − p_i))², regularized toward `mass`: a truncated
-/// pseudo-inverse of AᵀA (singular values below 2 % of the largest are dropped), so
-/// flat regions keep the mass point and edges and corners get their sharp position.
-fn solve_qef(points: &[DVec3], normals: &[DVec3], mass: DVec3, _cell: f64) -> DVec3 {
-    use nalgebra::{Matrix3, Vector3};
-    let mut ata = Matrix3::<f64>::zeros();
-    let mut atb = Vector3::<f64>::zeros();
+/// The point of the cell `lo`–`hi` minimizing Σ (n_i · (x − p_i))², regularized toward
+/// `mass`: a truncated pseudo-inverse of AᵀA (singular values below 2 % of the largest
+/// are dropped), so flat regions keep the mass point and edges and corners get their
+/// sharp position. Where that minimizer leaves the cell, the least error within it:
+/// the same solve with one or two coordinates held on the cell's faces, or a corner
+/// ([`constrained`]). Clamping the free minimizer instead moves a vertex off its crease
+/// wherever the crease's nearest point to the mass point lies in the next cell, and
+/// along a curved rim that makes teeth.
+///
+/// Returns the point and, where the free minimizer left the cell, its clamp to the cell.
+fn solve_qef(
+    points: &[DVec3],
+    normals: &[DVec3],
+    mass: DVec3,
+    lo: DVec3,
+    hi: DVec3,
+) -> (DVec3, Option<DVec3>) {
+    let mut ata = [[0.0f64; 3]; 3];
+    let mut atb = [0.0f64; 3];
+    let mut btb = 0.0;
     for (p, n) in points.iter().zip(normals) {
-        let nv = Vector3::new(n.x, n.y, n.z);
-        let rhs = n.dot(*p - mass);
-        ata += nv * nv.transpose();
-        atb += nv * rhs;
+        let (nv, rhs) = (n.to_array(), n.dot(*p - mass));
+        for r in 0..3 {
+            for c in 0..3 {
+                ata[r][c] += nv[r] * nv[c];
+            }
+            atb[r] += nv[r] * rhs;
+        }
+        btb += rhs * rhs;
     }
-    let svd = ata.svd(true, true);
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return mass;
+    let q = Qef { ata, atb, btb };
+    let free = match q.solve([None; 3]) {
+        Some(y) => mass + DVec3::from_array(y),
+        None => return (mass.clamp(lo, hi), None),
     };
-    let largest = svd.singular_values.max();
-    // Also stops a NaN.
-    if largest.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return mass;
+    if free.cmpge(lo).all() && free.cmple(hi).all() {
+        return (free, None);
     }
-    let mut inv = Matrix3::<f64>::zeros();
-    for s in 0..3 {
-        let sv = svd.singular_values[s];
-        if sv > 0.02 * largest {
-            inv[(s, s)] = 1.0 / sv;
+    let clamped = free.clamp(lo, hi);
+    match constrained(&q, mass, lo, hi) {
+        Some(p) if p != clamped => (p, Some(clamped)),
+        _ => (clamped, None),
+    }
+}
+
+/// A quadric error in coordinates about the mass point: E(y) = yᵀ AᵀA y − 2 yᵀ Aᵀb + bᵀb.
+struct Qef {
+    ata: [[f64; 3]; 3],
+    atb: [f64; 3],
+    btb: f64,
+}
+
+impl Qef {
+    fn error(&self, y: [f64; 3]) -> f64 {
+        let mut e = self.btb;
+        for r in 0..3 {
+            e -= 2.0 * y[r] * self.atb[r];
+            for c in 0..3 {
+                e += y[r] * self.ata[r][c] * y[c];
+            }
+        }
+        e
+    }
+
+    /// The minimizer with the coordinates given in `fixed` held there: a truncated
+    /// pseudo-inverse over the free ones (singular values under 2 % of the whole
+    /// matrix's largest dropped, so the free coordinates stay at the mass point along
+    /// directions the planes do not fix). None where the matrix is zero or not finite.
+    fn solve(&self, fixed: [Option<f64>; 3]) -> Option<[f64; 3]> {
+        use nalgebra::{DMatrix, DVector};
+        let whole = nalgebra::Matrix3::from_fn(|r, c| self.ata[r][c]);
+        let largest = whole.symmetric_eigenvalues().amax();
+        // Also stops a NaN.
+        if largest.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        let free: Vec<usize> = (0..3).filter(|&k| fixed[k].is_none()).collect();
+        let mut y = fixed.map(|f| f.unwrap_or(0.0));
+        if !free.is_empty() {
+            let m = DMatrix::from_fn(free.len(), free.len(), |r, c| self.ata[free[r]][free[c]]);
+            let rhs = DVector::from_fn(free.len(), |r, _| {
+                let row = free[r];
+                self.atb[row]
+                    - (0..3)
+                        .filter_map(|k| fixed[k].map(|v| self.ata[row][k] * v))
+                        .sum::<f64>()
+            });
+            let svd = m.svd(true, true);
+            let x = svd.pseudo_inverse(0.02 * largest).ok()? * rhs;
+            for (r, &k) in free.iter().enumerate() {
+                y[k] = x[r];
+            }
+        }
+        y.iter().all(|v| v.is_finite()).then_some(y)
+    }
+}
+
+/// The least-error point of the cell `lo`–`hi` (about the mass point) among the
+/// minimizers with one coordinate held on a face, two on an edge, or all three at a
+/// corner, that lie in the cell; ties go to the one nearest the mass point.
+fn constrained(q: &Qef, mass: DVec3, lo: DVec3, hi: DVec3) -> Option<DVec3> {
+    let (lo, hi) = ((lo - mass).to_array(), (hi - mass).to_array());
+    let slack = 1e-9 * (hi[0] - lo[0]).abs().max(1e-300);
+    let mut best: Option<(f64, f64, [f64; 3])> = None;
+    // Each coordinate free (0), on the low side (1) or on the high side (2); not all free.
+    for code in 1..27 {
+        let pick = |k: usize| match (code / 3usize.pow(k as u32)) % 3 {
+            1 => Some(lo[k]),
+            2 => Some(hi[k]),
+            _ => None,
+        };
+        let Some(y) = q.solve([pick(0), pick(1), pick(2)]) else {
+            continue;
+        };
+        if (0..3).any(|k| y[k] < lo[k] - slack || y[k] > hi[k] + slack) {
+            continue;
+        }
+        let (e, near) = (q.error(y), y.iter().map(|v| v * v).sum::<f64>());
+        let better = match best {
+            None => true,
+            Some((be, bn, _)) => {
+                let tie = 1e-9 * be.abs().max(q.btb).max(1e-300);
+                e < be - tie || (e <= be + tie && near < bn)
+            }
+        };
+        if better {
+            best = Some((e, near, y));
         }
     }
-    let x = v_t.transpose() * inv * u.transpose() * atb;
-    let out = mass + DVec3::new(x.x, x.y, x.z);
-    if out.is_finite() {
-        out
-    } else {
-        mass
-    }
+    best.map(|(_, _, y)| {
+        (mass + DVec3::from_array(y))
+            .clamp(mass + DVec3::from_array(lo), mass + DVec3::from_array(hi))
+    })
 }

@@ -291,12 +291,67 @@ fn tiles_trace_the_same_surface_on_gl() {
     same_surface(&gpu);
 }
 
+/// How many tiles of `src` at `size` list at most 32 leaves of a group, 33 to 64 (the
+/// mask's second word, `codegen::tiles::CULLED`), and more (read at every step).
+fn list_lengths(src: &str, size: (u32, u32)) -> [usize; 3] {
+    let a = analysis(src);
+    let m = module(&a, true);
+    let tiling = m.tiling.as_ref().expect("the scene has traced groups");
+    let binned = tiles::bin(tiling, &view_of(&a, size));
+    let mut bands = [0; 3];
+    for tile in 0..binned.across * binned.down {
+        for slot in 0..tiling.groups.len() as u32 {
+            let n = binned.list(tile, slot).map_or(0, |l| l.len());
+            bands[(n > 32) as usize + (n > 64) as usize] += 1;
+        }
+    }
+    bands
+}
+
+/// `n` small spheres (radius 0.06 to 0.14) through a cube of side 2.4, in unions of
+/// 20, seen from 6 units: a tile's lists run from a few leaves to past the per-ray mask.
+fn dense_cloud(n: usize) -> String {
+    let mut rng = Rng(7);
+    let mut src = String::new();
+    let groups = n.div_ceil(20);
+    for g in 0..groups {
+        src.push_str(&format!("let g{g} =\n"));
+        let end = ((g + 1) * 20).min(n);
+        for i in g * 20..end {
+            let c = [0; 3].map(|_| 2.4 * rng.unit() - 1.2);
+            let r = 0.06 + 0.08 * rng.unit();
+            let sep = if i + 1 < end { " |" } else { ";" };
+            src.push_str(&format!(
+                "    sphere({r:.3}).translate([{:.3}, {:.3}, {:.3}]){sep}\n",
+                c[0], c[1], c[2]
+            ));
+        }
+    }
+    let names: Vec<String> = (0..groups).map(|g| format!("g{g}")).collect();
+    src.push_str(&format!(
+        "render ({}) {{\n    camera = look_at(eye: [0, 1, 6], target: [0, 0, 0], fov: 40deg);\n}}\n",
+        names.join(" | ")
+    ));
+    src
+}
+
 fn same_surface(gpu: &sdfc::gpu::Gpu) {
-    for (name, src) in [
+    let scenes = [
         ("scattered(400)", scattered(400, 0)),
         ("city(300)", city(300, 0)),
         ("scattered(400) over a floor as code", cloud_over_a_floor()),
-    ] {
+        ("a dense cloud of 1,200", dense_cloud(1200)),
+    ];
+    // The scenes read lists in both words of the per-ray mask and past it.
+    let mut bands = [0; 3];
+    for (name, src) in &scenes {
+        let b = list_lengths(src, (96, 72));
+        eprintln!("{name}: tiles listing ≤ 32, 33-64, > 64 leaves: {b:?}");
+        (0..3).for_each(|k| bands[k] += b[k]);
+    }
+    assert!(bands.iter().all(|&n| n > 0), "{bands:?}");
+    assert!(sdfc::codegen::tiles::CULLED == 64);
+    for (name, src) in scenes {
         // Normals: the same hits, the same normals up to where in the hit tolerance
         // each trace stopped.
         let [a, b] = both(gpu, &src, (96, 72), ViewMode::Normal);

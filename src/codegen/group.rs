@@ -175,6 +175,10 @@ pub const TILES_HEADER: u32 = 16;
 /// (min, max) grown by the binning's margins, as f32 bits, for the per-ray test.
 pub const TILE_ENTRY: u32 = 7;
 
+/// How many of a tile list's first entries each ray culls (`scene_cull`, a two-word
+/// mask per traced group); entries past them are read at every step.
+pub const CULLED: u32 = 64;
+
 /// A tile's entry count meaning "this tile's list was too long: walk the whole group".
 pub const WHOLE: u32 = u32::MAX;
 
@@ -191,7 +195,7 @@ pub fn tiled_call(g: &Group, slot: u32, p: &str) -> String {
 
 /// `fn group_tiled_MASK(at0, slot, tile, skip, p) -> vec2<f32>`: the union of the
 /// leaves listed for `tile` and `slot` (ties to the first listed, the lowest record,
-/// as the tree walk's), less those of the first 32 entries whose bit is set in `skip`
+/// as the tree walk's), less those of the first [`CULLED`] entries whose bit is set in `skip`
 /// (those whose boxes the ray being traced misses). A crowded tile's list (`WHOLE`)
 /// never reaches it: such rays trace the whole scene (`scene_whole`, `codegen::tiles`).
 /// One loop, no call to the tree walk: on Mesa's software adapter a branch's other
@@ -202,19 +206,24 @@ pub fn tiled_walker(mask: u32) -> String {
 // buffer, binned by the runtime each frame: src/gpu/tiles.rs), less those the ray
 // being traced misses (`skip`, from scene_cull). A crowded tile (a list too long) is
 // traced over the whole scene instead (scene_whole), and reads as empty here.
-fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: u32, p: vec3<f32>) -> vec2<f32> {{
+fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: vec2<u32>, p: vec3<f32>) -> vec2<f32> {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
     let start = tiles[h];
     let count = select(tiles[h + 1u], 0u, tiles[h + 1u] == {WHOLE}u);
     var best = vec2<f32>(3.0e38, 0.0);
-    // The first 32 entries by their bits, in order; then any past them.
-    var bits = select(0xffffffffu, (1u << count) - 1u, count < 32u) & ~skip;
-    var next = 32u;
+    // The first {CULLED} entries by their bits (x, then y), in order; then any past them.
+    let low = select(0xffffffffu, (1u << min(count, 31u)) - 1u, count < 32u);
+    let high = select(0xffffffffu, (1u << (min(max(count, 32u), 63u) - 32u)) - 1u, count < 64u);
+    var bits = vec2<u32>(low, select(0u, high, count > 32u)) & ~skip;
+    var next = {CULLED}u;
     loop {{
         var i = next;
-        if (bits != 0u) {{
-            i = firstTrailingBit(bits);
-            bits = bits & (bits - 1u);
+        if (bits.x != 0u) {{
+            i = firstTrailingBit(bits.x);
+            bits.x = bits.x & (bits.x - 1u);
+        }} else if (bits.y != 0u) {{
+            i = 32u + firstTrailingBit(bits.y);
+            bits.y = bits.y & (bits.y - 1u);
         }} else if (next < count) {{
             next = next + 1u;
         }} else {{

@@ -18,7 +18,7 @@ use crate::ir::{Aabb, NodeId, Op, Shape};
 use std::collections::HashMap;
 use std::fmt::Write;
 
-pub use super::group::{TILES_HEADER, TILE_ENTRY, WHOLE};
+pub use super::group::{CULLED, TILES_HEADER, TILE_ENTRY, WHOLE};
 
 /// The pipeline-overridable constant of a module with per-tile culling that keeps
 /// the whole-scene paths for crowded tiles ([`DISPATCH`]); true unless a pipeline
@@ -261,7 +261,7 @@ fn only_groups(target: &Shape) -> bool {
     true
 }
 
-/// `scene_cull(ro, rd, tile, far) -> vec2<f32>`: which of the first 32 entries of each
+/// `scene_cull(ro, rd, tile, far) -> vec2<f32>`: which of the first [`CULLED`] entries of each
 /// traced group's list in `tile` the ray `ro + t rd`, 0 <= t <= far, misses (a slab
 /// test against the entry's grown box), into `scene_skip`, which the tiled walkers
 /// read (the trace, then the normal at its hit); `scene_cull_none()` clears it after
@@ -272,6 +272,7 @@ fn only_groups(target: &Shape) -> bool {
 /// groups alone, [`only_groups`]), from the nearest entry into a box it meets to the
 /// farthest exit (empty, start past end, where it meets none), else `(0, far)`.
 fn cull(slots: usize, only: bool) -> String {
+    const _: () = assert!(CULLED == 64, "the mask is two words");
     let mut set = String::new();
     let mut clear = String::new();
     for k in 0..slots {
@@ -279,7 +280,7 @@ fn cull(slots: usize, only: bool) -> String {
             set,
             "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far);"
         );
-        let _ = writeln!(clear, "    scene_skip[{k}] = 0u;");
+        let _ = writeln!(clear, "    scene_skip[{k}] = vec2<u32>(0u);");
     }
     let (first, span) = if only {
         (
@@ -294,7 +295,8 @@ fn cull(slots: usize, only: bool) -> String {
     };
     format!(
         "// Per traced group, the entries of the tile's list the ray being traced misses.
-var<private> scene_skip: array<u32, {slots}>;
+// (entries 0-31 in x, 32-63 in y).
+var<private> scene_skip: array<vec2<u32>, {slots}>;
 
 // The nearest entry of the ray into a box it meets and its farthest exit from one,
 // over the lists culled so far (0 and far where a list was not culled whole).
@@ -303,21 +305,21 @@ var<private> scene_span: vec2<f32>;
 // Whether a list the ray reads was too long (`WHOLE`): it then traces the whole scene.
 var<private> scene_whole: bool;
 
-// Bit i set where the ray ro + t / inv (0 <= t <= far) misses entry i's box, for the
-// first 32 entries of `tile`'s list of group `slot`.
-fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32) -> u32 {{
+// Bit i (of x, then of y from 32 on) set where the ray ro + t / inv (0 <= t <= far)
+// misses entry i's box, for the first {CULLED} entries of `tile`'s list of group `slot`.
+fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32) -> vec2<u32> {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
     let start = tiles[h];
     let count = tiles[h + 1u];
-    if (count == {WHOLE}u || count > 32u) {{
+    if (count == {WHOLE}u || count > {CULLED}u) {{
         scene_span = vec2<f32>(0.0, far);
     }}
     if (count == {WHOLE}u) {{
         scene_whole = true;
-        return 0u;
+        return vec2<u32>(0u);
     }}
-    var skip = 0u;
-    for (var i = 0u; i < min(count, 32u); i = i + 1u) {{
+    var skip = vec2<u32>(0u);
+    for (var i = 0u; i < min(count, {CULLED}u); i = i + 1u) {{
         let e = start + {TILE_ENTRY}u * i;
         let lo = vec3<f32>(bitcast<f32>(tiles[e + 1u]), bitcast<f32>(tiles[e + 2u]), bitcast<f32>(tiles[e + 3u]));
         let hi = vec3<f32>(bitcast<f32>(tiles[e + 4u]), bitcast<f32>(tiles[e + 5u]), bitcast<f32>(tiles[e + 6u]));
@@ -326,7 +328,8 @@ fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32
         let near = max(max(min(a.x, b.x), min(a.y, b.y)), max(min(a.z, b.z), 0.0));
         let far_side = min(min(max(a.x, b.x), max(a.y, b.y)), min(max(a.z, b.z), far));
         if (near > far_side) {{
-            skip = skip | (1u << i);
+            let bit = 1u << (i & 31u);
+            skip = skip | select(vec2<u32>(bit, 0u), vec2<u32>(0u, bit), i >= 32u);
         }} else {{
             scene_span = vec2<f32>(min(scene_span.x, near), max(scene_span.y, far_side));
         }}

@@ -15,7 +15,7 @@
 //!
 //! Within a tile, each ray goes further (`codegen::tiles::cull`): a list entry holds
 //! the leaf's grown box as well as its record, and the shader skips, for the whole
-//! trace of one ray, the first 32 entries whose boxes that ray misses, the same test
+//! trace of one ray, the first 64 entries whose boxes that ray misses, the same test
 //! as the binning's done exactly per ray; where the render target is its groups
 //! alone, the ray is traced only between its first entry into a box and its last
 //! exit. The boxes are grown by the larger of the screen's and the light's margins

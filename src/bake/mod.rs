@@ -12,6 +12,7 @@
 //! ```
 
 pub mod charts;
+pub mod coverage;
 pub mod export;
 pub mod gpu;
 pub mod images;

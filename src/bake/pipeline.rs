@@ -147,6 +147,8 @@ pub struct Report {
     pub slivers: usize,
     /// The largest |f| at a level-0 sample point after projection, over the scale.
     pub max_residual: f64,
+    /// How much of the surface the mesh holds ([`super::coverage`]).
+    pub coverage: super::coverage::Coverage,
     pub samples: usize,
     pub stages: Vec<(&'static str, Duration)>,
 }
@@ -446,6 +448,8 @@ pub fn bake<'s>(
     let mut quads = contour(shape, &grid, scale, progress)?;
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");
+    report.coverage = super::coverage::coverage(shape, &quads);
+    lap(&mut report, "coverage");
 
     // 2. Charts and layout.
     let (patches, table, atlas) = lay_out_charts(&mut quads, &grid, m, options)?;

@@ -372,6 +372,24 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         "projection:     largest |f| at a texel point {:.2e} of the scale ({} samples)",
         r.max_residual, r.samples
     );
+    let c = &r.coverage;
+    // (Samples are not looked at past two cells.)
+    let farthest = if c.farthest >= 2.0 {
+        "2 cells or more".to_string()
+    } else {
+        format!("{:.2} cells", c.farthest)
+    };
+    eprintln!(
+        "surface held:   {:.1} % by area within half a cell of the mesh (farthest of {} samples: {farthest})",
+        100.0 * (1.0 - c.missed),
+        c.samples,
+    );
+    if c.missed > 0.0 {
+        eprintln!(
+            "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; a finer --grid or --edge holds more of it",
+            100.0 * c.missed,
+        );
+    }
     let total: f64 = r.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
     for (name, d) in &r.stages {
         eprintln!("  {name:<14} {:>8.3} s", d.as_secs_f64());

@@ -178,8 +178,8 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
         }
     }
     let mut surface_to_mesh = 0.0f64;
-    // Area-uniform samples of the surface (what `sdfc bake`'s coverage line reads): random
-    // points of the box projected onto the surface miss slits and grooves.
+    // Area-uniform samples of the surface (the sampler of `sdfc bake`'s coverage line):
+    // random points of the box projected onto the surface miss slits and grooves.
     let samples = sdfc::reference::surface::surface_samples(field, 24).unwrap();
     for x in samples.iter().map(|s| s.p) {
         let k = key(x);
@@ -259,6 +259,7 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
     let mut measured = 0;
     let mut failures = Vec::new();
     let mut excepted = Vec::new();
+    let mut tight = Vec::new();
     let examples = common::scene_files()
         .into_iter()
         .filter(|p| p.parent().is_some_and(|d| d.ends_with("examples")));
@@ -284,7 +285,10 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
                 (turned, to, from)
             }
             None => match HELD_TIGHTER.iter().find(|e| e.0 == name) {
-                Some(&(_, _, to, from)) => (0.001, to, from),
+                Some(&(_, _, to, from)) => {
+                    tight.push(name.clone());
+                    (0.001, to, from)
+                }
                 None => (0.001, 0.5, 0.5),
             },
         };
@@ -308,6 +312,11 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
         excepted.len(),
         FINER_THAN_A_CELL.len(),
         "an exception was not measured (renamed?): {excepted:?}"
+    );
+    assert_eq!(
+        tight.len(),
+        HELD_TIGHTER.len(),
+        "an example held tighter was not measured (renamed?): {tight:?}"
     );
     assert!(failures.is_empty(), "{failures:#?}");
 }
@@ -397,14 +406,15 @@ fn rim_distances(twist: f64, head: bool) -> Vec<(f64, f64)> {
     out
 }
 
-/// The rim at every grid origin stays within the goal's half cell, and the mesh near
-/// it within three tenths of a cell of the surface. Where the hole's wall meets the
-/// body at 66°, a wedge of solid thinner than a cell can pass between the grid's
-/// corners, and the cells beside it see one plane each: the mesh then cuts the rim by
-/// up to 0.43 cells (two of the six origins). Measured (rim → mesh, mesh near the rim →
-/// surface, in cells, worst origin): untwisted 0.422 / 0.295, twisted 0.426 / 0.291,
-/// `capsule.sdf`'s shape 0.355 / 0.268; at `capsule.sdf`'s own grid 0.139 / 0.068
-/// (0.148 / 0.120 with the clamped QEF, whose teeth the issue saw).
+/// The rim at every grid origin stays within the goal's half cell both ways. Where the
+/// hole's wall meets the body at 66°, a wedge of solid thinner than a cell can pass
+/// between the grid's corners, and the cells beside it see one plane each: the mesh
+/// then cuts the rim by up to 0.43 cells (two of the six origins), with the QEF
+/// minimized within the cell or clamped to it alike. Measured (rim → mesh, mesh near
+/// the rim → surface, in cells, worst origin): untwisted 0.422 / 0.295, twisted
+/// 0.426 / 0.291, `capsule.sdf`'s shape 0.355 / 0.268. At `capsule.sdf`'s own grid
+/// (the first origin of its shape) the clamped QEF's teeth stood 0.120 cells off the
+/// surface near the rim; minimized within the cell, 0.068: held under 0.09.
 #[test]
 fn a_drilled_rim_follows_its_crease() {
     for (twist, head) in [(0.0, false), (0.4, false), (0.4, true)] {
@@ -412,10 +422,17 @@ fn a_drilled_rim_follows_its_crease() {
         eprintln!(
             "twist {twist}, head {head}: by grid origin, (rim → mesh, mesh near the rim → surface): {d:.3?} cells"
         );
-        for (k, (rim, off)) in d.into_iter().enumerate() {
+        for (k, &(rim, off)) in d.iter().enumerate() {
             assert!(
-                rim < 0.45 && off < 0.3,
+                rim < 0.5 && off < 0.5,
                 "twist {twist}, head {head}, origin {k}: the rim lies {rim:.3} cells from the mesh, the mesh near it {off:.3} cells from the surface"
+            );
+        }
+        if head {
+            assert!(
+                d[0].1 < 0.09,
+                "at capsule.sdf's own grid the mesh near the rim lies {:.3} cells off the surface: teeth",
+                d[0].1
             );
         }
     }
@@ -440,7 +457,7 @@ fn coverage_finds_what_the_mesh_misses() {
         let field = analysis.field(shape);
         let bounds = shape.root_node().bounds;
         let mesh = dual_contour(field, &Grid::over(bounds, cells), 1e-5);
-        coverage(field, &mesh)
+        coverage(field, &mesh, bounds)
     };
     let robot = at("robot.sdf", 48);
     assert!(robot.samples > 1000, "{robot:?}");

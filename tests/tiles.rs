@@ -291,7 +291,7 @@ fn tiles_trace_the_same_surface_on_gl() {
     same_surface(&gpu);
 }
 
-/// How many tiles of `src` at `size` list at most 32 leaves of a group, 33 to 64 (the
+/// How many (tile, group) lists of `src` at `size` hold 1 to 32 leaves, 33 to 64 (the
 /// mask's second word, `codegen::tiles::CULLED`), and more (read at every step).
 fn list_lengths(src: &str, size: (u32, u32)) -> [usize; 3] {
     let a = analysis(src);
@@ -302,10 +302,26 @@ fn list_lengths(src: &str, size: (u32, u32)) -> [usize; 3] {
     for tile in 0..binned.across * binned.down {
         for slot in 0..tiling.groups.len() as u32 {
             let n = binned.list(tile, slot).map_or(0, |l| l.len());
-            bands[(n > 32) as usize + (n > 64) as usize] += 1;
+            if n > 0 {
+                bands[(n > 32) as usize + (n > 64) as usize] += 1;
+            }
         }
     }
     bands
+}
+
+/// The GPU comparison's scenes (below) read lists in both words of the per-ray mask
+/// and past it: a test of the mask that cannot miss its second word.
+#[test]
+fn the_compared_scenes_list_past_each_word_of_the_mask() {
+    assert_eq!(sdfc::codegen::tiles::CULLED, 64);
+    let mut bands = [0; 3];
+    for (name, src) in compared_scenes() {
+        let b = list_lengths(&src, (96, 72));
+        eprintln!("{name}: lists of 1-32, 33-64, over 64 leaves: {b:?}");
+        (0..3).for_each(|k| bands[k] += b[k]);
+    }
+    assert!(bands.iter().all(|&n| n > 0), "{bands:?}");
 }
 
 /// `n` small spheres (radius 0.06 to 0.14) through a cube of side 2.4, in unions of
@@ -335,23 +351,18 @@ fn dense_cloud(n: usize) -> String {
     src
 }
 
-fn same_surface(gpu: &sdfc::gpu::Gpu) {
-    let scenes = [
+/// The scenes traced with and without tiles on the GPU.
+fn compared_scenes() -> [(&'static str, String); 4] {
+    [
         ("scattered(400)", scattered(400, 0)),
         ("city(300)", city(300, 0)),
         ("scattered(400) over a floor as code", cloud_over_a_floor()),
         ("a dense cloud of 1,200", dense_cloud(1200)),
-    ];
-    // The scenes read lists in both words of the per-ray mask and past it.
-    let mut bands = [0; 3];
-    for (name, src) in &scenes {
-        let b = list_lengths(src, (96, 72));
-        eprintln!("{name}: tiles listing ≤ 32, 33-64, > 64 leaves: {b:?}");
-        (0..3).for_each(|k| bands[k] += b[k]);
-    }
-    assert!(bands.iter().all(|&n| n > 0), "{bands:?}");
-    assert!(sdfc::codegen::tiles::CULLED == 64);
-    for (name, src) in scenes {
+    ]
+}
+
+fn same_surface(gpu: &sdfc::gpu::Gpu) {
+    for (name, src) in compared_scenes() {
         // Normals: the same hits, the same normals up to where in the hit tolerance
         // each trace stopped.
         let [a, b] = both(gpu, &src, (96, 72), ViewMode::Normal);

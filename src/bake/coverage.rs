@@ -2,12 +2,12 @@
 //! ([`crate::reference::surface::surface_samples`]) against the mesh's triangles. A
 //! part thinner than a cell (a shell, a slit, a small sphere) can fall between the
 //! grid's corners, and dual contouring then leaves it out of the mesh without a sign;
-//! the bake reports the share of the surface, by area, that lies more than half a
-//! cell from the mesh, and `sdfc bake` warns when there is any.
+//! the bake reports the share of the surface within the bounds it baked, by area, that
+//! lies more than half a cell from the mesh, and `sdfc bake` warns when there is any.
 
 use super::images::split_along_02;
 use super::mesh::QuadMesh;
-use crate::ir::Field;
+use crate::ir::{Aabb, Field};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -30,15 +30,21 @@ pub struct Coverage {
     pub missed: f64,
     /// The farthest sample from the mesh, in cells (at most 2: farther is not looked at).
     pub farthest: f64,
-    /// Samples drawn.
+    /// Samples within the bounds (none: not measured).
     pub samples: usize,
 }
 
-/// The surface of `shape` against `mesh` (its quads split as the export splits them).
-pub fn coverage(shape: Field<'_>, mesh: &QuadMesh) -> Coverage {
-    let Ok(samples) = crate::reference::surface::surface_samples(shape, SAMPLE_GRID) else {
+/// The surface of `shape` within `bounds` (the box the mesh was made over, finite)
+/// against `mesh`: its quads, each split along the diagonal [`split_along_02`] picks
+/// (the exported mesh, with `--chart-quads` over 1, lies on finer quads between the
+/// same corners). No samples (none within the bounds) is the default: not measured.
+pub fn coverage(shape: Field<'_>, mesh: &QuadMesh, bounds: Aabb) -> Coverage {
+    use crate::reference::surface::surface_samples_within;
+    let Ok(mut samples) = surface_samples_within(shape, bounds, SAMPLE_GRID, 0) else {
         return Coverage::default();
     };
+    // The sampler's margin: only what lies within the bounds was meshed for sure.
+    samples.retain(|s| s.p.cmpge(bounds.min).all() && s.p.cmple(bounds.max).all());
     let cell = mesh.cell;
     let mut tris = Vec::with_capacity(2 * mesh.quads.len());
     for q in &mesh.quads {
@@ -49,8 +55,9 @@ pub fn coverage(shape: Field<'_>, mesh: &QuadMesh) -> Coverage {
             tris.extend([[p[0], p[1], p[3]], [p[1], p[2], p[3]]]);
         }
     }
-    // Triangles by the buckets (two cells a side) their boxes touch.
-    let key = |x: DVec3| (x / (2.0 * cell)).floor().as_ivec3();
+    // Triangles by the buckets (two cells a side, from the bounds' corner: small keys)
+    // their boxes touch.
+    let key = |x: DVec3| ((x - bounds.min) / (2.0 * cell)).floor().as_ivec3();
     let mut buckets: HashMap<IVec3, Vec<u32>> = HashMap::new();
     for (i, [a, b, c]) in tris.iter().enumerate() {
         let (lo, hi) = (key(a.min(*b).min(*c)), key(a.max(*b).max(*c)));

@@ -363,8 +363,13 @@ pub fn check_memory(f: &Footprint) -> Result<u64, BakeError> {
     )))
 }
 
-/// Checks the options and `shape` before any work: the mesh grid and the chart quads.
-fn plan(gpu: &Gpu, shape: &Shape, options: &Options) -> Result<(Grid, usize), BakeError> {
+/// Checks the options and `shape` before any work: the mesh grid, the chart quads and
+/// the bounds baked (the shape's own, within `--bounds`).
+fn plan(
+    gpu: &Gpu,
+    shape: &Shape,
+    options: &Options,
+) -> Result<(Grid, usize, crate::ir::Aabb), BakeError> {
     if !has_material(shape) {
         return Err(BakeError::NoMaterial);
     }
@@ -414,7 +419,7 @@ fn plan(gpu: &Gpu, shape: &Shape, options: &Options) -> Result<(Grid, usize), Ba
         )));
     }
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
-    Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m))
+    Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m, bounds))
 }
 
 /// Runs the whole bake of `shape` (with the environment of its heights: a shape of a
@@ -438,7 +443,7 @@ pub fn bake<'s>(
         report.stages.push((name, clock.elapsed()));
         clock = Instant::now();
     };
-    let (grid, m) = plan(gpu, &shape, options)?;
+    let (grid, m, bounds) = plan(gpu, &shape, options)?;
     check_memory(&Footprint::grid(&grid))?;
     let scale = crate::uv::atlas::scale(&shape);
     report.grid = grid.dims;
@@ -448,7 +453,7 @@ pub fn bake<'s>(
     let mut quads = contour(shape, &grid, scale, progress)?;
     report.vertices = quads.vertices.len();
     lap(&mut report, "mesh");
-    report.coverage = super::coverage::coverage(shape, &quads);
+    report.coverage = super::coverage::coverage(shape, &quads, bounds);
     lap(&mut report, "coverage");
 
     // 2. Charts and layout.

@@ -379,11 +379,15 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     } else {
         format!("{:.2} cells", c.farthest)
     };
-    eprintln!(
-        "surface held:   {:.1} % by area within half a cell of the mesh (farthest of {} samples: {farthest})",
-        100.0 * (1.0 - c.missed),
-        c.samples,
-    );
+    if c.samples == 0 {
+        eprintln!("surface held:   not measured (no surface sample within the bounds)");
+    } else {
+        eprintln!(
+            "surface held:   {:.1} % by area within half a cell of the mesh (farthest of {} samples: {farthest})",
+            100.0 * (1.0 - c.missed),
+            c.samples,
+        );
+    }
     if c.missed > 0.0 {
         eprintln!(
             "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; a finer --grid or --edge holds more of it",

@@ -133,14 +133,26 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
         print_row(&row);
         spread.push(row);
     }
-    // The frame ratio of the first two scenes (few and many spheres, no seeds).
+    // The frame ratio of the first two scenes (few and many spheres, no seeds): from the
+    // rows (one after the other), and from their frames alternated one by one.
+    let mut alternated = None;
     if let [few, many, ..] = &spread[..] {
+        let pair = paired(
+            &gpu,
+            args,
+            [few.primitives, many.primitives],
+            (width, height),
+        )?;
         println!(
-            "  frame, {} ÷ {} scattered spheres: {:.1}x",
+            "  frame, {} ÷ {} scattered spheres: {:.1}x (the rows); {:.1}x (frames alternated: {:.2} ÷ {:.2} ms)",
             many.primitives,
             few.primitives,
-            ms(many.frame) / ms(few.frame)
+            ms(many.frame) / ms(few.frame),
+            ms(pair[1]) / ms(pair[0]),
+            ms(pair[1]),
+            ms(pair[0]),
         );
+        alternated = Some(ms(pair[1]) / ms(pair[0]));
     }
     // A chart that cannot be written does not lose the JSON: its error comes last.
     let plotted = match &args.plot {
@@ -153,11 +165,64 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
             "adapter": gpu.describe(),
             "size": [width, height],
             "scattered": spread.iter().map(row_json).collect::<Vec<_>>(),
+            "scattered_ratio_alternated": alternated,
             "rows": rows.iter().map(row_json).collect::<Vec<_>>(),
         });
         super::report::write_json(path, &json)?;
     }
     plotted
+}
+
+/// The median frames of `scattered(n, 0)` for the two counts, built again and drawn
+/// alternately one frame at a time (`args.frames` each, after one warm-up frame), so
+/// that a drift of the machine, or a process's mode (a software adapter's frame of a
+/// millisecond falls in two modes from run to run), weighs on both alike.
+fn paired(
+    gpu: &Gpu,
+    args: &BenchArgs,
+    counts: [usize; 2],
+    (width, height): (u32, u32),
+) -> Result<[Duration; 2], ExitCode> {
+    let options = Options {
+        walk: WalkForm::Loop,
+        tiles: true,
+        ..Default::default()
+    };
+    let fail = |e: sdfc::gpu::GpuError| {
+        eprintln!("error: scattered spheres, frames alternated: {e}");
+        ExitCode::from(super::exit::gpu(&e))
+    };
+    let mut built = Vec::new();
+    for n in counts {
+        let (source, name) = (scattered(n, 0), format!("scattered({n}, 0)"));
+        let analysis = driver::check(&source, None);
+        let module = driver::compile(&analysis, &options)
+            .map_err(|e| super::compile::report(&name, &source, e))?
+            .module;
+        let renderer = Renderer::new(gpu, &module, Path::new(".")).map_err(fail)?;
+        let shape = analysis
+            .scene
+            .as_ref()
+            .and_then(|s| s.render.clone())
+            .unwrap_or_default();
+        let mut view = View::new(analysis.program.render.as_ref(), &shape);
+        (view.width, view.height) = (width, height);
+        built.push((renderer, view));
+    }
+    let mut times = [Vec::new(), Vec::new()];
+    for round in 0..=args.frames.max(1) {
+        for (k, (renderer, view)) in built.iter().enumerate() {
+            let (_, t) = renderer
+                .frames(gpu, view, ViewMode::Color, 0, 1)
+                .map_err(fail)?;
+            // The first round warms both up.
+            if round > 0 {
+                times[k].extend(t);
+            }
+        }
+    }
+    let [a, b] = times;
+    Ok([median(a), median(b)])
 }
 
 /// A row's JSON, in both series (`as_code` is null where the baseline was not built).

@@ -309,8 +309,10 @@ struct Placed {
 /// Takes back the constrained placement ([`solve_qef`]) of every vertex of a quad that
 /// it folds: a quad either of whose triangles (split as the export splits it) turns
 /// more than 45° from the field's gradient at its centroid gets the clamped
-/// placement at those of its corners that have one, until no quad changes (a few
-/// passes). A triangle with a side that [`merge_close`] joins is left out: it loses its
+/// placement at those of its corners that have one, in up to four passes (a vertex is
+/// taken back once at most; the examples settle in two). A triangle with a side
+/// shorter than [`merge_close`]'s limit is left out: such a side is joined (unless its
+/// cluster is a chain, or its projection moves too far) and the triangle loses its
 /// area. Where a crease runs along a cell's face, two cells' constrained vertices
 /// can land on the face in the wrong order and fold the quad between them (`csg.sdf`'s
 /// crown, `twisted_bar.sdf`'s rounded edges); clamped, they did not.
@@ -432,7 +434,8 @@ fn crossing<'s>(
 /// wherever the crease's nearest point to the mass point lies in the next cell, and
 /// along a curved rim that makes teeth.
 ///
-/// Returns the point and, where the free minimizer left the cell, its clamp to the cell.
+/// Returns the point and, where it is not the free minimizer's clamp to the cell, that
+/// clamp (for [`unfold`]).
 fn solve_qef(
     points: &[DVec3],
     normals: &[DVec3],
@@ -453,7 +456,22 @@ fn solve_qef(
         }
         btb += rhs * rhs;
     }
-    let q = Qef { ata, atb, btb };
+    // A NaN would stall the eigenvalue iteration; the inputs are finite in practice.
+    if !ata.iter().flatten().chain(&atb).all(|v| v.is_finite()) {
+        return (mass.clamp(lo, hi), None);
+    }
+    let largest = nalgebra::Matrix3::from_fn(|r, c| ata[r][c])
+        .symmetric_eigenvalues()
+        .amax();
+    if largest.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return (mass.clamp(lo, hi), None);
+    }
+    let q = Qef {
+        ata,
+        atb,
+        btb,
+        largest,
+    };
     let free = match q.solve([None; 3]) {
         Some(y) => mass + DVec3::from_array(y),
         None => return (mass.clamp(lo, hi), None),
@@ -462,17 +480,19 @@ fn solve_qef(
         return (free, None);
     }
     let clamped = free.clamp(lo, hi);
-    match constrained(&q, mass, lo, hi) {
+    match constrained(&q, mass, lo, hi, clamped) {
         Some(p) if p != clamped => (p, Some(clamped)),
         _ => (clamped, None),
     }
 }
 
-/// A quadric error in coordinates about the mass point: E(y) = yᵀ AᵀA y − 2 yᵀ Aᵀb + bᵀb.
+/// A quadric error in coordinates about the mass point: E(y) = yᵀ AᵀA y − 2 yᵀ Aᵀb + bᵀb,
+/// with AᵀA's largest eigenvalue (positive).
 struct Qef {
     ata: [[f64; 3]; 3],
     atb: [f64; 3],
     btb: f64,
+    largest: f64,
 }
 
 impl Qef {
@@ -490,15 +510,10 @@ impl Qef {
     /// The minimizer with the coordinates given in `fixed` held there: a truncated
     /// pseudo-inverse over the free ones (singular values under 2 % of the whole
     /// matrix's largest dropped, so the free coordinates stay at the mass point along
-    /// directions the planes do not fix). None where the matrix is zero or not finite.
+    /// directions the planes do not fix). None where the result is not finite.
     fn solve(&self, fixed: [Option<f64>; 3]) -> Option<[f64; 3]> {
         use nalgebra::{DMatrix, DVector};
-        let whole = nalgebra::Matrix3::from_fn(|r, c| self.ata[r][c]);
-        let largest = whole.symmetric_eigenvalues().amax();
-        // Also stops a NaN.
-        if largest.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return None;
-        }
+        let largest = self.largest;
         let free: Vec<usize> = (0..3).filter(|&k| fixed[k].is_none()).collect();
         let mut y = fixed.map(|f| f.unwrap_or(0.0));
         if !free.is_empty() {
@@ -522,11 +537,18 @@ impl Qef {
 
 /// The least-error point of the cell `lo`–`hi` (about the mass point) among the
 /// minimizers with one coordinate held on a face, two on an edge, or all three at a
-/// corner, that lie in the cell; ties go to the one nearest the mass point.
-fn constrained(q: &Qef, mass: DVec3, lo: DVec3, hi: DVec3) -> Option<DVec3> {
+/// corner, that lie in the cell, and the free minimizer's clamp `clamped` (the
+/// truncated solves are not exact minimizers, so the clamp can be better); ties go to
+/// the one nearest the mass point.
+fn constrained(q: &Qef, mass: DVec3, lo: DVec3, hi: DVec3, clamped: DVec3) -> Option<DVec3> {
     let (lo, hi) = ((lo - mass).to_array(), (hi - mass).to_array());
     let slack = 1e-9 * (hi[0] - lo[0]).abs().max(1e-300);
-    let mut best: Option<(f64, f64, [f64; 3])> = None;
+    let first = (clamped - mass).to_array();
+    let mut best: Option<(f64, f64, [f64; 3])> = Some((
+        q.error(first),
+        first.iter().map(|v| v * v).sum::<f64>(),
+        first,
+    ));
     // Each coordinate free (0), on the low side (1) or on the high side (2); not all free.
     for code in 1..27 {
         let pick = |k: usize| match (code / 3usize.pow(k as u32)) % 3 {
@@ -553,7 +575,12 @@ fn constrained(q: &Qef, mass: DVec3, lo: DVec3, hi: DVec3) -> Option<DVec3> {
         }
     }
     best.map(|(_, _, y)| {
-        (mass + DVec3::from_array(y))
-            .clamp(mass + DVec3::from_array(lo), mass + DVec3::from_array(hi))
+        if y == first {
+            // The clamp itself, bit for bit.
+            clamped
+        } else {
+            (mass + DVec3::from_array(y))
+                .clamp(mass + DVec3::from_array(lo), mass + DVec3::from_array(hi))
+        }
     })
 }

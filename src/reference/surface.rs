@@ -62,7 +62,18 @@ pub fn surface_samples_salted<'s>(
     salt: u64,
 ) -> Result<Vec<SurfaceSample>, String> {
     let shape: Field = shape.into();
-    let bounds = shape.root_node().bounds;
+    surface_samples_within(shape, shape.root_node().bounds, grid, salt)
+}
+
+/// [`surface_samples_salted`] over the part of the surface in the box `bounds` (drawn
+/// on a grid of `grid` cells along its longest side, with a cell of margin: samples
+/// may lie up to a cell outside it).
+pub fn surface_samples_within(
+    shape: Field<'_>,
+    bounds: crate::ir::Aabb,
+    grid: usize,
+    salt: u64,
+) -> Result<Vec<SurfaceSample>, String> {
     if !bounds.is_finite() {
         return Err("the atlas's shape has no finite bounds to sample".into());
     }

@@ -14,6 +14,7 @@
 mod common;
 
 use glam::DVec3;
+use sdfc::bake::coverage::to_triangle;
 use sdfc::bake::pipeline::{self, Options, Quiet};
 use sdfc::gpu::gpu_for_tests;
 use sdfc::ir::eval;
@@ -29,29 +30,6 @@ struct Quality {
     mesh_to_surface: f64,
     surface_to_mesh: f64,
     cell: f64,
-}
-
-/// The distance from `p` to triangle `abc`.
-fn to_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let n = (b - a).cross(c - a);
-    let area2 = n.length();
-    if area2 > 1e-18 {
-        let n = n / area2;
-        let q = p - n * n.dot(p - a);
-        // Inside when the three sub-triangles turn the same way.
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|&(u, v)| (v - u).cross(q - u).dot(n) >= 0.0);
-        if inside {
-            return (p - q).length();
-        }
-    }
-    let seg = |u: DVec3, v: DVec3| {
-        let d = v - u;
-        let t = ((p - u).dot(d) / d.length_squared().max(1e-30)).clamp(0.0, 1.0);
-        (p - (u + d * t)).length()
-    };
-    seg(a, b).min(seg(b, c)).min(seg(c, a))
 }
 
 /// The distance from `q` to the zero set, from above: the nearer of the surface point
@@ -162,42 +140,13 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu) -> Option<Quality> {
         })
         .reduce(|| (0, 0.0), |x, y| (x.0 + y.0, x.1.max(y.1)));
     // Surface points against the mesh, through a coarse bucket grid of triangles.
-    let key = |x: DVec3| (x / (2.0 * cell)).floor().as_ivec3();
-    let mut buckets: std::collections::HashMap<glam::IVec3, Vec<usize>> = Default::default();
-    for (i, [a, b, c]) in tris.iter().enumerate() {
-        let (lo, hi) = (key(a.min(*b).min(*c)), key(a.max(*b).max(*c)));
-        for x in lo.x..=hi.x {
-            for y in lo.y..=hi.y {
-                for z in lo.z..=hi.z {
-                    buckets
-                        .entry(glam::IVec3::new(x, y, z))
-                        .or_default()
-                        .push(i);
-                }
-            }
-        }
-    }
+    let near = sdfc::bake::coverage::Nearby::new(tris.clone(), cell, DVec3::ZERO);
     let mut surface_to_mesh = 0.0f64;
     // Area-uniform samples of the surface (the sampler of `sdfc bake`'s coverage line):
     // random points of the box projected onto the surface miss slits and grooves.
     let samples = sdfc::reference::surface::surface_samples(field, 24).unwrap();
     for x in samples.iter().map(|s| s.p) {
-        let k = key(x);
-        let mut best = f64::INFINITY;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for &i in buckets
-                        .get(&(k + glam::IVec3::new(dx, dy, dz)))
-                        .into_iter()
-                        .flatten()
-                    {
-                        let [a, b, c] = tris[i];
-                        best = best.min(to_triangle(x, a, b, c));
-                    }
-                }
-            }
-        }
+        let best = near.distance(x);
         // Nothing within two buckets is farther than 2 cells: say so.
         surface_to_mesh = surface_to_mesh.max(best.min(4.0 * cell));
     }
@@ -329,7 +278,6 @@ fn baked_meshes_follow_creases_and_stay_within_half_a_cell_of_the_surface() {
 /// in teeth (issue 40: the drilled capsule's rim in Blender). Returns the farthest rim
 /// point from the mesh, in cells, for each origin.
 fn rim_distances(twist: f64, head: bool) -> Vec<(f64, f64)> {
-    use sdfc::bake::images::split_along_02;
     use sdfc::bake::mesh::{dual_contour, Grid};
     let text = format!(
         "let body = capsule(a: [0, -1, 0], b: [0, 1, 0], radius: 0.5);\n\
@@ -360,15 +308,7 @@ fn rim_distances(twist: f64, head: bool) -> Vec<(f64, f64)> {
             ..base
         };
         let mesh = dual_contour(field, &grid, 1e-5 * (bounds.max - bounds.min).max_element());
-        let mut tris = Vec::new();
-        for q in &mesh.quads {
-            let p = q.map(|i| mesh.vertices[i as usize]);
-            if split_along_02(p) {
-                tris.extend([[p[0], p[1], p[2]], [p[0], p[2], p[3]]]);
-            } else {
-                tris.extend([[p[0], p[1], p[3]], [p[1], p[2], p[3]]]);
-            }
-        }
+        let tris = mesh.triangles();
         let mut worst = 0.0f64;
         let mut rim_points = Vec::new();
         for i in 0..720 {

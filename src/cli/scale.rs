@@ -173,6 +173,18 @@ fn scale(args: &BenchArgs) -> Result<(), ExitCode> {
     plotted
 }
 
+/// The view of a generated scene's render block, at `width` × `height`.
+fn view_of(analysis: &driver::Analysis, (width, height): (u32, u32)) -> View {
+    let shape = analysis
+        .scene
+        .as_ref()
+        .and_then(|s| s.render.clone())
+        .unwrap_or_default();
+    let mut view = View::new(analysis.program.render.as_ref(), &shape);
+    (view.width, view.height) = (width, height);
+    view
+}
+
 /// The median frames of `scattered(n, 0)` for the two counts, built again and drawn
 /// alternately one frame at a time (`args.frames` each, after one warm-up frame), so
 /// that a drift of the machine, or a process's mode (a software adapter's frame of a
@@ -200,14 +212,7 @@ fn paired(
             .map_err(|e| super::compile::report(&name, &source, e))?
             .module;
         let renderer = Renderer::new(gpu, &module, Path::new(".")).map_err(fail)?;
-        let shape = analysis
-            .scene
-            .as_ref()
-            .and_then(|s| s.render.clone())
-            .unwrap_or_default();
-        let mut view = View::new(analysis.program.render.as_ref(), &shape);
-        (view.width, view.height) = (width, height);
-        built.push((renderer, view));
+        built.push((renderer, view_of(&analysis, (width, height))));
     }
     let mut times = [Vec::new(), Vec::new()];
     for round in 0..=args.frames.max(1) {
@@ -320,13 +325,7 @@ fn measure(
     // A real build: benchmarks measure pipelines, not the cache.
     gpu.pipelines.clear();
     let renderer = Renderer::new(gpu, &module, Path::new(".")).map_err(fail)?;
-    let shape = analysis
-        .scene
-        .as_ref()
-        .and_then(|s| s.render.clone())
-        .unwrap_or_default();
-    let mut view = View::new(analysis.program.render.as_ref(), &shape);
-    (view.width, view.height) = (width, height);
+    let view = view_of(&analysis, (width, height));
     let (_, frames) = renderer
         .frames(gpu, &view, ViewMode::Color, 1, args.frames.max(1))
         .map_err(fail)?;

@@ -28,6 +28,22 @@ pub struct QuadMesh {
     pub cell: f64,
 }
 
+impl QuadMesh {
+    /// The quads' triangles, each quad split along the diagonal [`split_along_02`] picks.
+    pub fn triangles(&self) -> Vec<[DVec3; 3]> {
+        let mut out = Vec::with_capacity(2 * self.quads.len());
+        for q in &self.quads {
+            let p = q.map(|i| self.vertices[i as usize]);
+            if split_along_02(p) {
+                out.extend([[p[0], p[1], p[2]], [p[0], p[2], p[3]]]);
+            } else {
+                out.extend([[p[0], p[1], p[3]], [p[1], p[2], p[3]]]);
+            }
+        }
+        out
+    }
+}
+
 /// The grid: `dims` cells along each axis from `origin`, cubic cells of `cell`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {

@@ -11,7 +11,7 @@ use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
-/// The sampling grid, in cells along the longest side of the shape's bounds: about
+/// The sampling grid, in cells along the longest side of the bounds baked: about
 /// two samples per cell-sized area of the surface at this grid, a few thousand for
 /// the examples (an f64 evaluation of the field for every 1/128 of a cell's volume
 /// near the surface).

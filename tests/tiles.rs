@@ -197,6 +197,17 @@ fn a_crowded_tile_walks_the_whole_group() {
     assert!(common::worst_byte_difference(&a.color, &b.color) <= 6);
     let [a, b] = both(&gpu, &src, (32, 32), ViewMode::Color);
     assert!(common::worst_byte_difference(&a.color, &b.color) <= 6);
+    // The first crowded frame builds the crowded pipeline, and its timings say so; the
+    // next frame finds it built. (`render --timings` prints the line.)
+    assert!(
+        a.timings.crowded_pipeline.is_none(),
+        "no tiles, no crowded pipeline"
+    );
+    let tiled = Renderer::new(&gpu, &m, std::path::Path::new(".")).unwrap();
+    let first = tiled.frames(&gpu, &view, ViewMode::Color, 0, 1).unwrap().0;
+    let second = tiled.frames(&gpu, &view, ViewMode::Color, 0, 1).unwrap().0;
+    assert!(first.timings.crowded_pipeline.is_some());
+    assert!(second.timings.crowded_pipeline.is_none());
 }
 
 /// 400 scattered spheres over a floor that is no leaf of their group (a smooth union).

@@ -51,6 +51,13 @@ pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> 
                 t.tiles_whole
             );
         }
+        if let Some(built) = t.crowded_pipeline {
+            eprintln!(
+                "crowded:   the pipeline for crowded tiles built first, {:.2} ms (a tile's list was over {} leaves)",
+                built.as_secs_f64() * 1e3,
+                sdfc::gpu::tiles::MAX_PER_TILE
+            );
+        }
         if t.coarse_samples > 0 {
             eprintln!(
                 "multi-scale: {} coarse samples walked first, one pixel in {}x{} (the frame's time includes them)",

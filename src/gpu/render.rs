@@ -315,7 +315,10 @@ impl Renderer {
         let group = scene_group::group(d, &self.bindings, Stage::Render, &self.layout, &with)?;
         let mut timings = tiles.map(|t| t.1).unwrap_or_default();
         let crowded = if timings.tiles_whole > 0 {
-            Some(self.crowded_pipeline(gpu)?)
+            let started = Instant::now();
+            let (pipeline, built) = self.crowded_pipeline(gpu)?;
+            timings.crowded_pipeline = built.then(|| started.elapsed());
+            Some(pipeline)
         } else {
             None
         };
@@ -333,11 +336,12 @@ impl Renderer {
     }
 
     /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
-    /// frame has one (its time is not in `pipeline_time`).
-    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline, GpuError> {
+    /// frame has one (its time is not in `pipeline_time`: the frame's timings have it),
+    /// and whether this call built it.
+    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<(wgpu::RenderPipeline, bool), GpuError> {
         let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = built.as_ref() {
-            return Ok(p.clone());
+            return Ok((p.clone(), false));
         }
         let key = super::cache::key(
             "render, crowded",
@@ -358,7 +362,7 @@ impl Renderer {
         })?;
         gpu.wait()?;
         *built = Some(p.clone());
-        Ok(p)
+        Ok((p, true))
     }
 
     /// The screen tiles of a frame of `view` (`gpu::tiles`) in a new buffer, with the
@@ -514,16 +518,15 @@ impl Renderer {
         sorted.sort();
         let median = sorted[sorted.len() / 2];
         let mut frame = self.read(gpu, &targets)?;
-        frame.timings.pipeline = self.pipeline_time;
-        frame.timings.frame = median;
-        frame.timings.frame_from_timestamps = from_timestamps;
-        let t = prepared.timings;
-        (
-            frame.timings.tiles,
-            frame.timings.tile_leaves,
-            frame.timings.tiles_whole,
-            frame.timings.coarse_samples,
-        ) = (t.tiles, t.tile_leaves, t.tiles_whole, t.coarse_samples);
+        // The preparation's timings (tiles, coarse samples, a crowded pipeline's build),
+        // with the pipeline's, the frame's and the readback's.
+        frame.timings = Timings {
+            pipeline: self.pipeline_time,
+            frame: median,
+            frame_from_timestamps: from_timestamps,
+            readback: frame.timings.readback,
+            ..prepared.timings
+        };
         Ok((frame, times))
     }
 

@@ -704,17 +704,7 @@ fn pipeline(
         label,
         source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     });
-    let targets: Vec<Option<wgpu::ColorTargetState>> = formats
-        .into_iter()
-        .flatten()
-        .map(|f| {
-            Some(wgpu::ColorTargetState {
-                format: *f,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        })
-        .collect();
+    let targets = super::render_pipeline::opaque_targets(formats.into_iter().flatten());
     let attributes = wgpu::vertex_attr_array![
         0 => Float32x3,
         1 => Float32x3,

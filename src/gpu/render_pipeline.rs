@@ -14,16 +14,7 @@ pub(super) fn pipeline(
         label: Some("scene"),
         source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     });
-    let targets: Vec<Option<wgpu::ColorTargetState>> = formats
-        .iter()
-        .map(|f| {
-            Some(wgpu::ColorTargetState {
-                format: *f,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        })
-        .collect();
+    let targets = opaque_targets(formats);
     let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("scene"),
         bind_group_layouts: &[Some(group0)],
@@ -56,4 +47,21 @@ pub(super) fn pipeline(
         multiview_mask: None,
         cache,
     })
+}
+
+/// Colour targets of these formats, written whole without blending (the scene's
+/// render pipeline and the baked mesh's).
+pub(super) fn opaque_targets<'f>(
+    formats: impl IntoIterator<Item = &'f wgpu::TextureFormat>,
+) -> Vec<Option<wgpu::ColorTargetState>> {
+    formats
+        .into_iter()
+        .map(|f| {
+            Some(wgpu::ColorTargetState {
+                format: *f,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        })
+        .collect()
 }

@@ -607,7 +607,13 @@ fn templates_are_filled_completely_and_validate() {
     assert!(template::placeholders(template::ATLAS).contains(&"walk_steps"));
     assert_eq!(
         template::placeholders(template::ENTRY),
-        ["bindings", "atlas_aov"]
+        [
+            "bindings",
+            "view_constants",
+            "view",
+            "atlas_aov_on",
+            "atlas_aov"
+        ]
     );
     assert_eq!(template::placeholders(template::TRACE), ["map", "suffix"]);
     assert_eq!(
@@ -633,11 +639,13 @@ fn templates_are_filled_completely_and_validate() {
     let src = std::fs::read_to_string(dir.join("plate.sdf")).unwrap();
     for walk in [codegen::WalkForm::Unrolled, codegen::WalkForm::Loop] {
         for seed_grid in [codegen::SeedGridChoice::On, codegen::SeedGridChoice::Off] {
-            // With the multi-scale pass's template too.
+            // With the multi-scale pass's template too, and the view as pipeline
+            // constants (validated in their colour form as well).
             let options = codegen::Options {
                 walk,
                 seed_grid,
                 multiscale: seed_grid == codegen::SeedGridChoice::On,
+                view_constants: walk == codegen::WalkForm::Loop,
                 ..Default::default()
             };
             let m = generate_with(&src, Some(&dir), &options).unwrap();

@@ -200,14 +200,14 @@ fn a_crowded_tile_walks_the_whole_group() {
     // The first crowded frame builds the crowded pipeline, and its timings say so; the
     // next frame finds it built. (`render --timings` prints the line.)
     assert!(
-        a.timings.crowded_pipeline.is_none(),
+        a.timings.pipeline_built.is_none(),
         "no tiles, no crowded pipeline"
     );
     let tiled = Renderer::new(&gpu, &m, std::path::Path::new(".")).unwrap();
     let first = tiled.frames(&gpu, &view, ViewMode::Color, 0, 1).unwrap().0;
     let second = tiled.frames(&gpu, &view, ViewMode::Color, 0, 1).unwrap().0;
-    assert!(first.timings.crowded_pipeline.is_some());
-    assert!(second.timings.crowded_pipeline.is_none());
+    assert!(first.timings.pipeline_built.is_some());
+    assert!(second.timings.pipeline_built.is_none());
 }
 
 /// 400 scattered spheres over a floor that is no leaf of their group (a smooth union).

@@ -95,7 +95,12 @@ pub fn run(args: &RenderArgs, gpu: &Gpu, module: &Module, view: &View, seconds: 
         Ok(t) => t,
         Err(e) => return usage(e),
     };
-    let renderer = match Renderer::new(gpu, module, &super::base_dir(&args.scene)) {
+    let renderer = match Renderer::new_for(
+        gpu,
+        module,
+        &super::base_dir(&args.scene),
+        (args.view, view.atlas_aov),
+    ) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");

@@ -51,12 +51,19 @@ pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> 
                 t.tiles_whole
             );
         }
-        if let Some(built) = t.crowded_pipeline {
-            eprintln!(
-                "crowded:   the pipeline for crowded tiles built first, {:.2} ms (a tile's list was over {} leaves)",
-                built.as_secs_f64() * 1e3,
-                sdfc::gpu::tiles::MAX_PER_TILE
-            );
+        if let Some(built) = t.pipeline_built {
+            if t.tiles_whole > 0 {
+                eprintln!(
+                    "crowded:   the pipeline for crowded tiles built first, {:.2} ms (a tile's list was over {} leaves)",
+                    built.as_secs_f64() * 1e3,
+                    sdfc::gpu::tiles::MAX_PER_TILE
+                );
+            } else {
+                eprintln!(
+                    "view:      the pipeline of this view built first, {:.2} ms",
+                    built.as_secs_f64() * 1e3
+                );
+            }
         }
         if t.coarse_samples > 0 {
             eprintln!(

@@ -31,9 +31,9 @@ pub fn parse_aov(s: &str) -> Result<(String, PathBuf), String> {
     let (name, file) = s
         .split_once('=')
         .ok_or_else(|| format!("expected NAME=FILE.exr, found {s:?}"))?;
-    if !["depth", "normal", "position", "steps"].contains(&name) {
+    if !["depth", "normal", "position", "steps", "uv"].contains(&name) {
         return Err(format!(
-            "unknown AOV {name:?}: choose depth, normal, position or steps"
+            "unknown AOV {name:?}: choose depth, normal, position, steps or uv"
         ));
     }
     Ok((name.to_string(), PathBuf::from(file)))
@@ -76,6 +76,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         differences: args.gradients.differences(),
         tiles: !args.no_tiles,
         multiscale: args.multiscale.first(),
+        view_constants: true,
     };
     let (source, analysis, mut compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &options) {

@@ -198,6 +198,7 @@ fn paired(
     let options = Options {
         walk: WalkForm::Loop,
         tiles: true,
+        view_constants: true,
         ..Default::default()
     };
     let fail = |e: sdfc::gpu::GpuError| {
@@ -296,6 +297,7 @@ fn measure(
     let options = Options {
         walk: WalkForm::Loop,
         tiles: true,
+        view_constants: true,
         ..Default::default()
     };
     let mut compiles = Vec::new();

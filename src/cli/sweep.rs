@@ -79,6 +79,11 @@ impl Bench<'_> {
         options: &Options,
     ) -> Result<(Duration, Duration), ExitCode> {
         let analysis = checked(name, source)?;
+        // As `sdfc render` draws it: the colour view's pipeline alone.
+        let options = &Options {
+            view_constants: true,
+            ..options.clone()
+        };
         let module = driver::compile(&analysis, options)
             .map_err(|e| compile::report(name, source, e))?
             .module;

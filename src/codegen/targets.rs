@@ -115,29 +115,41 @@ pub fn validate(wgsl: &str) -> Result<Validated, NagaError> {
     Ok(Validated { module, info })
 }
 
-/// A module with per-tile culling is also built with `SCENE_CROWDED` false (the
-/// runtime's pipeline for frames without a crowded tile, `gpu::render`): naga's
-/// pipeline-constant pass validates that form again, and rejects some constructs the
-/// plain module passes (a constant matrix used on both sides of an early return).
+/// A module with pipeline-overridable constants (`SCENE_CROWDED` of per-tile culling,
+/// `codegen::views`' view mode and atlas AOV switch) is also built with them set, as
+/// the runtime's colour pipeline sets them (`gpu::render`): naga's pipeline-constant
+/// pass validates that form again, and rejects some constructs the plain module passes
+/// (a constant matrix used on both sides of an early return).
 fn overridden(
     module: &naga::Module,
     info: &naga::valid::ModuleInfo,
     wgsl: &str,
 ) -> Result<(), NagaError> {
-    let crowded = super::tiles::CROWDED;
-    if !module
-        .overrides
-        .iter()
-        .any(|(_, o)| o.name.as_deref() == Some(crowded))
-    {
+    let declared = |name: &str| {
+        module
+            .overrides
+            .iter()
+            .any(|(_, o)| o.name.as_deref() == Some(name))
+    };
+    let mut constants = naga::back::PipelineConstants::default();
+    let mut said = Vec::new();
+    for (name, value, text) in [
+        (super::tiles::CROWDED, 0.0, "false"),
+        (super::views::VIEW, 0.0, "0"),
+        (super::views::ATLAS_AOV, 0.0, "false"),
+    ] {
+        if declared(name) {
+            constants.insert(name.to_string(), value);
+            said.push(format!("{name} = {text}"));
+        }
+    }
+    if constants.is_empty() {
         return Ok(());
     }
-    let mut constants = naga::back::PipelineConstants::default();
-    constants.insert(crowded.to_string(), 0.0);
     naga::back::pipeline_constants::process_overrides(module, info, None, &constants)
         .map(|_| ())
         .map_err(|e| NagaError {
-            message: format!("with {crowded} = false: {e:?}"),
+            message: format!("with {}: {e:?}", said.join(", ")),
             offset: match &e {
                 naga::back::pipeline_constants::PipelineConstantError::ValidationError(v) => {
                     v.location(wgsl).map(|l| l.offset as usize)

@@ -84,10 +84,11 @@ pub struct Timings {
     /// The multi-scale pass's coarse samples (`gpu::coarse`; its time is in `frame`),
     /// zero where it did not run.
     pub coarse_samples: usize,
-    /// The build of the pipeline for crowded tiles (`SCENE_CROWDED` true), where this
-    /// frame was the first with a crowded tile and built it (not in `pipeline`, nor in
-    /// `frame`).
-    pub crowded_pipeline: Option<Duration>,
+    /// The build of a pipeline other than the renderer's first (`gpu::Renderer`): for
+    /// crowded tiles (`SCENE_CROWDED` true), or another view or atlas AOV switch
+    /// (`codegen::views`), where this frame was the first to need it and built it (not
+    /// in `pipeline`, nor in `frame`).
+    pub pipeline_built: Option<Duration>,
 }
 
 /// SDF evaluations per pixel of a frame rendered in [`ViewMode::Evals`]: mean, 95th

@@ -314,7 +314,7 @@ impl MeshRenderer {
             ChartLayout::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
         };
         let (wgsl, _) = mesh_module(layout, filter).map_err(MeshError::Internal)?;
-        let formats = render::formats(gpu);
+        let formats = super::render_pipeline::formats(gpu);
         let d = &gpu.device;
         let vertices: Vec<Vertex> = (0..mesh.positions.len())
             .map(|i| {

@@ -1,7 +1,7 @@
 //! Headless rendering: the generated fragment shader into an offscreen target,
 //! read back with its AOVs (position + depth, normal + steps).
 
-use super::render_pipeline::pipeline;
+use super::render_pipeline::{built_variant, formats, pipeline, Variant};
 use super::scene_group::{self, Stage};
 use super::texture::{load_texture, sampler};
 use super::{Gpu, GpuError};
@@ -57,22 +57,6 @@ pub fn globals(view: &View, mode: ViewMode) -> [[f32; 4]; 9] {
     ]
 }
 
-/// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
-/// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
-pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
-    let f32_ok = gpu
-        .adapter
-        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
-        .allowed_usages
-        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT);
-    let aov = if f32_ok {
-        wgpu::TextureFormat::Rgba32Float
-    } else {
-        wgpu::TextureFormat::Rgba16Float
-    };
-    [wgpu::TextureFormat::Rgba8UnormSrgb, aov, aov, aov]
-}
-
 /// IEEE half to single precision.
 fn f16_to_f32(h: u16) -> f32 {
     let sign = ((h >> 15) as u32) << 31;
@@ -111,19 +95,24 @@ pub fn render_timed(
     base_dir: &Path,
     warmup: u32,
 ) -> Result<Frame, GpuError> {
-    let renderer = Renderer::new(gpu, module, base_dir)?;
+    let renderer = Renderer::new_for(gpu, module, base_dir, (mode, view.atlas_aov))?;
     renderer.frames(gpu, view, mode, warmup, 1).map(|(f, _)| f)
 }
 
 /// A generated module's render pipeline with its textures, built once and used for
 /// any number of frames, views and sizes (`sdfc render`, `sdfc bench`, the tests).
 pub struct Renderer {
-    /// With per-tile culling, built for frames where no tile's list is too long
-    /// (`codegen::tiles::CROWDED` false); `crowded` is the pipeline for the others,
-    /// built at the first such frame.
+    /// The pipeline of the variant [`Renderer::new_for`] was asked for (with per-tile
+    /// culling, for frames where no tile's list is too long: `codegen::tiles::CROWDED`
+    /// false), built with the renderer; `others` holds the variants built since, each
+    /// at the first frame that needed it.
     pipeline: wgpu::RenderPipeline,
-    crowded: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
-    /// The module's WGSL, for the crowded pipeline.
+    first: Variant,
+    others: std::sync::Mutex<std::collections::HashMap<Variant, wgpu::RenderPipeline>>,
+    /// Whether the module's view mode and atlas AOV switch are pipeline constants
+    /// (`codegen::views`): then each view drawn has its own pipeline.
+    view_constants: bool,
+    /// The module's WGSL, for the pipelines built after the first.
     wgsl: String,
     /// What the binding table of the manifest binds, slot by slot.
     bindings: Vec<crate::codegen::Binding>,
@@ -163,8 +152,9 @@ pub struct Targets {
 /// What one frame binds ([`Renderer::prepare`]).
 struct Prepared {
     group: wgpu::BindGroup,
-    /// The crowded pipeline, for a frame where a tile's list was too long.
-    crowded: Option<wgpu::RenderPipeline>,
+    /// The frame's pipeline where it is not the renderer's first (another view, or a
+    /// tile's list too long).
+    pipeline: Option<wgpu::RenderPipeline>,
     /// The screen tiles' timings and the coarse samples.
     timings: Timings,
     /// The frame's size where the multi-scale pass runs.
@@ -181,8 +171,21 @@ struct Queries {
 }
 
 impl Renderer {
-    /// Loads the textures and creates the pipeline (timed: `pipeline_time`).
+    /// Loads the textures and creates the pipeline of the colour view without the atlas
+    /// AOV (timed: `pipeline_time`).
     pub fn new(gpu: &Gpu, module: &Module, base_dir: &Path) -> Result<Renderer, GpuError> {
+        Renderer::new_for(gpu, module, base_dir, (ViewMode::Color, false))
+    }
+
+    /// [`Renderer::new`] with the pipeline of view `first.0`, with the atlas AOV where
+    /// `first.1`, where the module makes those pipeline constants
+    /// (`Options::view_constants`); other views get their pipelines at their first frame.
+    pub fn new_for(
+        gpu: &Gpu,
+        module: &Module,
+        base_dir: &Path,
+        first: (ViewMode, bool),
+    ) -> Result<Renderer, GpuError> {
         let formats = formats(gpu);
         let textures = module
             .manifest
@@ -200,10 +203,15 @@ impl Renderer {
         let params = scene_group::params(gpu, module)?;
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
-        let key = super::cache::key("render", (&bindings, formats), &module.wgsl);
         // With tiles, frames without a crowded tile compile the whole-scene paths away.
-        let lean = [(crate::codegen::tiles::CROWDED, 0.0)];
-        let constants: &[(&str, f64)] = if module.tiling.is_some() { &lean } else { &[] };
+        let views = module.view_constants;
+        let first = Variant {
+            view: views.then(|| first.0.index() as u32),
+            atlas_aov: views && first.1,
+            crowded: false,
+        };
+        let constants = first.constants(views, module.tiling.is_some());
+        let key = super::cache::key("render", (&bindings, formats, &constants), &module.wgsl);
         let ((pipeline, layout, coarse), pipeline_cached) =
             gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
                 gpu.scoped(|| {
@@ -211,7 +219,7 @@ impl Renderer {
                     let cache = gpu.disk.as_ref().map(|d| &d.cache);
                     let pipeline = pipeline(
                         &gpu.device,
-                        (&module.wgsl, constants),
+                        (&module.wgsl, &constants),
                         &layout,
                         &formats,
                         cache,
@@ -224,7 +232,9 @@ impl Renderer {
         gpu.wait()?;
         Ok(Renderer {
             pipeline,
-            crowded: Default::default(),
+            first,
+            others: Default::default(),
+            view_constants: views,
             wgsl: module.wgsl.clone(),
             bindings,
             layout,
@@ -314,13 +324,18 @@ impl Renderer {
         };
         let group = scene_group::group(d, &self.bindings, Stage::Render, &self.layout, &with)?;
         let mut timings = tiles.map(|t| t.1).unwrap_or_default();
-        let crowded = if timings.tiles_whole > 0 {
-            let started = Instant::now();
-            let (pipeline, built) = self.crowded_pipeline(gpu)?;
-            timings.crowded_pipeline = built.then(|| started.elapsed());
-            Some(pipeline)
-        } else {
+        let variant = Variant {
+            view: self.view_constants.then(|| mode.index() as u32),
+            atlas_aov: self.view_constants && view.atlas_aov,
+            crowded: timings.tiles_whole > 0,
+        };
+        let pipeline = if variant == self.first {
             None
+        } else {
+            let started = Instant::now();
+            let (pipeline, built) = self.variant_pipeline(gpu, variant)?;
+            timings.pipeline_built = built.then(|| started.elapsed());
+            Some(pipeline)
         };
         let coarse = coarse.is_some_and(|c| c.1);
         if coarse {
@@ -328,40 +343,34 @@ impl Renderer {
         }
         Ok(Prepared {
             group,
-            crowded,
+            pipeline,
             timings,
             coarse: coarse.then_some(size),
             _buffers: globals,
         })
     }
 
-    /// The pipeline with the whole-scene paths of crowded tiles, built the first time a
-    /// frame has one (its time is not in `pipeline_time`: the frame's timings have it),
-    /// and whether this call built it.
-    fn crowded_pipeline(&self, gpu: &Gpu) -> Result<(wgpu::RenderPipeline, bool), GpuError> {
-        let mut built = self.crowded.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = built.as_ref() {
+    /// The pipeline of `variant` (another view, or the whole-scene paths of crowded
+    /// tiles), built the first time a frame needs it (its time is not in
+    /// `pipeline_time`: the frame's timings have it), and whether this call built it.
+    fn variant_pipeline(
+        &self,
+        gpu: &Gpu,
+        variant: Variant,
+    ) -> Result<(wgpu::RenderPipeline, bool), GpuError> {
+        let mut built = self.others.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = built.get(&variant) {
             return Ok((p.clone(), false));
         }
-        let key = super::cache::key(
-            "render, crowded",
-            (&self.bindings, self.formats),
-            &self.wgsl,
-        );
-        let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
-            gpu.scoped(|| {
-                let cache = gpu.disk.as_ref().map(|d| &d.cache);
-                pipeline(
-                    &gpu.device,
-                    (&self.wgsl, &[]),
-                    &self.layout,
-                    &self.formats,
-                    cache,
-                )
-            })
-        })?;
+        let constants = variant.constants(self.view_constants, self.tiling.is_some());
+        let p = built_variant(
+            gpu,
+            (&self.wgsl, &constants),
+            (&self.bindings, &self.layout),
+            &self.formats,
+        )?;
         gpu.wait()?;
-        *built = Some(p.clone());
+        built.insert(variant, p.clone());
         Ok((p, true))
     }
 
@@ -442,7 +451,7 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(frame.crowded.as_ref().unwrap_or(&self.pipeline));
+        pass.set_pipeline(frame.pipeline.as_ref().unwrap_or(&self.pipeline));
         pass.set_bind_group(RENDER_GROUP, bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
@@ -518,7 +527,7 @@ impl Renderer {
         sorted.sort();
         let median = sorted[sorted.len() / 2];
         let mut frame = self.read(gpu, &targets)?;
-        // The preparation's timings (tiles, coarse samples, a crowded pipeline's build),
+        // The preparation's timings (tiles, coarse samples, another pipeline's build),
         // with the pipeline's, the frame's and the readback's.
         frame.timings = Timings {
             pipeline: self.pipeline_time,

@@ -1,5 +1,7 @@
 //! The render pipeline of a generated module (`gpu::Renderer`), with its
-//! pipeline-overridable constants (`codegen::tiles::CROWDED`).
+//! pipeline-overridable constants (`codegen::tiles::CROWDED`, `codegen::views`).
+
+use super::{Gpu, GpuError};
 
 /// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
 /// the targets' formats, with its pipeline-overridable constants.
@@ -64,4 +66,82 @@ pub(super) fn opaque_targets<'f>(
             })
         })
         .collect()
+}
+
+/// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
+/// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
+pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
+    let f32_ok = gpu
+        .adapter
+        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
+        .allowed_usages
+        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let aov = if f32_ok {
+        wgpu::TextureFormat::Rgba32Float
+    } else {
+        wgpu::TextureFormat::Rgba16Float
+    };
+    [wgpu::TextureFormat::Rgba8UnormSrgb, aov, aov, aov]
+}
+
+/// Which of a module's render pipelines a frame draws with: the values of its
+/// pipeline-overridable constants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(super) struct Variant {
+    /// The view mode's index, where it is a constant (`codegen::views`).
+    pub(super) view: Option<u32>,
+    /// Whether the atlas AOV is written, where that is a constant.
+    pub(super) atlas_aov: bool,
+    /// Whether a tile's list was too long (`codegen::tiles::CROWDED`), in a module with
+    /// per-tile culling.
+    pub(super) crowded: bool,
+}
+
+impl Variant {
+    /// The pipeline constants of this variant in a module that declares the view's
+    /// constants or not (`views`) and the crowded tiles' or not (`tiled`).
+    pub(super) fn constants(self, views: bool, tiled: bool) -> Vec<(&'static str, f64)> {
+        let mut out = Vec::new();
+        if tiled {
+            out.push((
+                crate::codegen::tiles::CROWDED,
+                f64::from(u8::from(self.crowded)),
+            ));
+        }
+        if views {
+            out.push((
+                crate::codegen::views::VIEW,
+                f64::from(self.view.unwrap_or(0)),
+            ));
+            out.push((
+                crate::codegen::views::ATLAS_AOV,
+                f64::from(u8::from(self.atlas_aov)),
+            ));
+        }
+        out
+    }
+}
+
+/// The pipeline of a variant other than a renderer's first, from the device's cache
+/// where an earlier renderer of the same module built it.
+pub(super) fn built_variant(
+    gpu: &Gpu,
+    (wgsl, constants): (&str, &[(&str, f64)]),
+    (bindings, layout): (&[crate::codegen::Binding], &wgpu::BindGroupLayout),
+    formats: &[wgpu::TextureFormat; 4],
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    // Its own kind: a first pipeline's entry holds it with its layout and pass.
+    let key = super::cache::key(
+        "render, another variant",
+        (bindings, formats, constants),
+        wgsl,
+    );
+    let (p, _) = gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
+        gpu.scoped(|| {
+            let cache = gpu.disk.as_ref().map(|d| &d.cache);
+            pipeline(&gpu.device, (wgsl, constants), layout, formats, cache)
+        })
+    })?;
+    gpu.wait()?;
+    Ok(p)
 }

@@ -567,17 +567,20 @@ impl Renderer {
 
     /// Draws one frame of `view` into `targets` (of `view`'s size) and waits for it:
     /// returns the submit-to-complete time, which includes binning the screen tiles
-    /// (`gpu::tiles`). Nothing is read back.
+    /// (`gpu::tiles`) but not the build of a pipeline this frame was the first to need
+    /// (another view, crowded tiles), and that build's time. Nothing is read back.
     pub fn draw_into(
         &self,
         gpu: &Gpu,
         view: &View,
         mode: ViewMode,
         targets: &Targets,
-    ) -> Result<Duration, GpuError> {
+    ) -> Result<(Duration, Option<Duration>), GpuError> {
         let started = Instant::now();
+        let mut built = None;
         gpu.scoped(|| {
             let prepared = self.prepare(gpu, view, mode)?;
+            built = prepared.timings.pipeline_built;
             let mut enc = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -588,7 +591,10 @@ impl Renderer {
             Ok::<_, GpuError>(())
         })??;
         gpu.wait()?;
-        Ok(started.elapsed())
+        Ok((
+            started.elapsed().saturating_sub(built.unwrap_or_default()),
+            built,
+        ))
     }
 }
 

@@ -306,9 +306,11 @@ impl App {
         };
         let base = self.base_dir.clone();
         let mut built = 0;
+        // The pipeline of the view on screen (another view builds its own when shown).
+        let first = (VIEWS[self.mode].0, false);
         let outcome = self.reloader.reload(text, force, |c| {
             built += 1;
-            Renderer::new(gpu, &c.module, &base).map_err(|e| e.to_string())
+            Renderer::new_for(gpu, &c.module, &base, first).map_err(|e| e.to_string())
         });
         self.params.pipelines += built;
         match outcome {
@@ -485,9 +487,15 @@ impl App {
                 self.params.recomputed = Some(Err(e.to_string()));
             }
         }
-        let took = renderer
+        let (took, built) = renderer
             .draw_into(gpu, &view, VIEWS[self.mode].0, targets)
             .map_err(ViewError::Gpu)?;
+        // A view's first frame builds its pipeline (`codegen::views`): counted with
+        // the reloads', and its driver compile kept out of the estimate below.
+        if built.is_some() {
+            self.params.pipelines += 1;
+            self.fresh = true;
+        }
         self.last_frame_ms = took.as_secs_f64() * 1e3;
         // The cost of a full-resolution frame, estimated from this one (frame time
         // grows with the pixels); not from the first frame of a new pipeline, which

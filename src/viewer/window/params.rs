@@ -25,7 +25,8 @@ pub(crate) struct Params {
     /// `time` runs from `started`, plus what ran before a pause.
     playing: Option<Instant>,
     time: f64,
-    /// Pipelines built since the viewer started (one per good reload).
+    /// Pipelines built since the viewer started (one per good reload, and one per
+    /// view at its first frame: `gpu::Renderer`).
     pub(crate) pipelines: usize,
     /// The last recomputation of the atlases on moving shapes: its time, or why it
     /// failed.

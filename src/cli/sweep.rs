@@ -7,7 +7,7 @@ use super::{compile, BenchArgs};
 use sdfc::bench::{layout, plate, SEED_COUNTS};
 use sdfc::codegen::{Options, SeedGridChoice};
 use sdfc::driver;
-use sdfc::gpu::{self, Gpu, ViewMode};
+use sdfc::gpu::{self, Gpu, MultiScale, ViewMode};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -141,9 +141,10 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
     println!("seed-count sweep (Fig. 15): the 8 x 8 plate of examples/plate.sdf");
     println!("adapter:   {}", gpu.describe());
     println!(
-        "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}, {}",
+        "size:      {width}x{height}, median of {} frames after one warm-up frame, walk {:?}, multi-scale pass {} (render's default), {}",
         bench.frames,
         args.walk.on(&gpu),
+        if MultiScale::Auto.on(&gpu) { "on" } else { "off" },
         if args.gradients.differences() {
             "gradients by central differences"
         } else {
@@ -185,6 +186,7 @@ fn sweep(args: &BenchArgs) -> Result<(), ExitCode> {
             "size": [width, height],
             "frames": bench.frames,
             "walk": format!("{:?}", args.walk.on(&gpu)),
+            "multiscale": MultiScale::Auto.on(&gpu),
             "gradients": if args.gradients.differences() { "differences" } else { "forward" },
             "constant_uv_ms": ms(constant),
             "plain_ms": ms(plain),
@@ -228,6 +230,8 @@ fn measure_rows(bench: &Bench, args: &BenchArgs) -> Result<(Vec<Row>, Baselines)
                 for grid in [false, true] {
                     let options = Options {
                         walk: args.walk.on(bench.gpu),
+                        // As `sdfc render` draws it by default.
+                        multiscale: MultiScale::Auto.on(bench.gpu),
                         seed_grid: if grid {
                             SeedGridChoice::On
                         } else {

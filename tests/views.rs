@@ -54,8 +54,8 @@ fn only_a_module_asked_for_them_has_the_view_constants() {
     assert!(!constant.wgsl.contains("g.resolution.w"));
     assert!(!constant.wgsl.contains("g.camera_forward.w"));
     // What a host gets is unchanged: `sdfc compile` leaves them out.
-    let dir = tempdir();
-    let out = dir.join("robot.wgsl");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("robot.wgsl");
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/robot.sdf");
     let (code, _, err) = common::sdfc(&[
         "compile",
@@ -65,12 +65,6 @@ fn only_a_module_asked_for_them_has_the_view_constants() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(!std::fs::read_to_string(&out).unwrap().contains("override"));
-}
-
-fn tempdir() -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("sdfc-views-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 #[test]
@@ -140,9 +134,8 @@ fn render_writes_the_uv_aov_it_documents() {
     if gpu_for_tests().is_none() {
         return;
     }
-    let dir = tempdir().join("uv");
-    std::fs::create_dir_all(&dir).unwrap();
-    let (png, uv) = (dir.join("s.png"), dir.join("uv.exr"));
+    let dir = tempfile::tempdir().unwrap();
+    let (png, uv) = (dir.path().join("s.png"), dir.path().join("uv.exr"));
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
     let (code, _, err) = common::sdfc(&[
         "render",

@@ -193,9 +193,11 @@ fn the_coarse_grid_covers_every_pixel() {
     }
 }
 
-/// `sphere.sdf` checked, and its renderer with the multi-scale pass.
-fn sphere_with_pass(gpu: &Gpu) -> (driver::Analysis, Renderer) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.sdf");
+/// An example checked, and its renderer with the multi-scale pass.
+fn example_with_pass(gpu: &Gpu, example: &str) -> (driver::Analysis, Renderer) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(example);
     let source = std::fs::read_to_string(&path).unwrap();
     let a = driver::check(&source, path.parent());
     let options = Options {
@@ -208,23 +210,30 @@ fn sphere_with_pass(gpu: &Gpu) -> (driver::Analysis, Renderer) {
 }
 
 /// The GPU's rebuild against the f64 reference (`reference::coarse::rebuild`): the
-/// sphere drawn with the pass, its coarse samples walked again on the CPU at the hits
-/// the frame shows there, and every pixel rebuilt from them in f64. Near the fit's
-/// tolerance the f32 and f64 walks may decide differently, so the test asks that most
-/// of the GPU's rebuilt pixels are the CPU's too (all 810 of them, measured), and that
-/// where both rebuild the uv agree (2.3e-7 of the reach, measured).
-#[test]
-fn the_rebuild_agrees_with_the_f64_reference() {
-    use sdfc::reference::coarse::{rebuild, Corner, STEP, TOLERANCE};
-    let Some(gpu) = gpu_for_tests() else { return };
-    let (a, r) = sphere_with_pass(&gpu);
+/// example drawn with the pass, its coarse samples walked again on the CPU at the hits
+/// the frame shows there, and every pixel rebuilt from them in f64 under the rule the
+/// module was generated with (across the atlas's merges, or within one seed). Near the
+/// fit's tolerance the f32 and f64 walks may decide differently, so the test asks that
+/// most of the GPU's rebuilt pixels are the CPU's too, and that where both rebuild the
+/// uv agree. Returns the pixels the GPU rebuilt, and those of them whose corners' nearest
+/// seeds (in f64) were not one seed.
+fn against_the_f64_reference(gpu: &Gpu, example: &str) -> (usize, usize) {
+    use sdfc::reference::coarse::{
+        across_merges, atlas_merged_bits, rebuild, same_seed, Corner, STEP, TOLERANCE,
+    };
+    let (a, r) = example_with_pass(gpu, example);
     let atlas = a.atlases[0].as_ref().unwrap();
+    let bits = atlas_merged_bits(atlas);
+    let merged: Box<dyn Fn(usize, usize) -> bool> = match &bits {
+        Some(b) => Box::new(across_merges(b)),
+        None => Box::new(same_seed),
+    };
     let reach = atlas.params.max_distance;
     let (w, h) = (160u32, 120u32);
     let mut view = common::scene_view(&a, (w, h));
-    let walked = frame(&gpu, &r, &view, ViewMode::Walked, true);
+    let walked = frame(gpu, &r, &view, ViewMode::Walked, true);
     view.atlas_aov = true;
-    let shown = frame(&gpu, &r, &view, ViewMode::Color, true);
+    let shown = frame(gpu, &r, &view, ViewMode::Color, true);
     let at = |x: u32, y: u32| (y * w + x) as usize;
     let corner = |i: u32, j: u32| {
         let (x, y) = ((i * STEP).min(w - 1), (j * STEP).min(h - 1));
@@ -242,7 +251,7 @@ fn the_rebuild_agrees_with_the_f64_reference() {
         .flat_map(|j| (0..cols).map(move |i| (i, j)))
         .map(|(i, j)| corner(i, j))
         .collect();
-    let (mut gpu_rebuilt, mut both, mut worst) = (0usize, 0usize, 0.0f64);
+    let (mut gpu_rebuilt, mut both, mut across, mut worst) = (0usize, 0usize, 0usize, 0.0f64);
     for y in 0..h {
         for x in 0..w {
             let i = at(x, y);
@@ -255,9 +264,15 @@ fn the_rebuild_agrees_with_the_f64_reference() {
             let (i1, j1) = ((i0 + 1).min(cols - 1), (j0 + 1).min(rows - 1));
             let c = |i: u32, j: u32| grid[(j * cols + i) as usize].clone();
             let corners = [c(i0, j0), c(i1, j0), c(i0, j1), c(i1, j1)];
+            if corners
+                .iter()
+                .any(|k| k.sample.seed != corners[0].sample.seed)
+            {
+                across += 1;
+            }
             let q = shown.position[i];
             let p = glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64);
-            if let Some(s) = rebuild(&corners, p, 1, TOLERANCE * reach) {
+            if let Some(s) = rebuild(&corners, p, 1, TOLERANCE * reach, &*merged) {
                 both += 1;
                 let g = shown.atlas[i];
                 let e = (s.uv - glam::DVec2::new(g[0] as f64, g[1] as f64)).length() / reach;
@@ -266,7 +281,7 @@ fn the_rebuild_agrees_with_the_f64_reference() {
         }
     }
     eprintln!(
-        "GPU rebuilt {gpu_rebuilt} pixels; the f64 reference rebuilt {both} of them; largest uv difference {worst:.2e} of the reach"
+        "{example}: GPU rebuilt {gpu_rebuilt} pixels ({across} between seeds); the f64 reference rebuilt {both} of them; largest uv difference {worst:.2e} of the reach"
     );
     assert!(gpu_rebuilt > 500, "{gpu_rebuilt}");
     assert!(
@@ -274,6 +289,25 @@ fn the_rebuild_agrees_with_the_f64_reference() {
         "{both} of {gpu_rebuilt}"
     );
     assert!(worst < 1e-3, "{worst:.2e}");
+    (gpu_rebuilt, across)
+}
+
+/// On the sphere (one seed; measured: all 810 of the GPU's rebuilt pixels are the CPU's,
+/// within 2.3e-7 of the reach).
+#[test]
+fn the_rebuild_agrees_with_the_f64_reference() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let (_, across) = against_the_f64_reference(&gpu, "sphere.sdf");
+    assert_eq!(across, 0);
+}
+
+/// On `plate.sdf`, whose 64 seeds are merged with their grid neighbours, the rebuild
+/// crosses the merged frontiers (Alg. 2 blends there), as the f64 reference's does.
+#[test]
+fn across_merged_frontiers_the_rebuild_agrees_with_the_f64_reference() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let (rebuilt, across) = against_the_f64_reference(&gpu, "plate.sdf");
+    assert!(across * 20 > rebuilt, "{across} of {rebuilt}");
 }
 
 /// Against the truth: on the sphere, whose log map is known in closed form, the uv
@@ -286,7 +320,7 @@ fn the_rebuild_agrees_with_the_f64_reference() {
 fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
     use glam::{DVec2, DVec3};
     let Some(gpu) = gpu_for_tests() else { return };
-    let (a, r) = sphere_with_pass(&gpu);
+    let (a, r) = example_with_pass(&gpu, "sphere.sdf");
     let atlas = a.atlases[0].as_ref().unwrap();
     let reach = atlas.params.max_distance;
     let seed = atlas.seeds[0].seed;
@@ -335,4 +369,121 @@ fn on_the_sphere_the_rebuilt_uv_is_as_close_to_the_exact_log_map_as_the_walk() {
         rmax <= 1.25 * wmax,
         "max: rebuilt {rmax:.2e}, walk {wmax:.2e}"
     );
+}
+
+/// The table of merged seeds: symmetric, with the diagonal set, two words a row past 32
+/// seeds, and only within its limit.
+#[test]
+fn the_table_of_merged_seeds_holds_exactly_the_merges() {
+    use sdfc::reference::coarse::{merged_bits, MERGED_TABLE_SEEDS};
+    let edges = [(0, 1), (33, 2), (39, 38)];
+    let bits = merged_bits(40, edges).unwrap();
+    assert_eq!(bits.row, 2);
+    assert_eq!(bits.words.len(), 80);
+    for i in 0..40 {
+        for j in 0..40 {
+            let want = i == j
+                || edges
+                    .iter()
+                    .any(|&(a, b)| (a, b) == (i, j) || (b, a) == (i, j));
+            assert_eq!(bits.get(i, j), want, "{i} {j}");
+        }
+    }
+    assert!(merged_bits(1, []).is_none());
+    assert!(merged_bits(MERGED_TABLE_SEEDS, []).is_some());
+    assert!(merged_bits(MERGED_TABLE_SEEDS + 1, []).is_none());
+}
+
+/// The rule across merges, on four corners whose uv is affine in their position (so
+/// the fit holds): corners of two seeds rebuild only where those are merged, three seeds
+/// only where every two of them are, and the sample takes the heaviest corner's seed.
+#[test]
+fn the_rebuild_crosses_a_frontier_only_between_merged_seeds() {
+    use glam::{DMat3, DVec2, DVec3};
+    use sdfc::reference::coarse::{across_merges, merged_bits, rebuild, same_seed, Corner};
+    use sdfc::uv::{Sample, Status};
+    let corners = |seeds: [usize; 4]| -> [Corner; 4] {
+        let at = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
+        std::array::from_fn(|k| {
+            let (x, y) = at[k];
+            Corner {
+                position: DVec3::new(x, y, 0.0),
+                material: 1,
+                sample: Sample {
+                    status: Status::Ok,
+                    uv: DVec2::new(0.5 + 0.3 * x - 0.1 * y, 0.2 + 0.4 * y),
+                    distance: 1.0,
+                    transport: DMat3::IDENTITY,
+                    seed: Some(seeds[k]),
+                    weight: 1.0,
+                    tangent: DVec3::X,
+                    bitangent: DVec3::Y,
+                },
+            }
+        })
+    };
+    let p = DVec3::new(0.9, 0.8, 0.0);
+    let two = corners([0, 0, 1, 1]);
+    let s = rebuild(&two, p, 1, 1e-9, &same_seed);
+    assert!(s.is_none());
+    let unmerged = merged_bits(3, [(1, 2)]).unwrap();
+    assert!(rebuild(&two, p, 1, 1e-9, &across_merges(&unmerged)).is_none());
+    let merged = merged_bits(3, [(0, 1), (1, 2)]).unwrap();
+    let s = rebuild(&two, p, 1, 1e-9, &across_merges(&merged)).unwrap();
+    assert_eq!(s.seed, Some(1), "the corner at (1, 1) weighs most");
+    assert!((s.uv - DVec2::new(0.5 + 0.27 - 0.08, 0.2 + 0.32)).length() < 1e-12);
+    // Three seeds: 0 and 2 are not merged.
+    let three = corners([0, 1, 2, 2]);
+    assert!(rebuild(&three, p, 1, 1e-9, &across_merges(&merged)).is_none());
+    let all = merged_bits(3, [(0, 1), (1, 2), (0, 2)]).unwrap();
+    assert!(rebuild(&three, p, 1, 1e-9, &across_merges(&all)).is_some());
+    // One seed needs no merge.
+    assert!(rebuild(&corners([2; 4]), p, 1, 1e-9, &same_seed).is_some());
+}
+
+/// The module carries an atlas's table of merged seeds in its `tables` words, and its
+/// materials rebuild across merges only where no material reads the atlas's `seed` or
+/// `transport` (which change at a frontier) and the shape does not move.
+#[test]
+fn the_module_carries_the_table_of_merged_seeds_where_the_rule_may_cross() {
+    use sdfc::reference::coarse::atlas_merged_bits;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/plate.sdf");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let options = Options {
+        multiscale: true,
+        ..Default::default()
+    };
+    let compile = |src: &str| {
+        let a = driver::check(src, path.parent());
+        assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
+        let m = driver::compile(&a, &options).unwrap().module;
+        (a, m)
+    };
+    let (a, module) = compile(&source);
+    let bits = atlas_merged_bits(a.atlases[0].as_ref().unwrap()).unwrap();
+    assert_eq!(bits.row, 2);
+    let call = regex_free_call(&module.wgsl);
+    let (at, row) = call.expect("atlas_0_pixel calls coarse_rebuild");
+    assert_eq!(row, 2);
+    let words = &module.manifest.tables[at as usize..at as usize + bits.words.len()];
+    assert_eq!(words, &bits.words[..]);
+    // A material that reads the seed keeps to one seed's region.
+    let seeded = source.replace("roughness = 0.7;", "roughness = 0.5 + 0.001 * tiles.seed;");
+    assert_ne!(seeded, source);
+    let (_, module) = compile(&seeded);
+    assert_eq!(regex_free_call(&module.wgsl), Some((0, 0)));
+}
+
+/// The last two arguments (the table's first word and its row's words) of the
+/// `coarse_rebuild` call in `atlas_0_pixel`.
+fn regex_free_call(wgsl: &str) -> Option<(u32, u32)> {
+    let body = &wgsl[wgsl.find("fn atlas_0_pixel(")?..];
+    let call = &body[body.find("coarse_rebuild(")?..];
+    let args = &call["coarse_rebuild(".len()..call.find(");")?];
+    let mut last = args
+        .rsplit(", ")
+        .map(|a| a.trim_end_matches('u').parse::<u32>().ok());
+    let row = last.next()??;
+    let at = last.next()??;
+    Some((at, row))
 }

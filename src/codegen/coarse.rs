@@ -17,8 +17,9 @@
 use super::manifest::{CoarsePass, COARSE_HOW};
 use super::{internal, template, Generator, Options};
 use crate::diagnostic::Diagnostic;
+use crate::reference::coarse::atlas_merged_bits;
 use crate::uv::Atlas;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
 
 pub use crate::reference::coarse::{CONDITION, FLATNESS, STEP, TOLERANCE};
@@ -28,6 +29,9 @@ pub use crate::reference::coarse::{CONDITION, FLATNESS, STEP, TOLERANCE};
 #[derive(Debug, Clone, Default)]
 pub struct Reads {
     pub by_material: Vec<(i32, BTreeSet<usize>)>,
+    /// Atlases whose `seed` or `transport` a material reads: their rebuilt pixels stay
+    /// within one seed's region.
+    pub discrete: BTreeSet<usize>,
 }
 
 impl Reads {
@@ -51,8 +55,12 @@ impl Generator<'_> {
         atlases: &[Option<Atlas>],
         options: &Options,
     ) -> Result<(usize, String), Vec<Diagnostic>> {
+        let merged = match self.multiscale {
+            true => self.merged_tables(atlases),
+            false => BTreeMap::new(),
+        };
         let pass = match self.multiscale {
-            true => code(&self.reads, atlases).map_err(internal)?,
+            true => code(&self.reads, atlases, &merged).map_err(internal)?,
             false => None,
         };
         let Some(pass) = pass else {
@@ -73,9 +81,42 @@ impl Generator<'_> {
     }
 }
 
+impl Generator<'_> {
+    /// The tables of merged seeds (`reference::coarse::MergedBits`) of the atlases whose
+    /// rebuilt pixels may cross merged frontiers, appended to the `tables` buffer: by
+    /// atlas index, the table's first word and its row's words. Not for an atlas whose
+    /// `seed` or `transport` a material reads (they change at a frontier), a moving one
+    /// (the host rewrites its merges), or one past `MERGED_TABLE_SEEDS` seeds.
+    fn merged_tables(&mut self, atlases: &[Option<Atlas>]) -> BTreeMap<usize, (u32, u32)> {
+        let mut out = BTreeMap::new();
+        for a in self.reads.slots() {
+            let moving = self.moving.iter().any(|m| m.index == a);
+            if moving || self.reads.discrete.contains(&a) {
+                continue;
+            }
+            let Some(bits) = atlases
+                .get(a)
+                .and_then(Option::as_ref)
+                .and_then(atlas_merged_bits)
+            else {
+                continue;
+            };
+            out.insert(a, (self.tables.len() as u32, bits.row as u32));
+            self.tables.extend(bits.words);
+        }
+        out
+    }
+}
+
 /// The pass's code, or `None` when no material reads an atlas (the module is then as
-/// without the pass). `atlases` are the prepared atlases by index.
-pub fn code(reads: &Reads, atlases: &[Option<Atlas>]) -> Result<Option<String>, String> {
+/// without the pass). `atlases` are the prepared atlases by index; `merged`, by atlas
+/// index, the first word and the row's words of the atlases' tables of merged seeds in
+/// the `tables` buffer (an atlas without one rebuilds within one seed's region).
+pub fn code(
+    reads: &Reads,
+    atlases: &[Option<Atlas>],
+    merged: &BTreeMap<usize, (u32, u32)>,
+) -> Result<Option<String>, String> {
     let slots = reads.slots();
     if slots.is_empty() {
         return Ok(None);
@@ -112,13 +153,14 @@ pub fn code(reads: &Reads, atlases: &[Option<Atlas>]) -> Result<Option<String>, 
             .and_then(Option::as_ref)
             .map_or(1.0, |atlas| atlas.params.max_distance);
         let tolerance = super::literal::lit(TOLERANCE * reach);
+        let (merged_at, row) = merged.get(&a).copied().unwrap_or((0, 0));
         let _ = write!(
             pixel,
             "// Atlas {a}'s sample where a material of id m reads it at p: rebuilt from the
 // multi-scale pass's coarse samples (coarse_rebuild) in a render pixel where they agree,
 // walked elsewhere.
 fn atlas_{a}_pixel(p: vec3<f32>, m: i32) -> AtlasSample {{
-    let r = coarse_rebuild({k}u, p, m, {tolerance});
+    let r = coarse_rebuild({k}u, p, m, {tolerance}, {merged_at}u, {row}u);
     if (r.status != f32(COARSE_WALK)) {{
         return r;
     }}

@@ -36,6 +36,9 @@ pub struct Uses {
     pub textures: Vec<TextureUse>,
     /// Atlas indices read by the expressions generated since the last reset.
     pub atlases: std::collections::BTreeSet<AtlasId>,
+    /// Atlases whose `seed` or `transport` some expression read, ever (not reset): the
+    /// multi-scale pass keeps their rebuilt pixels within one seed's region.
+    pub discrete: std::collections::BTreeSet<AtlasId>,
     /// While set, atlas uv and position are generated displaced by these WGSL
     /// expressions: the footprint of a pixel, for texture derivatives.
     pub offset: Option<(String, String)>,
@@ -124,6 +127,9 @@ fn field_expr_inner(v: &Value, tex: &mut Uses) -> Result<String, Unsupported> {
             FieldExpr::Input(SurfaceInput::Normal) => String::from("n"),
             FieldExpr::Atlas { atlas, attr } => {
                 tex.atlases.insert(*atlas);
+                if matches!(attr, AtlasAttr::Transport | AtlasAttr::Seed) {
+                    tex.discrete.insert(*atlas);
+                }
                 let name = match attr {
                     AtlasAttr::Uv => "uv",
                     AtlasAttr::Distance => "distance",

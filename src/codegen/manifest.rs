@@ -34,8 +34,9 @@ pub struct Manifest {
     /// Each texture binding's image, colour space, wrap mode, filter and mip chain.
     #[serde(serialize_with = "textures_json")]
     pub textures: Vec<TextureUse>,
-    /// The contents of the `tables` storage buffer (the atlases' seed-grid lists and the
-    /// groups' trees and leaf records; f32 values as their bits), which the runtime
+    /// The contents of the `tables` storage buffer (the atlases' seed-grid lists, the
+    /// multi-scale pass's tables of merged seeds, and the groups' trees and leaf records;
+    /// f32 values as their bits), which the runtime
     /// uploads as they are; empty, with no binding, when the module has neither.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub tables: Vec<u32>,

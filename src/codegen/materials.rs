@@ -42,6 +42,9 @@ impl Generator<'_> {
             let _ = writeln!(self.out, "        case {case}: {{\n{body}        }}");
             let read = uses.atlases.iter().map(|a| a.index()).collect();
             self.reads.by_material.push((case, read));
+            self.reads
+                .discrete
+                .extend(uses.discrete.iter().map(|a| a.index()));
             let item_span = self.program.def(m.def).item_span;
             self.region(start, Some(item_span), Definition::Material(m.name.clone()));
         }

@@ -9,8 +9,12 @@
 //! and an affine map of their positions in that plane fits their uv within
 //! [`TOLERANCE`] of the atlas's reach. The sample is then that least-squares map's at
 //! the pixel's point: uv, and the distance, frames and weight by the same weights.
+//!
+//! Where no material reads the atlas's `seed` or `transport`, the four may also have
+//! different nearest seeds, every two of them merged ([`MergedBits`]): Alg. 2 blends
+//! merged seeds across their frontier, so the fit sees a smooth uv there too.
 
-use crate::uv::{Sample, Status};
+use crate::uv::{Atlas, Sample, Status};
 use glam::{DVec2, DVec3};
 
 /// The coarse grid's spacing in pixels: the pass walks one pixel in `STEP²` (and the
@@ -44,12 +48,33 @@ pub struct Corner {
 /// (in the order (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)), with the uv tolerance
 /// `tolerance` (in uv units: [`TOLERANCE`] times the reach); `None` where they do not
 /// agree and the pixel walks.
-pub fn rebuild(c: &[Corner; 4], p: DVec3, material: i32, tolerance: f64) -> Option<Sample> {
-    let seed = c[0].sample.seed;
+///
+/// `merged` says whether two nearest seeds may meet within a patch: Alg. 2 blends the
+/// seeds of a merge across their frontier, so the uv, distance and frames stay
+/// continuous there ([`across_merges`]); [`same_seed`] allows none. The sample then takes
+/// the seed, like the transport, of the corner that weighs most at `p`.
+pub fn rebuild(
+    c: &[Corner; 4],
+    p: DVec3,
+    material: i32,
+    tolerance: f64,
+    merged: &dyn Fn(usize, usize) -> bool,
+) -> Option<Sample> {
     if c.iter()
-        .any(|k| k.material != material || k.sample.status != Status::Ok || k.sample.seed != seed)
+        .any(|k| k.material != material || k.sample.status != Status::Ok)
     {
         return None;
+    }
+    let seeds: Vec<usize> = c.iter().filter_map(|k| k.sample.seed).collect();
+    if seeds.len() != 4 {
+        return None;
+    }
+    for i in 0..4 {
+        for j in i + 1..4 {
+            if seeds[i] != seeds[j] && !merged(seeds[i], seeds[j]) {
+                return None;
+            }
+        }
     }
     let pos: Vec<DVec3> = c.iter().map(|k| k.position).collect();
     let mid = (pos[0] + pos[1] + pos[2] + pos[3]) * 0.25;
@@ -109,5 +134,75 @@ pub fn rebuild(c: &[Corner; 4], p: DVec3, material: i32, tolerance: f64) -> Opti
     out.tangent = (0..4).map(|k| w[k] * c[k].sample.tangent).sum();
     out.bitangent = (0..4).map(|k| w[k] * c[k].sample.bitangent).sum();
     out.transport = c[heaviest].sample.transport;
+    out.seed = c[heaviest].sample.seed;
     Some(out)
+}
+
+/// The strict rule of [`rebuild`]: the four corners' nearest seed is one seed.
+pub fn same_seed(_: usize, _: usize) -> bool {
+    false
+}
+
+/// The rule across merges: seeds `i` and `j` meet where `bits` ([`merged_bits`]) says
+/// they are merged.
+pub fn across_merges(bits: &MergedBits) -> impl Fn(usize, usize) -> bool + '_ {
+    move |i, j| bits.get(i, j)
+}
+
+/// The most seeds an atlas may have for the rebuild to cross its merged frontiers: the
+/// table of merged pairs ([`MergedBits`]) holds seeds² bits, 128 KiB at this count.
+/// An atlas with more rebuilds within one seed's region only.
+pub const MERGED_TABLE_SEEDS: usize = 1024;
+
+/// Which of an atlas's seeds are merged, as a bit table: row i holds `row` words, bit j
+/// of the row (word j / 32, bit j % 32) set where i and j are merged or i = j. The
+/// shader reads the same words from the `tables` buffer (`coarse_merged`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergedBits {
+    pub row: usize,
+    pub words: Vec<u32>,
+}
+
+impl MergedBits {
+    pub fn get(&self, i: usize, j: usize) -> bool {
+        let word = i * self.row + j / 32;
+        self.words
+            .get(word)
+            .is_some_and(|w| (w >> (j % 32)) & 1 == 1)
+    }
+}
+
+/// The table of `seeds` seeds merged along `edges` (pairs of seed indices, either
+/// order); `None` past [`MERGED_TABLE_SEEDS`] seeds, or with fewer than two.
+pub fn merged_bits(
+    seeds: usize,
+    edges: impl IntoIterator<Item = (usize, usize)>,
+) -> Option<MergedBits> {
+    if !(2..=MERGED_TABLE_SEEDS).contains(&seeds) {
+        return None;
+    }
+    let row = seeds.div_ceil(32);
+    let mut words = vec![0u32; row * seeds];
+    let mut set = |i: usize, j: usize| words[i * row + j / 32] |= 1 << (j % 32);
+    for i in 0..seeds {
+        set(i, i);
+    }
+    for (i, j) in edges {
+        if i < seeds && j < seeds {
+            set(i, j);
+            set(j, i);
+        }
+    }
+    Some(MergedBits { row, words })
+}
+
+/// [`merged_bits`] of an atlas's merge graph.
+pub fn atlas_merged_bits(atlas: &Atlas) -> Option<MergedBits> {
+    let edges = atlas
+        .graph
+        .neighbors
+        .iter()
+        .enumerate()
+        .flat_map(|(i, list)| list.iter().map(move |&(j, _)| (i, j)));
+    merged_bits(atlas.seeds.len(), edges)
 }

@@ -639,13 +639,12 @@ fn templates_are_filled_completely_and_validate() {
     let src = std::fs::read_to_string(dir.join("plate.sdf")).unwrap();
     for walk in [codegen::WalkForm::Unrolled, codegen::WalkForm::Loop] {
         for seed_grid in [codegen::SeedGridChoice::On, codegen::SeedGridChoice::Off] {
-            // With the multi-scale pass's template too, and the view as pipeline
-            // constants (validated in their colour form as well).
+            // With the multi-scale pass's template too (the view's pipeline constants,
+            // in every module, are validated in their default form as well).
             let options = codegen::Options {
                 walk,
                 seed_grid,
                 multiscale: seed_grid == codegen::SeedGridChoice::On,
-                view_constants: walk == codegen::WalkForm::Loop,
                 ..Default::default()
             };
             let m = generate_with(&src, Some(&dir), &options).unwrap();

@@ -1,18 +1,18 @@
-//! The view mode and the atlas AOV's switch as pipeline constants (`codegen::views`,
-//! `Options::view_constants`): `sdfc render`, the viewer and the benchmarks build one
-//! pipeline per view, so that the driver compiles that view's code alone. Every view
-//! must draw the same picture, to the byte, as the module that reads the view from its
-//! globals (what `compile` and `export-web` write for hosts), and each view's pipeline
-//! is built once, at its first frame.
+//! The view mode and the atlas AOV's switch as pipeline constants (`codegen::views`):
+//! every module declares `SCENE_VIEW` and `SCENE_ATLAS_AOV` (default -1: read from the
+//! globals). `sdfc render`, the viewer and the benchmarks build one pipeline per view,
+//! so that the driver compiles that view's code alone; a host that sets no constant
+//! draws every view with one pipeline. Both must draw the same picture, and each view's
+//! pipeline is built once, at its first frame.
 
 use sdfc::choice::Choice;
 use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver;
-use sdfc::gpu::{gpu_for_tests, Renderer, ViewMode};
+use sdfc::gpu::{gpu_for_tests, Gpu, Renderer, ViewMode};
 
 mod common;
 
-fn module(src: &str, view_constants: bool) -> sdfc::codegen::Module {
+fn module(src: &str, tiles: bool) -> sdfc::codegen::Module {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let a = driver::check(src, Some(&dir));
     assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
@@ -20,8 +20,7 @@ fn module(src: &str, view_constants: bool) -> sdfc::codegen::Module {
         &a,
         &Options {
             walk: WalkForm::Loop,
-            tiles: true,
-            view_constants,
+            tiles,
             ..Default::default()
         },
     )
@@ -35,52 +34,155 @@ fn robot() -> String {
 }
 
 #[test]
-fn only_a_module_asked_for_them_has_the_view_constants() {
+fn every_module_declares_the_view_constants_and_its_manifest_says_so() {
     let src = robot();
-    let runtime = module(&src, false);
-    assert!(!runtime.view_constants);
-    assert!(!runtime.wgsl.contains("override SCENE_VIEW"));
-    assert!(runtime
+    let m = module(&src, false);
+    assert!(m.wgsl.contains("override SCENE_VIEW: i32 = -1;"));
+    assert!(m.wgsl.contains("override SCENE_ATLAS_AOV: i32 = -1;"));
+    assert!(m
         .wgsl
-        .contains("let view = i32(g.resolution.w) + opaque;"));
-    let constant = module(&src, true);
-    assert!(constant.view_constants);
-    assert!(constant.wgsl.contains("override SCENE_VIEW: i32 = 0;"));
-    assert!(constant
-        .wgsl
-        .contains("override SCENE_ATLAS_AOV: bool = false;"));
-    assert!(constant.wgsl.contains("let view = SCENE_VIEW;"));
-    // Neither the view nor the AOV switch is read from the globals any more.
-    assert!(!constant.wgsl.contains("g.resolution.w"));
-    assert!(!constant.wgsl.contains("g.camera_forward.w"));
-    // What a host gets is unchanged: `sdfc compile` leaves them out.
+        .contains("let view = select(i32(g.resolution.w) + opaque, SCENE_VIEW, SCENE_VIEW >= 0);"));
+    let names: Vec<_> = m
+        .manifest
+        .pipeline_constants
+        .iter()
+        .map(|c| c.name)
+        .collect();
+    assert_eq!(names, ["SCENE_VIEW", "SCENE_ATLAS_AOV"]);
+    assert!(m
+        .manifest
+        .pipeline_constants
+        .iter()
+        .all(|c| c.default == -1 && c.ty == "i32"));
+    // What `sdfc compile` writes for hosts has them too, and the other languages get
+    // the defaults (naga's back ends take no pipeline constants).
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("robot.wgsl");
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/robot.sdf");
-    let (code, _, err) = common::sdfc(&[
-        "compile",
-        scene.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    assert!(!std::fs::read_to_string(&out).unwrap().contains("override"));
+    for (target, file) in [
+        ("wgsl", "robot.wgsl"),
+        ("msl", "robot.metal"),
+        ("spirv", "robot.spv"),
+    ] {
+        let out = dir.path().join(file);
+        let (code, _, err) = common::sdfc(&[
+            "compile",
+            scene.to_str().unwrap(),
+            "--target",
+            target,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{target}: {err}");
+        let bytes = std::fs::read(&out).unwrap();
+        let text = String::from_utf8_lossy(&bytes);
+        assert_eq!(
+            text.contains("override SCENE_VIEW"),
+            target == "wgsl",
+            "{target}"
+        );
+    }
 }
 
+/// Draws `scene` (a host's `SceneRenderer`, no pipeline constant set) into a
+/// `width` × `height` sRGB target and reads it back.
+fn host_frame(gpu: &Gpu, scene: &sdfc::SceneRenderer, (width, height): (u32, u32)) -> Vec<u8> {
+    let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("host frame"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let row = (4 * width).div_ceil(256) * 256;
+    let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("host readback"),
+        size: (row * height) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let view = target.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("host"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        scene.draw(&mut pass);
+    }
+    encoder.copy_texture_to_buffer(
+        target.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(height),
+            },
+        },
+        target.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    readback
+        .slice(..)
+        .map_async(wgpu::MapMode::Read, |r| r.unwrap());
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .unwrap();
+    let data = readback.slice(..).get_mapped_range().unwrap();
+    let mut pixels = Vec::new();
+    for y in 0..height as usize {
+        let start = y * row as usize;
+        pixels.extend_from_slice(&data[start..start + 4 * width as usize]);
+    }
+    pixels
+}
+
+/// Every view (15 of them; `level` is for baked meshes), with and without the atlas
+/// AOV: the runtime's pipeline per view (the constants set) draws what one pipeline
+/// with the defaults draws from the globals' view, to the byte (a `Renderer` built with
+/// the defaults, for the AOVs too) and within one 8-bit level against a host's
+/// `SceneRenderer` (its `fs_main`); each view's pipeline is built at its first frame.
 #[test]
 fn every_view_draws_the_same_with_the_view_as_a_constant() {
     let Some(gpu) = gpu_for_tests() else { return };
     let src = robot();
     let here = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let runtime = Renderer::new(&gpu, &module(&src, false), &here).unwrap();
-    let constant = Renderer::new(&gpu, &module(&src, true), &here).unwrap();
+    let m = module(&src, false);
+    let constant = Renderer::new(&gpu, &m, &here).unwrap();
+    let runtime = Renderer::new(&gpu, &m, &here).unwrap();
+    runtime.set_views_from_globals(true);
     let a = driver::check(&src, Some(&here));
-    let mut view = common::scene_view(&a, (48, 64));
+    let textures = sdfc::Textures::load(&a.program).unwrap();
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let host = sdfc::SceneRenderer::new(&gpu.device, &gpu.queue, &m, &textures, format).unwrap();
+    let (w, h) = (48, 64);
+    let mut view = common::scene_view(&a, (w, h));
+    // The runtime form's one pipeline, built at its first frame and never again.
+    let warm = runtime
+        .frames(&gpu, &view, ViewMode::Normal, 0, 1)
+        .unwrap()
+        .0;
+    assert!(warm.timings.pipeline_built.is_some());
     for aov in [false, true] {
         view.atlas_aov = aov;
         for &(mode, name, _) in ViewMode::CHOICES {
             if mode == ViewMode::Level {
-                // Baked meshes only.
                 continue;
             }
             let a = runtime.frames(&gpu, &view, mode, 0, 1).unwrap().0;
@@ -98,8 +200,6 @@ fn every_view_draws_the_same_with_the_view_as_a_constant() {
                 );
             }
             assert_eq!(first.color, again.color, "{what}: drawn again");
-            // One pipeline for every view where the globals hold it; else each view's
-            // own, built at its first frame (the renderer's first is colour, no AOV).
             assert!(a.timings.pipeline_built.is_none(), "{what}");
             let first_is_built = mode != ViewMode::Color || aov;
             assert_eq!(
@@ -108,6 +208,20 @@ fn every_view_draws_the_same_with_the_view_as_a_constant() {
                 "{what}"
             );
             assert!(again.timings.pipeline_built.is_none(), "{what}");
+            if !aov {
+                host.set_globals(&gpu.queue, &sdfc::globals(&view, mode));
+                let theirs = host_frame(&gpu, &host, (w, h));
+                let worst = common::worst_byte_difference(&theirs, &first.color);
+                assert!(
+                    worst <= 1,
+                    "{what}: the host's frame differs by {worst}/255"
+                );
+                let distinct: std::collections::HashSet<&[u8]> = theirs.chunks(4).collect();
+                assert!(
+                    mode != ViewMode::Color || distinct.len() > 100,
+                    "{what}: a picture, not a clear"
+                );
+            }
         }
     }
 }

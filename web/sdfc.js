@@ -5,7 +5,8 @@
 // The bind group layout is built from the manifest's bindings whose `used_by` names
 // the render entry points, and nothing else. A module with the multi-scale atlas pass
 // (the manifest's `coarse`) also gets its compute pipeline, which `prepare` records
-// before each draw, as the manifest says.
+// before each draw, as the manifest says. Each view drawn gets its own render pipeline
+// (the manifest's `pipeline_constants`).
 
 const KINDS = {
   "uniform": { buffer: { type: "uniform" } },
@@ -114,12 +115,29 @@ export class SdfcScene {
     });
     this.group = this.groupWith(noSamples);
     const pipelineLayout = device.createPipelineLayout({ bindGroupLayouts: [layout] });
-    this.pipeline = device.createRenderPipeline({
-      label: "sdfc scene",
-      layout: pipelineLayout,
-      vertex: { module: this.module, entryPoint: "vs_main" },
-      fragment: { module: this.module, entryPoint: "fs_main", targets: [{ format }] },
-    });
+    // A render pipeline per view drawn, built at its first draw: the view (the
+    // globals' resolution.w) is a pipeline constant (the manifest's
+    // pipeline_constants), so that the driver compiles that view's code alone; fs_main
+    // has no atlas AOV target, so that switch is off. A module without the constants
+    // draws every view with one pipeline.
+    const declared = new Set((manifest.pipeline_constants || []).map((c) => c.name));
+    const perView = declared.has("SCENE_VIEW") && declared.has("SCENE_ATLAS_AOV");
+    this.pipelines = new Map();
+    this.pipelineFor = (view) => {
+      const key = perView ? view : 0;
+      if (!this.pipelines.has(key)) {
+        const constants = perView ? { SCENE_VIEW: view, SCENE_ATLAS_AOV: 0 } : {};
+        this.pipelines.set(key, device.createRenderPipeline({
+          label: `sdfc scene, view ${key}`,
+          layout: pipelineLayout,
+          vertex: { module: this.module, entryPoint: "vs_main" },
+          fragment: { module: this.module, entryPoint: "fs_main", targets: [{ format }], constants },
+        }));
+      }
+      return this.pipelines.get(key);
+    };
+    this.view = 0;
+    this.pipelineFor(0);
     if (this.coarse) {
       this.coarsePipeline = device.createComputePipeline({
         label: "sdfc coarse",
@@ -181,12 +199,14 @@ export class SdfcScene {
   /// Writes the Globals block: nine vec4 (the manifest's `globals` say what each holds).
   setGlobals(globals) {
     this.device.queue.writeBuffer(this.globals, 0, new Float32Array(globals.flat()));
+    // The view the next draw's pipeline is built for (resolution.w).
+    this.view = Math.max(0, Math.round(globals[7][3]));
   }
 
   /// Records the full-screen draw into a render pass (with the multi-scale pass, the
   /// samples of the `prepare` just before it, else every pixel walks).
   draw(pass) {
-    pass.setPipeline(this.pipeline);
+    pass.setPipeline(this.pipelineFor(this.view));
     pass.setBindGroup(0, this.fresh ? this.framed.group : this.group);
     this.fresh = false;
     pass.draw(3);

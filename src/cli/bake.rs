@@ -254,7 +254,6 @@ pub fn run(args: BakeArgs) -> ExitCode {
         differences: false,
         tiles: false,
         multiscale: false,
-        view_constants: false,
     };
     let (_, analysis, compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &codegen_options) {

@@ -70,7 +70,6 @@ fn frame_bench(args: &BenchArgs, scene: &Path) -> Result<(), ExitCode> {
     // As `sdfc render` draws it: large unions traced per screen tile.
     let base = Options {
         tiles: true,
-        view_constants: true,
         ..Default::default()
     };
     let (source, analysis, unrolled) = compile::build(scene, args.shape.as_deref(), &base)?;

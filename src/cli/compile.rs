@@ -98,7 +98,6 @@ pub fn run(args: CompileArgs) -> ExitCode {
         differences: false,
         tiles: false,
         multiscale: args.multiscale,
-        view_constants: false,
     };
     let coarse = args.multiscale && args.entry == "cs_coarse";
     if args.target == Target::Glsl

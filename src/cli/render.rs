@@ -76,7 +76,6 @@ pub fn run(args: RenderArgs) -> ExitCode {
         differences: args.gradients.differences(),
         tiles: !args.no_tiles,
         multiscale: args.multiscale.first(),
-        view_constants: true,
     };
     let (source, analysis, mut compiled) =
         match compile::build(&args.scene, args.shape.as_deref(), &options) {

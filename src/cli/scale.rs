@@ -198,7 +198,6 @@ fn paired(
     let options = Options {
         walk: WalkForm::Loop,
         tiles: true,
-        view_constants: true,
         ..Default::default()
     };
     let fail = |e: sdfc::gpu::GpuError| {
@@ -297,7 +296,6 @@ fn measure(
     let options = Options {
         walk: WalkForm::Loop,
         tiles: true,
-        view_constants: true,
         ..Default::default()
     };
     let mut compiles = Vec::new();

@@ -80,10 +80,7 @@ impl Bench<'_> {
     ) -> Result<(Duration, Duration), ExitCode> {
         let analysis = checked(name, source)?;
         // As `sdfc render` draws it: the colour view's pipeline alone.
-        let options = &Options {
-            view_constants: true,
-            ..options.clone()
-        };
+        let options = &Options { ..options.clone() };
         let module = driver::compile(&analysis, options)
             .map_err(|e| compile::report(name, source, e))?
             .module;

@@ -48,6 +48,24 @@ pub struct Manifest {
     /// generated with it (`sdfc compile --multiscale`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coarse: Option<CoarsePass>,
+    /// The module's pipeline-overridable constants that a host may set when it builds a
+    /// render pipeline (`codegen::views`: the view, and whether the atlas AOV is
+    /// written); a host that sets none gets each one's default.
+    pub pipeline_constants: Vec<PipelineConstant>,
+}
+
+/// A pipeline-overridable constant of the module (WGSL's `override`), set through the
+/// pipeline's `constants` (WebGPU's `GPUProgrammableStage.constants`, wgpu's
+/// `PipelineCompilationOptions::constants`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PipelineConstant {
+    pub name: &'static str,
+    /// Its WGSL type.
+    #[serde(rename = "type")]
+    pub ty: &'static str,
+    pub default: i32,
+    /// What it does, and what its default means.
+    pub meaning: &'static str,
 }
 
 /// How a host runs the multi-scale atlas pass of a module generated with it. Before
@@ -101,13 +119,13 @@ pub const GLOBALS_LAYOUT: &[&str] = &[
 /// What each `Globals` field holds (`shaders/render.wgsl`), in [`GLOBALS_LAYOUT`] order.
 pub const GLOBALS_MEANING: &[&str] = &[
     "xyz: the camera position; w: tan(vertical field of view / 2)",
-    "xyz: the camera's unit forward vector; w: 1 to fill fs_aov's atlas AOV, else 0",
+    "xyz: the camera's unit forward vector; w: 1 to fill fs_aov's atlas AOV, else 0 (read where the pipeline constant SCENE_ATLAS_AOV is -1, its default)",
     "xyz: the camera's unit right vector; w: unused",
     "xyz: the camera's unit up vector; w: unused",
     "xyz: the unit direction towards the sun; w: its intensity",
     "rgb: the sun's colour (linear); w: the ambient strength",
     "rgb: the background colour (linear); w: unused",
-    "x, y: the image size in pixels; z: time in seconds; w: the view (0 colour, 1 normal, 2 depth, 3 steps, 4 uv, 5 checker, 6 status, 7 distance, 8 seeds, 9 blend, 10 distortion, 11 seams, 12 albedo, 14 evals, 15 walked: the multi-scale pass's rebuilt and walked pixels)",
+    "x, y: the image size in pixels; z: time in seconds; w: the view (0 colour, 1 normal, 2 depth, 3 steps, 4 uv, 5 checker, 6 status, 7 distance, 8 seeds, 9 blend, 10 distortion, 11 seams, 12 albedo, 14 evals, 15 walked: the multi-scale pass's rebuilt and walked pixels; read where the pipeline constant SCENE_VIEW is -1, its default)",
     "x: the far distance (rays stop beyond it: the distance across the shape's bounds from the camera); y: the hit epsilon (relative to the ray's length); z: the most sphere-tracing steps; w: the scene's scale (offsets of normals and shadows)",
 ];
 

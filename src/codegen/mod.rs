@@ -79,9 +79,6 @@ pub struct Module {
     /// was generated with `Options::multiscale` and has some: the runtime runs
     /// `cs_coarse` before every frame (`gpu::coarse`). Zero without the pass.
     pub coarse_slots: usize,
-    /// Whether the view mode and the atlas AOV's switch are pipeline constants
-    /// (`Options::view_constants`, `codegen::views`).
-    pub view_constants: bool,
 }
 
 /// The scene definition a region of generated code came from.
@@ -239,13 +236,6 @@ pub struct Options {
     /// (`gpu::coarse`). Off by default, like `tiles`: `sdfc render`, the viewer and
     /// the benchmarks turn it on. No change to a module whose materials read no atlas.
     pub multiscale: bool,
-    /// The view mode and whether the atlas AOV is written are pipeline-overridable
-    /// constants (`codegen::views`), which the runtime sets for each pipeline it builds
-    /// (one per view drawn), instead of values of the globals that every pixel reads:
-    /// on Mesa's software adapter an `if` runs both sides, so every view's code ran at
-    /// every pixel. Off by default, like `tiles`: a host drives every view with one
-    /// pipeline; `sdfc render`, the viewer and the benchmarks turn it on.
-    pub view_constants: bool,
 }
 
 crate::choice::choice_enum! {
@@ -394,13 +384,12 @@ pub fn generate(
         ("bindings", bindings::declarations(&table)),
         ("atlas_aov", aov),
     ];
-    values.extend(views::entry_values(options.view_constants));
+    values.extend(views::entry_values());
     let entry = template::fill(template::ENTRY, &values).map_err(|e| internal(e.to_string()))?;
     g.out.push_str(&entry);
     let mut module = g.finish(target, scene, table, textures, params);
     module.tiling = tiling;
     module.coarse_slots = coarse_slots;
-    module.view_constants = options.view_constants;
     module.manifest.coarse = coarse::contract(&module.manifest.bindings, coarse_slots);
     Ok(module)
 }
@@ -757,6 +746,7 @@ impl Generator<'_> {
             tables: self.tables,
             params,
             coarse: None,
+            pipeline_constants: views::contract(),
         };
         Module {
             wgsl,
@@ -766,7 +756,6 @@ impl Generator<'_> {
             moving: self.moving,
             tiling: None,
             coarse_slots: 0,
-            view_constants: false,
         }
     }
 }

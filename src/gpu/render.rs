@@ -6,6 +6,7 @@ use super::scene_group::{self, Stage};
 use super::texture::{load_texture, sampler};
 use super::{Gpu, GpuError};
 use crate::codegen::bindings::RENDER_GROUP;
+use crate::codegen::views::FROM_GLOBALS;
 use crate::codegen::Module;
 use crate::view::View;
 use std::path::Path;
@@ -109,9 +110,6 @@ pub struct Renderer {
     pipeline: wgpu::RenderPipeline,
     first: Variant,
     others: std::sync::Mutex<std::collections::HashMap<Variant, wgpu::RenderPipeline>>,
-    /// Whether the module's view mode and atlas AOV switch are pipeline constants
-    /// (`codegen::views`): then each view drawn has its own pipeline.
-    view_constants: bool,
     /// The module's WGSL, for the pipelines built after the first.
     wgsl: String,
     /// What the binding table of the manifest binds, slot by slot.
@@ -132,6 +130,8 @@ pub struct Renderer {
     /// that has one, and whether frames run it ([`Renderer::set_multiscale`]).
     coarse: Option<super::coarse::CoarsePass>,
     multiscale: std::sync::atomic::AtomicBool,
+    /// `set_views_from_globals`: one pipeline, the view read from the globals.
+    views_from_globals: std::sync::atomic::AtomicBool,
     formats: [wgpu::TextureFormat; 4],
     /// The time the pipeline took to create (or to find in the device's cache).
     pub pipeline_time: Duration,
@@ -178,8 +178,8 @@ impl Renderer {
     }
 
     /// [`Renderer::new`] with the pipeline of view `first.0`, with the atlas AOV where
-    /// `first.1`, where the module makes those pipeline constants
-    /// (`Options::view_constants`); other views get their pipelines at their first frame.
+    /// `first.1` (pipeline constants: `codegen::views`); other views get their pipelines
+    /// at their first frame.
     pub fn new_for(
         gpu: &Gpu,
         module: &Module,
@@ -204,13 +204,12 @@ impl Renderer {
         let bindings = module.manifest.bindings.clone();
         let started = Instant::now();
         // With tiles, frames without a crowded tile compile the whole-scene paths away.
-        let views = module.view_constants;
         let first = Variant {
-            view: views.then(|| first.0.index() as u32),
-            atlas_aov: views && first.1,
+            view: first.0.index() as i32,
+            atlas_aov: i32::from(first.1),
             crowded: false,
         };
-        let constants = first.constants(views, module.tiling.is_some());
+        let constants = first.constants(module.tiling.is_some());
         let key = super::cache::key("render", (&bindings, formats, &constants), &module.wgsl);
         let ((pipeline, layout, coarse), pipeline_cached) =
             gpu.pipelines.get_or_try(gpu.disk.as_ref(), key, || {
@@ -234,7 +233,6 @@ impl Renderer {
             pipeline,
             first,
             others: Default::default(),
-            view_constants: views,
             wgsl: module.wgsl.clone(),
             bindings,
             layout,
@@ -245,6 +243,7 @@ impl Renderer {
             tiling: module.tiling.clone(),
             coarse,
             multiscale: std::sync::atomic::AtomicBool::new(true),
+            views_from_globals: std::sync::atomic::AtomicBool::new(false),
             formats,
             pipeline_time: started.elapsed(),
             pipeline_cached,
@@ -291,6 +290,15 @@ impl Renderer {
             .store(on, std::sync::atomic::Ordering::Relaxed);
     }
 
+    /// Whether the frames drawn after this use one pipeline for every view, built with
+    /// the view constants' defaults (the view and the atlas AOV switch read from the
+    /// globals, as a host that sets no constant draws: `codegen::views`) instead of a
+    /// pipeline per view (the default). For tests and comparisons.
+    pub fn set_views_from_globals(&self, on: bool) {
+        self.views_from_globals
+            .store(on, std::sync::atomic::Ordering::Relaxed);
+    }
+
     /// Whether the module has the multi-scale atlas pass.
     pub fn has_multiscale(&self) -> bool {
         self.coarse.is_some()
@@ -324,9 +332,20 @@ impl Renderer {
         };
         let group = scene_group::group(d, &self.bindings, Stage::Render, &self.layout, &with)?;
         let mut timings = tiles.map(|t| t.1).unwrap_or_default();
+        let from_globals = self
+            .views_from_globals
+            .load(std::sync::atomic::Ordering::Relaxed);
         let variant = Variant {
-            view: self.view_constants.then(|| mode.index() as u32),
-            atlas_aov: self.view_constants && view.atlas_aov,
+            view: if from_globals {
+                FROM_GLOBALS
+            } else {
+                mode.index() as i32
+            },
+            atlas_aov: if from_globals {
+                FROM_GLOBALS
+            } else {
+                i32::from(view.atlas_aov)
+            },
             crowded: timings.tiles_whole > 0,
         };
         let pipeline = if variant == self.first {
@@ -362,7 +381,7 @@ impl Renderer {
         if let Some(p) = built.get(&variant) {
             return Ok((p.clone(), false));
         }
-        let constants = variant.constants(self.view_constants, self.tiling.is_some());
+        let constants = variant.constants(self.tiling.is_some());
         let p = built_variant(
             gpu,
             (&self.wgsl, &constants),

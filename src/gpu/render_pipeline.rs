@@ -88,19 +88,20 @@ pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
 /// pipeline-overridable constants.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(super) struct Variant {
-    /// The view mode's index, where it is a constant (`codegen::views`).
-    pub(super) view: Option<u32>,
-    /// Whether the atlas AOV is written, where that is a constant.
-    pub(super) atlas_aov: bool,
+    /// The view mode's index (`codegen::views::VIEW`), or -1: read from the globals.
+    pub(super) view: i32,
+    /// Whether the atlas AOV is written (`codegen::views::ATLAS_AOV`): 1 or 0, or -1:
+    /// as the globals say.
+    pub(super) atlas_aov: i32,
     /// Whether a tile's list was too long (`codegen::tiles::CROWDED`), in a module with
     /// per-tile culling.
     pub(super) crowded: bool,
 }
 
 impl Variant {
-    /// The pipeline constants of this variant in a module that declares the view's
-    /// constants or not (`views`) and the crowded tiles' or not (`tiled`).
-    pub(super) fn constants(self, views: bool, tiled: bool) -> Vec<(&'static str, f64)> {
+    /// The pipeline constants of this variant: the view's (every module declares them)
+    /// and, in a module with per-tile culling (`tiled`), the crowded tiles'.
+    pub(super) fn constants(self, tiled: bool) -> Vec<(&'static str, f64)> {
         let mut out = Vec::new();
         if tiled {
             out.push((
@@ -108,16 +109,8 @@ impl Variant {
                 f64::from(u8::from(self.crowded)),
             ));
         }
-        if views {
-            out.push((
-                crate::codegen::views::VIEW,
-                f64::from(self.view.unwrap_or(0)),
-            ));
-            out.push((
-                crate::codegen::views::ATLAS_AOV,
-                f64::from(u8::from(self.atlas_aov)),
-            ));
-        }
+        out.push((crate::codegen::views::VIEW, f64::from(self.view)));
+        out.push((crate::codegen::views::ATLAS_AOV, f64::from(self.atlas_aov)));
         out
     }
 }

@@ -149,7 +149,6 @@ pub fn run(options: Options) -> Result<(), ViewError> {
     let codegen_options = codegen::Options {
         walk: options.walk,
         tiles: true,
-        view_constants: true,
         // Decided with the adapter (`resumed`).
         multiscale: false,
         ..Default::default()

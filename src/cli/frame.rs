@@ -51,19 +51,20 @@ pub fn write_frame(args: &RenderArgs, frame: &Frame, header: Option<String>) -> 
                 t.tiles_whole
             );
         }
+        // The frame's variant (its view, its atlas AOV switch and, where a tile's list
+        // was too long, the crowded tiles' paths), built at its first frame.
         if let Some(built) = t.pipeline_built {
-            if t.tiles_whole > 0 {
-                eprintln!(
-                    "crowded:   the pipeline for crowded tiles built first, {:.2} ms (a tile's list was over {} leaves)",
-                    built.as_secs_f64() * 1e3,
+            let crowded = match t.tiles_whole > 0 {
+                true => format!(
+                    " with the paths for crowded tiles (a tile's list was over {} leaves)",
                     sdfc::gpu::tiles::MAX_PER_TILE
-                );
-            } else {
-                eprintln!(
-                    "view:      the pipeline of this view built first, {:.2} ms",
-                    built.as_secs_f64() * 1e3
-                );
-            }
+                ),
+                false => String::new(),
+            };
+            eprintln!(
+                "built:     this view's pipeline{crowded}, {:.2} ms, at its first frame",
+                built.as_secs_f64() * 1e3
+            );
         }
         if t.coarse_samples > 0 {
             eprintln!(

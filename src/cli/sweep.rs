@@ -79,8 +79,8 @@ impl Bench<'_> {
         options: &Options,
     ) -> Result<(Duration, Duration), ExitCode> {
         let analysis = checked(name, source)?;
-        // As `sdfc render` draws it: the colour view's pipeline alone.
-        let options = &Options { ..options.clone() };
+        // As `sdfc render` draws it: the colour view's pipeline alone (the renderer
+        // sets the view's pipeline constants).
         let module = driver::compile(&analysis, options)
             .map_err(|e| compile::report(name, source, e))?
             .module;

@@ -4,9 +4,9 @@
 //! `camera_forward.w`), so a host that sets no constant switches views with one
 //! pipeline; at 0 or more the pipeline draws that view (the atlas AOV off at 0, on at
 //! 1), and the driver compiles that view's code alone. `sdfc render`, the viewer, the
-//! benchmarks (`gpu::Renderer`), the embedded `SceneRenderer` and the web page's
-//! `sdfc.js` build one pipeline per view they draw; the manifest's
-//! `pipeline_constants` says so to other hosts.
+//! benchmarks (`gpu::Renderer`) and the web page's `sdfc.js` build one pipeline per
+//! view they draw; the embedded `SceneRenderer` builds one with the defaults; the
+//! manifest's `pipeline_constants` tells other hosts.
 //!
 //! Why: on a software adapter (Mesa's lavapipe, Chromium's SwiftShader) an `if` runs
 //! both sides under lane masks, so the debug views' code, which holds a second call of

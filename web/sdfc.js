@@ -199,8 +199,10 @@ export class SdfcScene {
   /// Writes the Globals block: nine vec4 (the manifest's `globals` say what each holds).
   setGlobals(globals) {
     this.device.queue.writeBuffer(this.globals, 0, new Float32Array(globals.flat()));
-    // The view the next draw's pipeline is built for (resolution.w).
-    this.view = Math.max(0, Math.round(globals[7][3]));
+    // The view the next draw's pipeline is built for (resolution.w; the colour view
+    // where that is not a view's number).
+    const view = Math.round(globals[7][3]);
+    this.view = Number.isInteger(view) && view >= 0 ? view : 0;
   }
 
   /// Records the full-screen draw into a render pass (with the multi-scale pass, the

@@ -144,7 +144,7 @@ pub fn run(args: CompileArgs) -> ExitCode {
     let words = compiled.module.manifest.tables.len();
     if words > 0 && args.manifest.is_none() {
         eprintln!(
-            "note: the module reads the `tables` storage buffer ({words} words: seed grids, large unions); `--manifest FILE` writes its contents"
+            "note: the module reads the `tables` storage buffer ({words} words: seed grids, the multi-scale pass's merged seeds, large unions); `--manifest FILE` writes its contents"
         );
     }
     if let Some(path) = &args.manifest {

@@ -16,7 +16,7 @@ use sdfc::sema::builtins::{Kind, BUILTINS};
 use sdfc::sema::math::{Math, MATH};
 use sdfc::sema::Value;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 /// How a math builtin is sampled: its arguments' ranges, as (lo, hi) per float

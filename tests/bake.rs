@@ -2,7 +2,7 @@
 //! CPU reference, and bad input. GPU tests skip loudly without an adapter unless
 //! SDFC_REQUIRE_GPU=1. Bakes are small (256² atlases, coarse grids): lavapipe is slow.
 
-mod common;
+use crate::common;
 
 use common::assert_borders_identical;
 use glam::DVec3;

@@ -3,7 +3,7 @@
 //! and bad input gets a clear message, the documented exit status and no file.
 //! GPU tests skip loudly without an adapter unless SDFC_REQUIRE_GPU=1.
 
-mod common;
+use crate::common;
 
 use common::{assert_borders_identical, gltf_validate, sdfc};
 use sdfc::bake::table::ChartsFile;

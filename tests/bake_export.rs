@@ -2,7 +2,7 @@
 //! glTF-Validator's verdict on it, the reader on broken files, and the .ktx2 against an
 //! independent parser (the `ktx2` crate).
 
-mod common;
+use crate::common;
 
 use common::glb::{join_text, split};
 

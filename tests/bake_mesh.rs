@@ -11,7 +11,7 @@
 //! crease at several grid origins. Today's figures are in docs/baking.md ("The mesh against the zero set");
 //! `--nocapture` prints them.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use sdfc::bake::coverage::to_triangle;

@@ -4,7 +4,7 @@
 //! through the packed lookup matches the same bake in the flat layout.
 //! GPU tests skip loudly without an adapter unless SDFC_REQUIRE_GPU=1.
 
-mod common;
+use crate::common;
 
 use common::assert_borders_identical;
 use sdfc::bake::pipeline::{self, Baked, Options, Quiet, Resolution, Style};

@@ -416,7 +416,7 @@ fn lipschitz_bound_reaches_the_shader() {
     )));
 }
 
-mod common;
+use crate::common;
 use common::sdfc;
 
 #[test]

@@ -6,7 +6,7 @@ use sdfc::driver::{check, Analysis};
 use sdfc::ir::{eval, Op};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn checked(src: &str, dir: Option<&Path>) -> Analysis {

@@ -8,7 +8,7 @@ mod targets;
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 fn corpus() -> Vec<Vec<u8>> {
     let files = common::scene_files();

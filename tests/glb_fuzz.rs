@@ -18,9 +18,9 @@
 //! failure names the seed, the variant's index and kind and what was changed, and
 //! leaves the file (up to 4 MiB) in `target/tmp/glb_fuzz/`. The suite runs a bounded number; the
 //! ignored test runs at least 1,000 in-process and 100 through the binary:
-//! `cargo test --release --test glb_fuzz -- --ignored --nocapture`.
+//! `cargo test --release --test suite glb_fuzz:: -- --ignored --nocapture`.
 
-mod common;
+use crate::common;
 
 use common::glb::{crc32, join_text, split, zlib_zeros};
 
@@ -2511,6 +2511,11 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
 /// first of each kind and a sample through the binary.
 #[test]
 fn hostile_glb_files_are_refused_or_rendered_safely() {
+    // The test process's peak memory is this test's alone.
+    if !crate::common::in_own_process("glb_fuzz::hostile_glb_files_are_refused_or_rendered_safely")
+    {
+        return;
+    }
     campaign(Plan {
         per_kind: 50,
         ok_every: 8,
@@ -2525,8 +2530,12 @@ fn hostile_glb_files_are_refused_or_rendered_safely() {
 /// (textures up to 8192 × 8192, nesting a million deep, inflation bombs of 1 GiB),
 /// and at least 100 through the binary.
 #[test]
-#[ignore = "minutes: cargo test --release --test glb_fuzz -- --ignored --nocapture"]
+#[ignore = "minutes: cargo test --release --test suite glb_fuzz:: -- --ignored --nocapture"]
 fn hostile_glb_files_full_campaign() {
+    // The test process's peak memory is this test's alone.
+    if !crate::common::in_own_process("glb_fuzz::hostile_glb_files_full_campaign") {
+        return;
+    }
     campaign(Plan {
         per_kind: 60,
         ok_every: 4,
@@ -2568,7 +2577,7 @@ fn deep_nesting_is_refused_or_skipped_without_overflowing_the_stack() {
 /// vertices (a 50 MB file) on the last of 1,024 charts in one tile. Within the time
 /// limit, like any other file.
 #[test]
-#[ignore = "a 50 MB file through the binary: cargo test --release --test glb_fuzz -- --ignored"]
+#[ignore = "a 50 MB file through the binary: cargo test --release --test suite glb_fuzz:: -- --ignored"]
 fn a_packed_chart_search_of_a_million_vertices_finishes_in_time() {
     let dir = tempfile::tempdir().unwrap();
     let mut rng = Rng::new(1);

@@ -7,7 +7,7 @@
 //! and a message naming the limit; malformed files stay exit 2. No GPU is needed:
 //! `render` reads the file before it opens an adapter.
 
-mod common;
+use crate::common;
 
 use common::glb::{crc32, join_text, split, zlib_zeros};
 

@@ -8,7 +8,7 @@ use sdfc::ir::{self, eval};
 use sdfc::view::{trace_cpu, View};
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 struct Compiled {
     module: codegen::Module,

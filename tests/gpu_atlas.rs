@@ -15,7 +15,7 @@ use sdfc::uv::{Atlas, Status};
 use sdfc::view::View;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn examples() -> Vec<PathBuf> {

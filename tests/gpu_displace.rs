@@ -13,7 +13,7 @@ use sdfc::reference::material::{MaterialEval, Textures};
 use sdfc::view::{trace_cpu, View};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn example() -> Analysis {

@@ -16,7 +16,7 @@ use sdfc::gpu::{self, gpu_for_tests};
 use sdfc::reference::material::MaterialEval;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 fn analyze(name: &str) -> Analysis {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");

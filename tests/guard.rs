@@ -6,10 +6,10 @@ use glam::DVec3;
 use sdfc::ir::{eval, guard, Shape};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
-mod gen;
+use crate::gen;
 
 /// Every shape of a scene: its named shapes and the render target.
 fn shapes(src: &str, dir: &Path) -> Vec<(String, Shape)> {

@@ -3,7 +3,7 @@
 //! Each scene once gave an internal compiler error, hung or exhausted memory; each now
 //! compiles (naga accepts it) or gets its spanned error, quickly.
 
-mod common;
+use crate::common;
 
 use sdfc::codegen::inline_cost::{inlined_sizes, MAX_INLINED};
 use sdfc::codegen::{self, WalkForm};

@@ -7,7 +7,7 @@ use sdfc::incremental::BackEnd;
 use sdfc::syntax::lexer;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 /// The text with comments and line breaks added between tokens, and spaces doubled.
 fn with_trivia(text: &str) -> String {

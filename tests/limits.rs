@@ -2,7 +2,7 @@
 //! errors, crashed or hung. Each now either compiles (naga accepts it) or gets its
 //! spanned error, and the depth limits hold at the limit and just beyond it.
 
-mod common;
+use crate::common;
 
 use sdfc::driver::check_all;
 use sdfc::syntax::parser::MAX_NESTING;

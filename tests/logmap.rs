@@ -14,7 +14,7 @@ fn atlas(src: &str) -> Atlas {
     Atlas::prepare(def, &shape).unwrap().with_reference_steps()
 }
 
-mod common;
+use crate::common;
 use common::Rng;
 
 #[test]

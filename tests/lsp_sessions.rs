@@ -20,14 +20,14 @@
 //! A session comes from one `u64` seed (what the client sends, not the server's
 //! timing). A failing session's messages are written, framed, to
 //! `target/tmp/lsp-session-SEED.txt` (`sdfc lsp < FILE` replays them);
-//! `SDFC_LSP_SEED=N cargo test --release --test lsp_sessions one_session --
+//! `SDFC_LSP_SEED=N cargo test --release --test suite lsp_sessions::one_session --
 //! --nocapture` runs session N alone. The 500-session run: `cargo test --release
-//! --test lsp_sessions -- --ignored --nocapture` (`SDFC_LSP_SESSIONS` sets the count,
+//! --test suite lsp_sessions:: -- --ignored --nocapture` (`SDFC_LSP_SESSIONS` sets the count,
 //! `SDFC_LSP_JOBS` how many run at a time).
 
 #[allow(unused)]
-mod gen;
-mod mutate;
+use crate::gen;
+use crate::mutate;
 
 use gen::Rng;
 use serde_json::{json, Value};

@@ -5,7 +5,7 @@
 //! in wgpu on the software adapter); `fs_main` fits WebGPU's default limits. And the
 //! embedding example draws what `sdfc render` draws (below).
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};

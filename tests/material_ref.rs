@@ -12,7 +12,7 @@ use sdfc::reference::material::{
 };
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn checked(src: &str) -> Analysis {

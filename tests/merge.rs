@@ -8,7 +8,7 @@ use sdfc::ir::eval;
 use sdfc::uv::{Atlas, Search, Status};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 /// The first atlas of a scene that checks with no diagnostics at all.

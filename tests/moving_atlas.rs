@@ -9,7 +9,7 @@ use sdfc::access::Access;
 use sdfc::gpu::{gpu_for_tests, Renderer, ViewMode};
 use sdfc::view::View;
 
-mod common;
+use crate::common;
 
 /// An ellipsoid whose x radius is a parameter, with a merged atlas of three seeds on it
 /// (front, the right side, the top), textured by a checker on its uv.

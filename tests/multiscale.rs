@@ -11,7 +11,7 @@ use sdfc::gpu::{gpu_for_tests, Frame, Gpu, Renderer, ViewMode};
 use sdfc::view::View;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 /// The share of rebuilt pixels, the rebuilt uv's error against the walk (99th
 /// percentile and largest, as fractions of the reach) and the colour PSNR.

@@ -21,22 +21,22 @@
 //!
 //! Every case comes from one `u64` seed: `SDFC_MUT_SEED=N cargo test --release --test
 //! mutations one_mutation -- --nocapture` prints case N's text and what it gave. The
-//! 10,000-mutation run: `cargo test --release --test mutations -- --ignored
+//! 10,000-mutation run: `cargo test --release --test suite mutations:: -- --ignored
 //! --nocapture` (`SDFC_MUT_COUNT` sets the count); it shrinks each distinct failure.
 
+use crate::common::quiet::caught;
 #[allow(unused)]
-mod gen;
-mod mutate;
+use crate::gen;
+use crate::mutate;
 
 #[path = "../fuzz/fuzz_targets/targets.rs"]
 mod targets;
 
 use gen::Rng;
 use mutate::{case, examples, examples_dir, lex, Case};
-use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::sync::{mpsc, Once};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 /// A case that takes longer than this is a failure (a hang).
@@ -71,40 +71,6 @@ enum Outcome {
     Ok(Stats),
     /// Where (check_all, E0900, span, format, seeds, hang) and what.
     Failed(&'static str, String),
-}
-
-thread_local! {
-    static PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
-}
-
-/// Panics are caught per stage; the hook keeps the message and place, quietly.
-fn quiet_panics() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        std::panic::set_hook(Box::new(|info| {
-            let msg = if let Some(s) = info.payload().downcast_ref::<&str>() {
-                s.to_string()
-            } else if let Some(s) = info.payload().downcast_ref::<String>() {
-                s.clone()
-            } else {
-                "(a panic without a message)".to_string()
-            };
-            let place = info
-                .location()
-                .map(|l| format!(" at {}:{}", l.file(), l.line()))
-                .unwrap_or_default();
-            PANIC.with(|p| *p.borrow_mut() = Some(format!("{msg}{place}")));
-        }));
-    });
-}
-
-/// Runs `f`, turning a panic into its message.
-fn caught<T>(f: impl FnOnce() -> T) -> Result<T, String> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|_| {
-        PANIC
-            .with(|p| p.borrow_mut().take())
-            .unwrap_or_else(|| "(no message)".to_string())
-    })
 }
 
 /// The properties of one text (see the module docs), on the calling thread.
@@ -196,7 +162,6 @@ fn properties(text: &str, base: &Path, rng: &mut Rng) -> Outcome {
 /// thread has), with the [`HANG`] limit; the case's time with it. A thread that hangs
 /// is left running (the process ends with the test).
 fn run(text: &str, seed: u64, limit: Duration) -> (Outcome, Duration) {
-    quiet_panics();
     let (tx, rx) = mpsc::channel();
     let owned = text.to_string();
     let started = Instant::now();
@@ -592,6 +557,10 @@ fn assert_none(found: &[Found]) {
 /// so the in-suite count went from 1,500 to 500 to keep CI under its 15 minutes).
 #[test]
 fn mutated_examples_check_format_and_place_seeds() {
+    // The process's peak memory is this test's alone.
+    if !crate::common::in_own_process("mutations::mutated_examples_check_format_and_place_seeds") {
+        return;
+    }
     let found = sweep(0, 500, 10, None);
     assert_none(&found);
 }
@@ -601,6 +570,11 @@ fn mutated_examples_check_format_and_place_seeds() {
 #[test]
 #[ignore]
 fn many_mutated_examples_check_format_and_place_seeds() {
+    if !crate::common::in_own_process(
+        "mutations::many_mutated_examples_check_format_and_place_seeds",
+    ) {
+        return;
+    }
     let count = std::env::var("SDFC_MUT_COUNT")
         .ok()
         .and_then(|n| n.parse().ok())

@@ -14,7 +14,7 @@ use sdfc::uv::atlas::tangent_frame;
 use sdfc::uv::Status;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn checked(src: &str) -> Analysis {

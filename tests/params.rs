@@ -10,7 +10,7 @@ use sdfc::ir::eval;
 use sdfc::view::View;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 /// A scene around one number: `{P}` is replaced by a parameter or by the constant.
 struct Case {

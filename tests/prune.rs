@@ -9,7 +9,7 @@ use sdfc::uv::prune::{Pruning, GUARD, WINDOW};
 use sdfc::uv::Atlas;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn atlases(src: &str) -> Vec<Atlas> {

@@ -3,22 +3,21 @@
 //! (`sdfc::driver::check_all`). Each scene must come back without a panic, without an
 //! internal compiler error (`E0900`), with every span inside the text, and in time.
 //!
-//! A failure names its seed; `SDFC_GEN_SEED=N cargo test --test random_scenes one_seed
+//! A failure names its seed; `SDFC_GEN_SEED=N cargo test --test suite random_scenes::one_seed
 //! -- --nocapture` prints that scene and its diagnostics. The 10,000-scene run is
-//! `cargo test --release --test random_scenes ten_thousand -- --ignored`.
+//! `cargo test --release --test suite random_scenes::ten_thousand -- --ignored`.
 //!
 //! The §5 scenes (`gen::section5`: displacement, shell maps, mirrored and refined
 //! atlases, normal maps, textured CSG, atlases on displaced shapes and chains of them)
 //! also go through the loop walk when they check; `section5_random_scenes` runs 400 in
-//! the suite, and `cargo test --release --test random_scenes section5 -- --ignored
+//! the suite, and `cargo test --release --test suite random_scenes::section5 -- --ignored
 //! --nocapture` runs 1,500 (`SDFC_GEN_FIRST`, `SDFC_GEN_COUNT`) with their times and
 //! the peak RSS (`SDFC_GEN_SEED=N SDFC_GEN_S5=1 … one_seed` prints one).
 
-mod gen;
+use crate::gen;
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
-use std::sync::{Mutex, Once};
 use std::time::{Duration, Instant};
 
 /// A scene that takes longer than this is reported as a hang.
@@ -71,29 +70,6 @@ impl Outcome {
             Outcome::Hang => "hang".into(),
         }
     }
-}
-
-static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
-
-/// Panics are caught per scene; the hook keeps the message and place, quietly.
-fn quiet_panics() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        std::panic::set_hook(Box::new(|info| {
-            let msg = if let Some(s) = info.payload().downcast_ref::<&str>() {
-                s.to_string()
-            } else if let Some(s) = info.payload().downcast_ref::<String>() {
-                s.clone()
-            } else {
-                "(a panic without a message)".to_string()
-            };
-            let place = info
-                .location()
-                .map(|l| format!(" at {}:{}", l.file(), l.line()))
-                .unwrap_or_default();
-            *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{msg}{place}"));
-        }));
-    });
 }
 
 fn base_dir() -> PathBuf {
@@ -157,63 +133,68 @@ fn compile_loop(
 /// loop walk (`--walk loop`, what E0118's help suggests), which must not be an internal
 /// error either.
 fn run_with(text: &str, limit: Duration, loop_walk: bool) -> Outcome {
-    quiet_panics();
     let (tx, rx) = mpsc::channel();
     let owned = text.to_string();
     let handle = std::thread::Builder::new()
         .stack_size(8 << 20)
         .spawn(move || {
-            let mut analysis = sdfc::driver::check_all(&owned, Some(&base_dir()));
-            let outcome = if let Some(d) = analysis
-                .diagnostics
-                .iter()
-                .find(|d| d.code == sdfc::codes::E_INTERNAL)
-            {
-                Outcome::Internal(format!("{}: {}", d.message, d.notes.join(" / ")))
-            } else if let Some(why) = bad_span(&owned, &analysis) {
-                Outcome::BadSpan(why)
-            } else {
-                let mut codes: Vec<&'static str> =
-                    analysis.diagnostics.iter().map(|d| d.code).collect();
-                codes.sort();
-                codes.dedup();
-                let first_error = analysis.diagnostics.iter().find(|d| d.is_error()).map(|d| {
-                    let at = d.span().map(|s| owned[s.range()].to_string());
-                    format!("{} {} at {:?}", d.code, d.message, at)
-                });
-                let errors = analysis.has_errors();
-                let mut loop_ok = None;
-                let mut failure = None;
-                if loop_walk && analysis.scene.is_some() {
-                    // A scene that checked has no error but check_all's E0118 (of the
-                    // unrolled module), which would stop `compile` at once.
-                    analysis
-                        .diagnostics
-                        .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
-                    match compile_loop(&analysis) {
-                        Ok(_) => loop_ok = Some(true),
-                        Err(sdfc::driver::CompileError::Internal { diagnostic, .. }) => {
-                            failure = Some(Outcome::Internal(format!(
-                                "with --walk loop: {}: {}",
-                                diagnostic.message,
-                                diagnostic.notes.join(" / ")
-                            )))
+            // A panic is a finding: caught quietly, with its message and place.
+            let outcome = crate::common::quiet::caught(|| {
+                let mut analysis = sdfc::driver::check_all(&owned, Some(&base_dir()));
+                let outcome = if let Some(d) = analysis
+                    .diagnostics
+                    .iter()
+                    .find(|d| d.code == sdfc::codes::E_INTERNAL)
+                {
+                    Outcome::Internal(format!("{}: {}", d.message, d.notes.join(" / ")))
+                } else if let Some(why) = bad_span(&owned, &analysis) {
+                    Outcome::BadSpan(why)
+                } else {
+                    let mut codes: Vec<&'static str> =
+                        analysis.diagnostics.iter().map(|d| d.code).collect();
+                    codes.sort();
+                    codes.dedup();
+                    let first_error = analysis.diagnostics.iter().find(|d| d.is_error()).map(|d| {
+                        let at = d.span().map(|s| owned[s.range()].to_string());
+                        format!("{} {} at {:?}", d.code, d.message, at)
+                    });
+                    let errors = analysis.has_errors();
+                    let mut loop_ok = None;
+                    let mut failure = None;
+                    if loop_walk && analysis.scene.is_some() {
+                        // A scene that checked has no error but check_all's E0118 (of the
+                        // unrolled module), which would stop `compile` at once.
+                        analysis
+                            .diagnostics
+                            .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
+                        match compile_loop(&analysis) {
+                            Ok(_) => loop_ok = Some(true),
+                            Err(sdfc::driver::CompileError::Internal { diagnostic, .. }) => {
+                                failure = Some(Outcome::Internal(format!(
+                                    "with --walk loop: {}: {}",
+                                    diagnostic.message,
+                                    diagnostic.notes.join(" / ")
+                                )))
+                            }
+                            Err(sdfc::driver::CompileError::Scene(d)) => {
+                                loop_ok = Some(false);
+                                failure = bad_span_of(&owned, &d).map(|why| {
+                                    Outcome::BadSpan(format!("with --walk loop: {why}"))
+                                });
+                            }
+                            Err(sdfc::driver::CompileError::Usage(_)) => loop_ok = Some(false),
                         }
-                        Err(sdfc::driver::CompileError::Scene(d)) => {
-                            loop_ok = Some(false);
-                            failure = bad_span_of(&owned, &d)
-                                .map(|why| Outcome::BadSpan(format!("with --walk loop: {why}")));
-                        }
-                        Err(sdfc::driver::CompileError::Usage(_)) => loop_ok = Some(false),
                     }
-                }
-                failure.unwrap_or(Outcome::Ok {
-                    errors,
-                    codes,
-                    first_error,
-                    loop_walk: loop_ok,
-                })
-            };
+                    failure.unwrap_or(Outcome::Ok {
+                        errors,
+                        codes,
+                        first_error,
+                        loop_walk: loop_ok,
+                    })
+                };
+                outcome
+            })
+            .unwrap_or_else(Outcome::Panic);
             let _ = tx.send(outcome);
         })
         .expect("a thread");
@@ -224,11 +205,7 @@ fn run_with(text: &str, limit: Duration, loop_walk: bool) -> Outcome {
         }
         Err(mpsc::RecvTimeoutError::Disconnected) => {
             let _ = handle.join();
-            let msg = LAST_PANIC
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .take()
-                .unwrap_or_else(|| "(no message)".to_string());
+            let msg = "(the thread ended without an outcome)".to_string();
             Outcome::Panic(msg)
         }
         // The thread is left running; the process ends with the test.
@@ -800,6 +777,10 @@ fn max_rss() -> Option<u64> {
 #[test]
 #[ignore = "1,500 §5 scenes: run with --release -- --ignored"]
 fn section5_random_scenes_long() {
+    // The process's peak memory is this test's alone.
+    if !crate::common::in_own_process("random_scenes::section5_random_scenes_long") {
+        return;
+    }
     // A scene over HANG (10 s, the suite's limit) is a failure; it runs until SLOW, so
     // that its time is measured, and beyond that it is reported as a hang (shrunk).
     const SLOW: Duration = Duration::from_secs(20);

@@ -14,7 +14,7 @@ use sdfc::reference::material::normal_map;
 use sdfc::uv::{Atlas, Status};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn checked(src: &str) -> Analysis {

@@ -1,7 +1,7 @@
 //! Limits and safety (docs/limits.md): what sdfc does to the user's files, which
 //! files a scene may read, and how bad input and resource limits are reported.
 
-mod common;
+use crate::common;
 
 use common::{sdfc, sdfc_with_input};
 use std::path::{Path, PathBuf};

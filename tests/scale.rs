@@ -12,7 +12,7 @@ use sdfc::ir::eval;
 use sdfc::view::View;
 use std::time::{Duration, Instant};
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn analysis(src: &str) -> driver::Analysis {

@@ -3,7 +3,7 @@
 //! every example against an independent area-uniform measure, and stretch against the
 //! hand-placed seeds, are in `seeds_coverage.rs`.
 
-mod common;
+use crate::common;
 
 use common::sdfc;
 

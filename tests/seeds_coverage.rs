@@ -12,7 +12,7 @@
 //! the rest sampled evenly), weighted by |∇f| (the shell is 2ε/|∇f| thick, so that
 //! weight makes the density proportional to area), then projected onto the surface.
 
-mod common;
+use crate::common;
 
 use common::{sdfc, Rng};
 use glam::DVec3;

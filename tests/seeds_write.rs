@@ -8,7 +8,7 @@
 //! statements taken out, up to whitespace taken out next to those statements (or just
 //! before the closing brace) and whitespace put in where the statements went.
 
-mod common;
+use crate::common;
 
 #[path = "../fuzz/fuzz_targets/targets.rs"]
 #[allow(dead_code)]

@@ -12,7 +12,7 @@ use sdfc::ir::{eval, Op};
 use sdfc::reference::material::Textures;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn checked(src: &str) -> Analysis {

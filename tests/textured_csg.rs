@@ -13,7 +13,7 @@ use sdfc::ir::eval;
 use sdfc::reference::material::{MaterialEval, MaterialValue};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn example() -> String {

@@ -13,7 +13,7 @@ use sdfc::driver;
 use sdfc::gpu::{gpu_for_tests, tiles, Renderer, ViewMode};
 use sdfc::view::View;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn analysis(src: &str) -> driver::Analysis {

@@ -2,7 +2,7 @@
 //! files, the reload state machine, the orbit camera), then one real window under Xvfb
 //! whose screenshot must match `sdfc render` of the same view.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use sdfc::driver::check;

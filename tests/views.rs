@@ -10,7 +10,7 @@ use sdfc::codegen::{Options, WalkForm};
 use sdfc::driver;
 use sdfc::gpu::{gpu_for_tests, Gpu, Renderer, ViewMode};
 
-mod common;
+use crate::common;
 
 fn module(src: &str, tiles: bool) -> sdfc::codegen::Module {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");

@@ -11,7 +11,7 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::f64::consts::PI;
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn atlas(src: &str) -> Atlas {

@@ -13,7 +13,7 @@
 //! Without Chromium, Node or puppeteer-core the tests say so and skip, unless
 //! `SDFC_REQUIRE_TOOLS=1` (as in CI), which makes that a failure.
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpListener;

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod glb;
+pub mod quiet;
 
 use std::io::Write;
 use std::process::{Command, Stdio};
@@ -360,4 +361,35 @@ pub fn render_as_library(
     let (code, _, err) = sdfc(&[&args[..], extra].concat());
     assert_eq!(code, 0, "{scene}: {err}");
     image::open(out).unwrap().to_rgba8()
+}
+
+/// Whether the calling test, `path` (`FILE::NAME`), runs in a process of its own, as a
+/// test that measures its process's peak memory must: the tests share one binary
+/// (tests/suite.rs). In the suite's process this runs the binary again with only that
+/// test, passes its output on, fails where it fails, and says no (the caller returns);
+/// in that second process it says yes.
+pub fn in_own_process(path: &str) -> bool {
+    const ALONE: &str = "SDFC_TEST_ALONE";
+    if std::env::var(ALONE).as_deref() == Ok(path) {
+        return true;
+    }
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let out = Command::new(exe)
+        .args([path, "--exact", "--include-ignored", "--nocapture"])
+        .args(["--test-threads", "1"])
+        .env(ALONE, path)
+        .output()
+        .expect("the test binary runs again");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    print!("{stdout}");
+    eprint!("{stderr}");
+    assert!(out.status.success(), "{path} failed in its own process");
+    assert!(
+        stdout.contains("test result: ok. 1 passed"),
+        "{path} is not the name of one test: {stdout}"
+    );
+    false
 }

@@ -61,6 +61,8 @@ mod grammar;
 mod guard;
 #[path = "hardening3.rs"]
 mod hardening3;
+#[path = "harness.rs"]
+mod harness;
 #[path = "ide.rs"]
 mod ide;
 #[path = "incremental.rs"]

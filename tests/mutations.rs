@@ -20,7 +20,7 @@
 //! (`mutate::KNOWN_BUGS`).
 //!
 //! Every case comes from one `u64` seed: `SDFC_MUT_SEED=N cargo test --release --test
-//! mutations one_mutation -- --nocapture` prints case N's text and what it gave. The
+//! suite mutations::one_mutation -- --nocapture` prints case N's text and what it gave. The
 //! 10,000-mutation run: `cargo test --release --test suite mutations:: -- --ignored
 //! --nocapture` (`SDFC_MUT_COUNT` sets the count); it shrinks each distinct failure.
 

@@ -127,6 +127,61 @@ fn compile_loop(
     sdfc::driver::compile_shape(analysis, shape, &options)
 }
 
+/// What checking `text` gives (and, with `loop_walk`, compiling it with the loop walk
+/// when it checks), on the calling thread.
+fn outcome_of(text: &str, loop_walk: bool) -> Outcome {
+    let mut analysis = sdfc::driver::check_all(text, Some(&base_dir()));
+    if let Some(d) = analysis
+        .diagnostics
+        .iter()
+        .find(|d| d.code == sdfc::codes::E_INTERNAL)
+    {
+        Outcome::Internal(format!("{}: {}", d.message, d.notes.join(" / ")))
+    } else if let Some(why) = bad_span(text, &analysis) {
+        Outcome::BadSpan(why)
+    } else {
+        let mut codes: Vec<&'static str> = analysis.diagnostics.iter().map(|d| d.code).collect();
+        codes.sort();
+        codes.dedup();
+        let first_error = analysis.diagnostics.iter().find(|d| d.is_error()).map(|d| {
+            let at = d.span().map(|s| text[s.range()].to_string());
+            format!("{} {} at {:?}", d.code, d.message, at)
+        });
+        let errors = analysis.has_errors();
+        let mut loop_ok = None;
+        let mut failure = None;
+        if loop_walk && analysis.scene.is_some() {
+            // A scene that checked has no error but check_all's E0118 (of the
+            // unrolled module), which would stop `compile` at once.
+            analysis
+                .diagnostics
+                .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
+            match compile_loop(&analysis) {
+                Ok(_) => loop_ok = Some(true),
+                Err(sdfc::driver::CompileError::Internal { diagnostic, .. }) => {
+                    failure = Some(Outcome::Internal(format!(
+                        "with --walk loop: {}: {}",
+                        diagnostic.message,
+                        diagnostic.notes.join(" / ")
+                    )))
+                }
+                Err(sdfc::driver::CompileError::Scene(d)) => {
+                    loop_ok = Some(false);
+                    failure = bad_span_of(text, &d)
+                        .map(|why| Outcome::BadSpan(format!("with --walk loop: {why}")));
+                }
+                Err(sdfc::driver::CompileError::Usage(_)) => loop_ok = Some(false),
+            }
+        }
+        failure.unwrap_or(Outcome::Ok {
+            errors,
+            codes,
+            first_error,
+            loop_walk: loop_ok,
+        })
+    }
+}
+
 /// Runs one scene through `check_all` on its own thread (8 MiB of stack, as the main
 /// thread has), with a time limit. With `loop_walk`, a scene that checked (its module
 /// built, or refused as too large for a driver, E0118) is compiled once more with the
@@ -139,62 +194,8 @@ fn run_with(text: &str, limit: Duration, loop_walk: bool) -> Outcome {
         .stack_size(8 << 20)
         .spawn(move || {
             // A panic is a finding: caught quietly, with its message and place.
-            let outcome = crate::common::quiet::caught(|| {
-                let mut analysis = sdfc::driver::check_all(&owned, Some(&base_dir()));
-                let outcome = if let Some(d) = analysis
-                    .diagnostics
-                    .iter()
-                    .find(|d| d.code == sdfc::codes::E_INTERNAL)
-                {
-                    Outcome::Internal(format!("{}: {}", d.message, d.notes.join(" / ")))
-                } else if let Some(why) = bad_span(&owned, &analysis) {
-                    Outcome::BadSpan(why)
-                } else {
-                    let mut codes: Vec<&'static str> =
-                        analysis.diagnostics.iter().map(|d| d.code).collect();
-                    codes.sort();
-                    codes.dedup();
-                    let first_error = analysis.diagnostics.iter().find(|d| d.is_error()).map(|d| {
-                        let at = d.span().map(|s| owned[s.range()].to_string());
-                        format!("{} {} at {:?}", d.code, d.message, at)
-                    });
-                    let errors = analysis.has_errors();
-                    let mut loop_ok = None;
-                    let mut failure = None;
-                    if loop_walk && analysis.scene.is_some() {
-                        // A scene that checked has no error but check_all's E0118 (of the
-                        // unrolled module), which would stop `compile` at once.
-                        analysis
-                            .diagnostics
-                            .retain(|d| d.code != sdfc::codes::E_INLINED_SIZE);
-                        match compile_loop(&analysis) {
-                            Ok(_) => loop_ok = Some(true),
-                            Err(sdfc::driver::CompileError::Internal { diagnostic, .. }) => {
-                                failure = Some(Outcome::Internal(format!(
-                                    "with --walk loop: {}: {}",
-                                    diagnostic.message,
-                                    diagnostic.notes.join(" / ")
-                                )))
-                            }
-                            Err(sdfc::driver::CompileError::Scene(d)) => {
-                                loop_ok = Some(false);
-                                failure = bad_span_of(&owned, &d).map(|why| {
-                                    Outcome::BadSpan(format!("with --walk loop: {why}"))
-                                });
-                            }
-                            Err(sdfc::driver::CompileError::Usage(_)) => loop_ok = Some(false),
-                        }
-                    }
-                    failure.unwrap_or(Outcome::Ok {
-                        errors,
-                        codes,
-                        first_error,
-                        loop_walk: loop_ok,
-                    })
-                };
-                outcome
-            })
-            .unwrap_or_else(Outcome::Panic);
+            let outcome = crate::common::quiet::caught(|| outcome_of(&owned, loop_walk))
+                .unwrap_or_else(Outcome::Panic);
             let _ = tx.send(outcome);
         })
         .expect("a thread");

@@ -267,3 +267,50 @@ fn seeds_write_keeps_the_files_other_text() {
         "{output}"
     );
 }
+
+/// The property's checker itself: the spans of `stmts` in `input`, found by text.
+fn spans_of(input: &str, stmts: &[&str]) -> Vec<Span> {
+    stmts
+        .iter()
+        .map(|s| {
+            let at = input.find(s).unwrap();
+            Span::new(at, at + s.len())
+        })
+        .collect()
+}
+
+/// Found by the 10,000-mutation run (case 1000906): two statements on one line, then a
+/// blank line. Taking the line out and keeping the blank line is the same text as
+/// taking the blank line's newline and keeping the line's, which the greedy alignment
+/// chose; the checker takes either. Taking out a blank line between two lines that
+/// stay, away from any statement, it still refuses.
+#[test]
+fn the_checker_takes_blank_lines_beside_statements_and_no_others() {
+    let input = "atlas a on s {\n    // c\n    seed x = [0, 0, 1]; seed y = [0, 1, 0];\n\n    seed z = [1, 0, 0];\n    // d\n}\n";
+    let spans = spans_of(
+        input,
+        &[
+            "seed x = [0, 0, 1];",
+            "seed y = [0, 1, 0];",
+            "seed z = [1, 0, 0];",
+        ],
+    );
+    let inserted = "    seed s0 = [1, 1, 0];\n";
+    let output = format!("atlas a on s {{\n    // c\n\n    // d\n{inserted}}}\n");
+    let close = input.find('}').unwrap();
+    assert_only_statements_replaced(input, &output, &spans, inserted, close);
+
+    let input =
+        "atlas a on s {\n    steps = 4;\n\n    max_distance = 2;\n    seed x = [0, 0, 1];\n}\n";
+    let spans = spans_of(input, &["seed x = [0, 0, 1];"]);
+    let output = format!("atlas a on s {{\n    steps = 4;\n    max_distance = 2;\n{inserted}}}\n");
+    let close = input.find('}').unwrap();
+    let refused = common::quiet::caught(|| {
+        assert_only_statements_replaced(input, &output, &spans, inserted, close)
+    });
+    let message = refused.expect_err("a blank line away from the statements went");
+    assert!(
+        message.contains("removed away from any statement"),
+        "{message}"
+    );
+}

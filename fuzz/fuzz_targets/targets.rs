@@ -438,7 +438,10 @@ pub fn assert_only_statements_replaced(
         &spans[k..],
         context()
     );
-    // Each run of removed bytes holds a statement or ends at the closing brace.
+    // Each run of removed bytes holds a statement, or lies in whitespace that touches one
+    // or the closing brace. (The alignment is greedy: where a statement's line and a
+    // blank line beside it go, it may keep the statement's newline and take out the
+    // blank line's, which is the same text.)
     let mut x = 0;
     while x < a.len() {
         if !deleted[x] {
@@ -449,8 +452,16 @@ pub fn assert_only_statements_replaced(
         while x < a.len() && deleted[x] {
             x += 1;
         }
+        let (mut l, mut r) = (start, x);
+        while l > 0 && a[l - 1].is_ascii_whitespace() {
+            l -= 1;
+        }
+        while r < a.len() && a[r].is_ascii_whitespace() {
+            r += 1;
+        }
+        let touches = (l > 0 && statement[l - 1]) || (r < a.len() && statement[r]) || r == close;
         assert!(
-            statement[start..x].contains(&true) || x == close,
+            statement[start..x].contains(&true) || touches,
             "whitespace {start}..{x} ({:?}) removed away from any statement\n{}",
             &input[start..x],
             context()

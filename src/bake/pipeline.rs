@@ -3,7 +3,7 @@
 use super::charts::{ChartTable, Samples};
 use super::gpu::{BakePass, Shaded};
 use super::images;
-use super::mesh::{dual_contour, Grid, QuadMesh, MAX_GRID};
+use super::mesh::{adaptive_contour, refine, Grid, QuadMesh, MAX_GRID};
 use super::mips::{self, Texel};
 use super::patches::{self, Patches};
 use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
@@ -67,6 +67,21 @@ pub struct Options {
     pub style: Style,
     /// The longest side of a grown chart, in cells (packed only).
     pub max_chart: usize,
+    /// Whether cells that may hold detail finer than themselves are meshed on a finer
+    /// grid ([`refine`]).
+    pub refine: Refine,
+}
+
+/// Refinement of the mesh where a cell may hold detail finer than itself.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Refine {
+    /// Mesh plainly; where that mesh misses part of the surface (the coverage line),
+    /// mesh again with [`refine::DEFAULT_REFINE`]. Scenes the plain grid holds keep
+    /// their mesh and charts as they were.
+    #[default]
+    Auto,
+    /// Refine this many times (1: never).
+    Times(usize),
 }
 
 impl Default for Options {
@@ -79,6 +94,7 @@ impl Default for Options {
             gutter: 0,
             style: Style::Flat,
             max_chart: DEFAULT_MAX_CHART,
+            refine: Refine::Auto,
         }
     }
 }
@@ -131,6 +147,16 @@ pub struct Report {
     pub grid: [usize; 3],
     /// Mesh quads along a chart's side.
     pub chart_quads: usize,
+    /// Cells meshed on the finer grid, the factor (1: none), and the cells that asked
+    /// for it.
+    pub refined: usize,
+    pub refine: usize,
+    pub refine_wanted: usize,
+    /// With [`Refine::Auto`], what the plain mesh missed, where that made it refine.
+    pub plain_coverage: Option<super::coverage::Coverage>,
+    /// With [`Refine::Auto`], why the refined mesh was not baked (its charts do not
+    /// fit the atlas), where the plain one was.
+    pub refine_dropped: Option<String>,
     pub vertices: usize,
     /// Cells: the chart grid's quads (each a chart in a flat atlas).
     pub cells: usize,
@@ -412,6 +438,14 @@ fn plan(
             "the grid would have {cells} cells along its longest side; the range is 2 to {MAX_GRID} (change --grid or --edge)"
         )));
     }
+    if let Refine::Times(r) = options.refine {
+        if !(1..=refine::MAX_REFINE).contains(&r) {
+            return Err(BakeError::Option(format!(
+                "--refine {r} is not auto or between 1 and {}",
+                refine::MAX_REFINE
+            )));
+        }
+    }
     let m = options.chart_quads;
     if !(1..=MAX_CHART_QUADS).contains(&m) {
         return Err(BakeError::Option(format!(
@@ -450,14 +484,58 @@ pub fn bake<'s>(
     report.chart_quads = m;
 
     // 1. Mesh.
-    let mut quads = contour(shape, &grid, scale, progress)?;
-    report.vertices = quads.vertices.len();
+    let times = match options.refine {
+        Refine::Auto => 1,
+        Refine::Times(r) => r,
+    };
+    let (mut quads, _) = contour(shape, &grid, scale, times, &mut report, progress)?;
     lap(&mut report, "mesh");
     report.coverage = super::coverage::coverage(shape, &quads, bounds);
     lap(&mut report, "coverage");
+    // The plain mesh, kept while a refined one is tried.
+    let mut plain = None;
+    if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
+        report.plain_coverage = Some(report.coverage);
+        let (mut refined, left) = contour(
+            shape,
+            &grid,
+            scale,
+            refine::DEFAULT_REFINE,
+            &mut report,
+            progress,
+        )?;
+        // Fine cells still hold two sheets: part them, where every cell that asks
+        // can be refined that far (the cells asking do not depend on the factor).
+        if left > 0 && report.refine_wanted <= refine::max_refined(refine::MAX_REFINE) {
+            (refined, _) = contour(
+                shape,
+                &grid,
+                scale,
+                refine::MAX_REFINE,
+                &mut report,
+                progress,
+            )?;
+        }
+        plain = Some(std::mem::replace(&mut quads, refined));
+        lap(&mut report, "mesh, refined");
+        report.coverage = super::coverage::coverage(shape, &quads, bounds);
+        lap(&mut report, "coverage");
+    }
 
     // 2. Charts and layout.
-    let (patches, table, atlas) = lay_out_charts(&mut quads, &grid, m, options)?;
+    let (patches, table, atlas) = match (lay_out_charts(&mut quads, &grid, m, options), plain) {
+        // The refined mesh's charts do not fit where the plain mesh's may: bake that,
+        // with the coverage line's warning, as before refinement.
+        (Err(BakeError::Resource(why)), Some(plain)) => {
+            quads = plain;
+            report.refine_dropped = Some(why);
+            report.coverage = report.plain_coverage.take().unwrap_or_default();
+            (report.refine, report.refined) = (1, 0);
+            lay_out_charts(&mut quads, &grid, m, options)?
+        }
+        (laid, _) => laid?,
+    };
+    report.vertices = quads.vertices.len();
     report.cells = table.len();
     report.charts = patches.len();
     report.chart_size = atlas.cell_size();
@@ -513,21 +591,26 @@ pub fn bake<'s>(
     })
 }
 
-/// Stage 1: the mesh of `shape` by dual contouring over `grid`; an error when it has
-/// no quads.
+/// Stage 1: the mesh of `shape` by dual contouring over `grid`, cells with finer
+/// detail `refine` times finer, and how many fine cells still hold two sheets; an
+/// error when it has no quads.
 fn contour(
     shape: crate::ir::Field,
     grid: &Grid,
     scale: f64,
+    refine: usize,
+    report: &mut Report,
     progress: &dyn Progress,
-) -> Result<QuadMesh, BakeError> {
+) -> Result<(QuadMesh, usize), BakeError> {
     progress.stage("mesh", 1);
-    let quads = dual_contour(shape, grid, 1e-5 * scale);
+    let made = adaptive_contour(shape, grid, 1e-5 * scale, refine);
+    (report.refine, report.refined, report.refine_wanted) = (refine, made.refined, made.wanted);
+    let quads = made.mesh;
     progress.finish();
     if quads.quads.is_empty() {
         return Err(BakeError::Empty(grid.cell));
     }
-    Ok(quads)
+    Ok((quads, made.fine_two_sheets))
 }
 
 /// Stage 2: the charts (one a cell, or grown, which turns the quads to their charts'

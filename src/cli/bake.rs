@@ -2,7 +2,7 @@
 
 use super::{compile, exit, BakeArgs};
 use indicatif::{ProgressBar, ProgressStyle};
-use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Resolution};
+use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Refine, Resolution};
 use sdfc::bake::{export, table::ChartsFile};
 use sdfc::fsutil::write_output;
 use sdfc::gpu::Gpu;
@@ -26,6 +26,21 @@ pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
         }
     }
     Ok(out)
+}
+
+/// Parses `--refine`: `auto` or a factor from 1 to [`refine::MAX_REFINE`].
+pub fn parse_refine(s: &str) -> Result<Refine, String> {
+    use sdfc::bake::mesh::refine;
+    if s == "auto" {
+        return Ok(Refine::Auto);
+    }
+    match s.parse::<usize>() {
+        Ok(r) if (1..=refine::MAX_REFINE).contains(&r) => Ok(Refine::Times(r)),
+        _ => Err(format!(
+            "expected auto or a whole number from 1 to {} (fine cells along a refined cell's side), found {s:?}",
+            refine::MAX_REFINE
+        )),
+    }
 }
 
 /// Progress bars on standard error (hidden when it is not a terminal).
@@ -113,6 +128,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         gutter: args.gutter,
         style,
         max_chart: args.max_chart,
+        refine: args.refine,
     })
 }
 
@@ -331,6 +347,31 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         r.chart_quads,
         r.chart_quads
     );
+    if let Some(why) = &r.refine_dropped {
+        eprintln!("refined:        none: the refined mesh's charts do not fit ({why}); baked the plain grid's mesh");
+    }
+    if r.refine > 1 {
+        let capped = if r.refine_wanted > r.refined {
+            format!(
+                " (of {} that asked: the limit is {} fine cells)",
+                r.refine_wanted,
+                sdfc::bake::mesh::refine::MAX_FINE_CELLS
+            )
+        } else {
+            String::new()
+        };
+        let why = match r.plain_coverage {
+            Some(c) => format!(
+                "; the plain grid's mesh missed {:.1} % of the surface",
+                100.0 * c.missed
+            ),
+            None => String::new(),
+        };
+        eprintln!(
+            "refined:        {} cells with detail finer than a cell, meshed {}× finer{capped}{why}",
+            r.refined, r.refine
+        );
+    }
     match l {
         sdfc::bake::ChartLayout::Flat(f) => eprintln!(
             "atlas:          {}×{} flat, {} charts of {}² texels, {} levels (down to 2²){}",
@@ -390,7 +431,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     }
     if c.missed > 0.0 {
         eprintln!(
-            "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; a finer --grid or --edge holds more of it",
+            "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; a finer --grid or --edge, or --refine 8, holds more of it",
             100.0 * c.missed,
         );
     }

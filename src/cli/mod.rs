@@ -457,6 +457,12 @@ pub struct BakeArgs {
     /// image used with 2 texels, 85 % without).
     #[arg(long, value_name = "TEXELS", num_args = 0..=1, require_equals = true, default_value = "0", default_missing_value = "2")]
     pub gutter: u32,
+    /// Mesh the cells that may hold detail finer than themselves (a part thinner than
+    /// a cell, a slit, a wedge sharper than 75°) on a grid R times finer, joined to the
+    /// rest without cracks. `auto` does it (R = 4) only where the plain mesh misses part
+    /// of the surface (the report's "surface held"); 1 never does (docs/baking.md).
+    #[arg(long, value_name = "auto|R", default_value = "auto", value_parser = bake::parse_refine)]
+    pub refine: sdfc::bake::pipeline::Refine,
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]
     pub layout: Layout,

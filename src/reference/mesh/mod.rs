@@ -14,6 +14,8 @@ use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
 use rayon::prelude::*;
 
+pub mod refine;
+
 /// The finest grid a bake may ask for, in cells along the longest side.
 pub const MAX_GRID: usize = 512;
 
@@ -74,6 +76,44 @@ impl Grid {
 
 /// Meshes the zero set of `shape` on `grid`. `tolerance` is the projection's |f| bound.
 pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64) -> QuadMesh {
+    adaptive_contour(shape, grid, tolerance, 1).mesh
+}
+
+/// What [`adaptive_contour`] made: the mesh, and how many cells it refined.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Contoured {
+    pub mesh: QuadMesh,
+    /// The cells meshed on the finer grid.
+    pub refined: usize,
+    /// The cells that asked for it ([`refine::max_refined`] at most are refined).
+    pub wanted: usize,
+    /// Fine cells that still hold two sheets or a sharp wedge (a finer refinement
+    /// would part them).
+    pub fine_two_sheets: usize,
+}
+
+/// Meshes the zero set of `shape` on `grid`, and meshes each cell that may hold detail
+/// finer than itself on a grid `refine` times finer ([`refine`]); `refine` 1 is plain
+/// dual contouring. `tolerance` is the projection's |f| bound.
+pub fn adaptive_contour<'s>(
+    shape: impl Into<Field<'s>>,
+    grid: &Grid,
+    tolerance: f64,
+    refine: usize,
+) -> Contoured {
+    contour_refining(shape, grid, tolerance, refine, None)
+}
+
+/// [`adaptive_contour`], refining the cells `chosen` (indices `i + nx (j + ny k)`, at
+/// most [`refine::max_refined`]) instead of those [`refine::select`] picks: for tests
+/// of the joins between coarse and fine cells.
+pub fn contour_refining<'s>(
+    shape: impl Into<Field<'s>>,
+    grid: &Grid,
+    tolerance: f64,
+    refine: usize,
+    chosen: Option<Vec<usize>>,
+) -> Contoured {
     let shape: Field = shape.into();
     let [nx, ny, nz] = grid.dims;
     let (px, py) = (nx + 1, ny + 1);
@@ -103,7 +143,7 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
     for (v, &c) in active.iter().enumerate() {
         index[c] = v as u32;
     }
-    let mut placed: Vec<Placed> = active
+    let placed: Vec<Placed> = active
         .par_iter()
         .map(|&c| {
             let (i, j, k) = (c % nx, (c / nx) % ny, c / (nx * ny));
@@ -111,7 +151,62 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
         })
         .collect();
 
-    // One quad per sign-changing edge that has four cells around it.
+    let mut chosen = match chosen {
+        _ if refine < 2 => Vec::new(),
+        Some(mut cells) => {
+            cells.retain(|&c| c < nx * ny * nz);
+            cells.sort_unstable();
+            cells.dedup();
+            cells
+        }
+        None => refine::select(shape, grid, &field, &index, &placed),
+    };
+    let wanted = chosen.len();
+    chosen.truncate(refine::max_refined(refine));
+    let (mut placed, quads, sizes) = if chosen.is_empty() {
+        let quads = uniform_quads(grid, &field, &index, cell_at);
+        let sizes = vec![grid.cell; placed.len()];
+        (placed, quads, sizes)
+    } else {
+        let coarse = refine::Coarse {
+            grid,
+            field: &field,
+            index: &index,
+            placed,
+        };
+        refine::contour(shape, coarse, &chosen, refine, tolerance)
+    };
+    let fine_two_sheets = placed
+        .iter()
+        .zip(&sizes)
+        .filter(|(p, &size)| p.opposed && size < grid.cell)
+        .count();
+    unfold(shape, &mut placed, &quads, &sizes);
+    let mut mesh = QuadMesh {
+        vertices: placed.iter().map(|p| p.p).collect(),
+        normals: placed.iter().map(|p| p.n).collect(),
+        quads,
+        cell: grid.cell,
+    };
+    merge_close(shape, &mut mesh, &sizes, tolerance);
+    Contoured {
+        mesh,
+        refined: chosen.len(),
+        wanted,
+        fine_two_sheets,
+    }
+}
+
+/// One quad per sign-changing edge of the grid that has four cells around it, joining
+/// their vertices (`index`: each cell's vertex, `u32::MAX` for none).
+fn uniform_quads(
+    grid: &Grid,
+    field: &[f64],
+    index: &[u32],
+    cell_at: impl Fn(usize, usize, usize) -> usize,
+) -> Vec<[u32; 4]> {
+    let [nx, ny, nz] = grid.dims;
+    let inside = |i: usize, j: usize, k: usize| field[i + (nx + 1) * (j + (ny + 1) * k)] < 0.0;
     let mut quads = Vec::new();
     for k in 0..=nz {
         for j in 0..=ny {
@@ -151,15 +246,7 @@ pub fn dual_contour<'s>(shape: impl Into<Field<'s>>, grid: &Grid, tolerance: f64
             }
         }
     }
-    unfold(shape, &mut placed, &quads, grid.cell);
-    let mut mesh = QuadMesh {
-        vertices: placed.iter().map(|p| p.p).collect(),
-        normals: placed.iter().map(|p| p.n).collect(),
-        quads,
-        cell: grid.cell,
-    };
-    merge_close(shape, &mut mesh, tolerance);
-    mesh
+    quads
 }
 
 /// Vertices joined by a quad side shorter than this many cells become one point.
@@ -174,9 +261,17 @@ pub const MERGE_CELLS: f64 = 0.1;
 /// mean and the projection moves it less than that: a member moves by under two
 /// tenths of a cell (about half a tenth for a pair). The quads keep their four corners
 /// (a chart still has four), some of which now coincide.
-fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: f64) {
+///
+/// `sizes` holds each vertex's cell size: a side's limit is that of its smaller cell,
+/// a cluster's that of its smallest.
+fn merge_close<'s>(
+    shape: impl Into<Field<'s>>,
+    mesh: &mut QuadMesh,
+    sizes: &[f64],
+    tolerance: f64,
+) {
     let shape: Field = shape.into();
-    let limit = MERGE_CELLS * mesh.cell;
+    let limit_of = |a: u32, b: u32| MERGE_CELLS * sizes[a as usize].min(sizes[b as usize]);
     let mut parent: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
     fn root(parent: &mut [u32], mut i: u32) -> u32 {
         while parent[i as usize] != i {
@@ -189,7 +284,7 @@ fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: 
     for q in &mesh.quads {
         for k in 0..4 {
             let (a, b) = (q[k], q[(k + 1) % 4]);
-            if (mesh.vertices[a as usize] - mesh.vertices[b as usize]).length() < limit {
+            if (mesh.vertices[a as usize] - mesh.vertices[b as usize]).length() < limit_of(a, b) {
                 let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
                 if ra != rb {
                     parent[ra.max(rb) as usize] = ra.min(rb);
@@ -204,26 +299,27 @@ fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: 
     let roots: Vec<u32> = (0..mesh.vertices.len() as u32)
         .map(|i| root(&mut parent, i))
         .collect();
-    // Each cluster's sum and size, then its point.
-    let mut clusters: std::collections::HashMap<u32, (DVec3, usize)> = Default::default();
+    // Each cluster's sum, size and limit, then its point.
+    let mut clusters: std::collections::HashMap<u32, (DVec3, usize, f64)> = Default::default();
     for (i, &r) in roots.iter().enumerate() {
-        let e = clusters.entry(r).or_insert((DVec3::ZERO, 0));
+        let e = clusters.entry(r).or_insert((DVec3::ZERO, 0, f64::INFINITY));
         e.0 += mesh.vertices[i];
         e.1 += 1;
+        e.2 = e.2.min(MERGE_CELLS * sizes[i]);
     }
     clusters.retain(|_, c| c.1 > 1);
     // Each cluster's mean, projected; a cluster whose members lie farther than the
     // limit from it (a chain), or whose projection lands farther, stays as it was.
     for (i, r) in roots.iter().enumerate() {
         if let Some(c) = clusters.get(r) {
-            if (mesh.vertices[i] - c.0 / c.1 as f64).length() >= limit {
+            if (mesh.vertices[i] - c.0 / c.1 as f64).length() >= c.2 {
                 clusters.remove(r);
             }
         }
     }
-    clusters.retain(|_, (sum, count)| {
+    clusters.retain(|_, (sum, count, limit)| {
         let mean = *sum / *count as f64;
-        match eval::project(shape, mean, tolerance).filter(|p| (*p - mean).length() < limit) {
+        match eval::project(shape, mean, tolerance).filter(|p| (*p - mean).length() < *limit) {
             Some(p) => {
                 *sum = p;
                 true
@@ -232,7 +328,7 @@ fn merge_close<'s>(shape: impl Into<Field<'s>>, mesh: &mut QuadMesh, tolerance: 
         }
     });
     for (i, r) in roots.iter().enumerate() {
-        if let Some((p, _)) = clusters.get(r) {
+        if let Some((p, _, _)) = clusters.get(r) {
             mesh.vertices[i] = *p;
             let n = eval::gradient(shape, *p).normalize_or_zero();
             if n != DVec3::ZERO {
@@ -283,14 +379,27 @@ fn place_vertex<'s>(
         points.push(x);
         normals.push(n);
     }
-    let mass = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
     let lo = grid.corner(i, j, k);
-    let hi = lo + DVec3::splat(grid.cell);
-    let (qef, clamped) = solve_qef(&points, &normals, mass, lo, hi);
+    place_from(shape, &points, &normals, lo, grid.cell, tolerance)
+}
+
+/// The vertex of the cell from `lo` with side `cell` whose edges the surface crosses at
+/// `points`, with the unit `normals` there.
+fn place_from(
+    shape: Field<'_>,
+    points: &[DVec3],
+    normals: &[DVec3],
+    lo: DVec3,
+    cell: f64,
+    tolerance: f64,
+) -> Placed {
+    let mass = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+    let hi = lo + DVec3::splat(cell);
+    let (qef, clamped) = solve_qef(points, normals, mass, lo, hi);
     let on_surface = |x: DVec3| {
         // Project; where that fails (a flat gradient), keep the mass point's projection or the mass point.
         let p = eval::project(shape, x, tolerance)
-            .filter(|p| (*p - x).length() < 2.0 * grid.cell)
+            .filter(|p| (*p - x).length() < 2.0 * cell)
             .or_else(|| eval::project(shape, mass, tolerance))
             .unwrap_or(mass);
         let n = eval::gradient(shape, p).normalize_or_zero();
@@ -306,10 +415,18 @@ fn place_vertex<'s>(
         (p, n)
     };
     let (p, n) = on_surface(qef);
+    // Two crossings whose normals face apart: two sheets, or a wedge sharper than the
+    // cell can hold ([`refine::select`]).
+    let opposed = normals.iter().enumerate().any(|(a, na)| {
+        normals[a + 1..]
+            .iter()
+            .any(|nb| na.dot(*nb) < refine::OPPOSED)
+    });
     Placed {
         p,
         n,
         clamped: clamped.map(on_surface),
+        opposed,
     }
 }
 
@@ -320,6 +437,8 @@ struct Placed {
     p: DVec3,
     n: DVec3,
     clamped: Option<(DVec3, DVec3)>,
+    /// Two of the crossings' normals face apart.
+    opposed: bool,
 }
 
 /// Takes back the constrained placement ([`solve_qef`]) of every vertex of a quad that
@@ -332,9 +451,8 @@ struct Placed {
 /// area. Where a crease runs along a cell's face, two cells' constrained vertices
 /// can land on the face in the wrong order and fold the quad between them (`csg.sdf`'s
 /// crown, `twisted_bar.sdf`'s rounded edges); clamped, they did not.
-fn unfold<'s>(shape: Field<'s>, placed: &mut [Placed], quads: &[[u32; 4]], cell: f64) {
+fn unfold<'s>(shape: Field<'s>, placed: &mut [Placed], quads: &[[u32; 4]], sizes: &[f64]) {
     let cos45 = std::f64::consts::FRAC_1_SQRT_2;
-    let short = MERGE_CELLS * cell;
     let folded = |placed: &[Placed], q: &[u32; 4]| {
         let p = q.map(|i| placed[i as usize].p);
         let tris = if split_along_02(p) {
@@ -345,10 +463,11 @@ fn unfold<'s>(shape: Field<'s>, placed: &mut [Placed], quads: &[[u32; 4]], cell:
         tris.iter().any(|t| {
             let (a, b, c) = (p[t[0]], p[t[1]], p[t[2]]);
             // A side [`merge_close`] joins leaves no triangle to turn.
-            if [(a, b), (b, c), (c, a)]
-                .iter()
-                .any(|(u, v)| (*u - *v).length() < short)
-            {
+            let short = |x: usize, y: usize| {
+                let (u, v) = (q[t[x]] as usize, q[t[y]] as usize);
+                (p[t[x]] - p[t[y]]).length() < MERGE_CELLS * sizes[u].min(sizes[v])
+            };
+            if short(0, 1) || short(1, 2) || short(2, 0) {
                 return false;
             }
             let n = (b - a).cross(c - a).normalize_or_zero();

@@ -25,6 +25,8 @@ mod bake_fidelity;
 mod bake_mesh;
 #[path = "bake_packed.rs"]
 mod bake_packed;
+#[path = "bake_refine.rs"]
+mod bake_refine;
 #[path = "book.rs"]
 mod book;
 #[path = "cli.rs"]

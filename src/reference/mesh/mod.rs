@@ -163,6 +163,7 @@ pub fn contour_refining<'s>(
     };
     let wanted = chosen.len();
     chosen.truncate(refine::max_refined(refine));
+    let mut chosen_len = 0;
     let (mut placed, quads, sizes) = if chosen.is_empty() {
         let quads = uniform_quads(grid, &field, &index, cell_at);
         let sizes = vec![grid.cell; placed.len()];
@@ -174,7 +175,10 @@ pub fn contour_refining<'s>(
             index: &index,
             placed,
         };
-        refine::contour(shape, coarse, &chosen, refine, tolerance)
+        let (placed, quads, sizes, refined) =
+            refine::contour(shape, coarse, chosen, refine, tolerance);
+        chosen_len = refined;
+        (placed, quads, sizes)
     };
     let fine_two_sheets = placed
         .iter()
@@ -191,7 +195,7 @@ pub fn contour_refining<'s>(
     merge_close(shape, &mut mesh, &sizes, tolerance);
     Contoured {
         mesh,
-        refined: chosen.len(),
+        refined: chosen_len,
         wanted,
         fine_two_sheets,
     }

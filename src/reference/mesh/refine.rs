@@ -249,37 +249,33 @@ struct Crossed {
 pub(super) fn contour(
     shape: Field<'_>,
     coarse: Coarse<'_>,
-    chosen: &[usize],
+    mut chosen: Vec<usize>,
     r: usize,
     tolerance: f64,
-) -> (Vec<Placed>, Vec<[u32; 4]>, Vec<f64>) {
+) -> (Vec<Placed>, Vec<[u32; 4]>, Vec<f64>, usize) {
     let grid = coarse.grid;
     let [nx, ny, _] = grid.dims;
-    let w = r + 1;
     let mut lattice = Lattice {
         grid,
         field: coarse.field,
         r,
-        blocks: chosen.iter().enumerate().map(|(b, &c)| (c, b)).collect(),
+        blocks: HashMap::new(),
         values: Vec::new(),
     };
     let unpack = |c: usize| [c % nx, (c / nx) % ny, c / (nx * ny)];
-    lattice.values = chosen
-        .par_iter()
-        .flat_map_iter(|&c| {
-            let cell = unpack(c);
-            let lattice = &lattice;
-            (0..w * w * w).map(move |l| {
-                let x = [l % w, (l / w) % w, l / (w * w)];
-                let at = [0, 1, 2].map(|k| cell[k] * r + x[k]);
-                if x.iter().all(|v| v % r == 0) {
-                    lattice.value(at).expect("a coarse corner")
-                } else {
-                    eval::distance(shape, lattice.point(at))
-                }
-            })
-        })
-        .collect();
+    // Refine, then refine the cells around any coarse edge that the refined cells cross
+    // more than once (a coarse vertex cannot stand for two crossings of one edge: its
+    // quads would share a side twice), until none is left or the limit is reached.
+    let mut new = chosen.len();
+    while new > 0 {
+        let from = chosen.len() - new;
+        add_blocks(shape, &mut lattice, &chosen[from..]);
+        let mut more = crossed_twice(&lattice, &chosen[from..]);
+        more.truncate(max_refined(r).saturating_sub(chosen.len()));
+        new = more.len();
+        chosen.extend(more);
+    }
+    let chosen = &chosen[..];
     let edges = crossed_edges(&lattice, chosen);
 
     // Vertices in order of first appearance; fine cells, and coarse cells beside a
@@ -382,7 +378,83 @@ pub(super) fn contour(
             }
         })
         .collect();
-    (placed, quads, sizes)
+    (placed, quads, sizes, chosen.len())
+}
+
+/// Samples the blocks of the cells `cells` (not yet refined) into `lattice`.
+fn add_blocks(shape: Field<'_>, lattice: &mut Lattice<'_>, cells: &[usize]) {
+    let (r, [nx, ny, _]) = (lattice.r, lattice.grid.dims);
+    let w = r + 1;
+    let first = lattice.blocks.len();
+    let values: Vec<f64> = cells
+        .par_iter()
+        .flat_map_iter(|&c| {
+            let cell = [c % nx, (c / nx) % ny, c / (nx * ny)];
+            let lattice = &*lattice;
+            (0..w * w * w).map(move |l| {
+                let x = [l % w, (l / w) % w, l / (w * w)];
+                let at = [0, 1, 2].map(|k| cell[k] * r + x[k]);
+                match lattice.value(at) {
+                    Some(v) if x.iter().all(|v| v % r == 0) => v,
+                    _ => eval::distance(shape, lattice.point(at)),
+                }
+            })
+        })
+        .collect();
+    lattice.values.extend(values);
+    for (b, &c) in cells.iter().enumerate() {
+        lattice.blocks.insert(c, first + b);
+    }
+}
+
+/// The unrefined cells around the coarse edges of `cells` whose fine samples change
+/// sign more than once along them, each once, in order.
+fn crossed_twice(lattice: &Lattice<'_>, cells: &[usize]) -> Vec<usize> {
+    let (r, grid) = (lattice.r, lattice.grid);
+    let [nx, ny, _] = grid.dims;
+    let mut out = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for &c in cells {
+        let cell = [c % nx, (c / nx) % ny, c / (nx * ny)];
+        for axis in 0..3 {
+            let (d1, d2) = ((axis + 1) % 3, (axis + 2) % 3);
+            for (o1, o2) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let mut start = cell.map(|v| v * r);
+                start[d1] += o1 * r;
+                start[d2] += o2 * r;
+                let signs: Vec<bool> = (0..=r)
+                    .filter_map(|t| {
+                        let mut x = start;
+                        x[axis] += t;
+                        lattice.value(x).map(|v| v < 0.0)
+                    })
+                    .collect();
+                if signs.windows(2).filter(|p| p[0] != p[1]).count() < 2 {
+                    continue;
+                }
+                // The four cells around this coarse edge.
+                for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let mut around = cell;
+                    around[d1] += o1;
+                    around[d2] += o2;
+                    if around[d1] < a || around[d2] < b {
+                        continue;
+                    }
+                    around[d1] -= a;
+                    around[d2] -= b;
+                    if around.iter().zip(grid.dims).any(|(v, d)| *v >= d) || lattice.refined(around)
+                    {
+                        continue;
+                    }
+                    let index = lattice.cell_index(around);
+                    if seen.insert(index) {
+                        out.push(index);
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The minimal edges the surface crosses, in a fixed order: the coarse edges no

@@ -94,6 +94,20 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         assert!(err.contains("surface held:"), "{stem}: {err}");
         if stem == "warps" {
             assert!(err.contains("warning: the mesh misses"), "{stem}: {err}");
+            // Refined, its charts do not fit 128²: the plain mesh, and why.
+            assert!(
+                err.contains("refined:        none: the refined mesh's charts do not fit"),
+                "{stem}: {err}"
+            );
+        }
+        // The robot's limbs fall between this coarse grid's corners: refined (packed),
+        // its mesh holds the whole surface, and its file goes through the same checks.
+        if stem == "robot" {
+            assert!(
+                err.contains("cells with detail finer than a cell, meshed 4× finer; the plain grid's mesh missed"),
+                "{stem}: {err}"
+            );
+            assert!(!err.contains("warning: the mesh misses"), "{stem}: {err}");
         }
         // A corner of a plate (--bounds): the surface outside the bounds is not missed.
         if plate {
@@ -294,6 +308,16 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             "must be below",
         ),
         (vec![&sphere, "--size", "300"], 2, "power of two"),
+        (
+            vec![&sphere, "--refine", "9"],
+            2,
+            "expected auto or a whole number from 1 to 8",
+        ),
+        (
+            vec![&sphere, "--refine", "0"],
+            2,
+            "expected auto or a whole number from 1 to 8",
+        ),
         (vec![&sphere, "--grid", "1"], 2, "cells"),
         (
             vec![&sphere, "--grid", "8", "--size", "16"],

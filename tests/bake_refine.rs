@@ -7,7 +7,9 @@
 //! where the refined charts do not fit.
 
 use glam::DVec3;
-use sdfc::bake::mesh::{adaptive_contour, contour_refining, dual_contour, Grid, QuadMesh};
+use sdfc::bake::mesh::{
+    adaptive_contour, contour_refining, dual_contour, Grid, QuadMesh, Refining,
+};
 use sdfc::ir::{eval, Field};
 use std::collections::HashMap;
 
@@ -121,7 +123,7 @@ fn coarse_and_fine_cells_join_without_cracks() {
                 for every in [2, 3, 5] {
                     let chosen: Vec<usize> =
                         (0..cells).filter(|c| (c * 7919) % every == 0).collect();
-                    let made = contour_refining(field, &grid, 1e-6, r, Some(chosen));
+                    let made = contour_refining(field, &grid, 1e-6, r, Refining::Only(chosen));
                     let what = format!("{shape}, r = {r}, every {every}th cell");
                     assert!(made.refined > 0, "{what}");
                     let repeated = assert_closed(&made.mesh, &what);

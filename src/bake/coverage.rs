@@ -38,9 +38,18 @@ pub struct Coverage {
 /// (the exported mesh, with `--chart-quads` over 1, lies on finer quads between the
 /// same corners). No samples (none within the bounds) is the default: not measured.
 pub fn coverage(shape: Field<'_>, mesh: &QuadMesh, bounds: Aabb) -> Coverage {
+    coverage_and_missed(shape, mesh, bounds).0
+}
+
+/// [`coverage`], and the samples it found missed (farther than [`HELD_CELLS`]).
+pub fn coverage_and_missed(
+    shape: Field<'_>,
+    mesh: &QuadMesh,
+    bounds: Aabb,
+) -> (Coverage, Vec<DVec3>) {
     use crate::reference::surface::surface_samples_within;
     let Ok(mut samples) = surface_samples_within(shape, bounds, SAMPLE_GRID, 0) else {
-        return Coverage::default();
+        return (Coverage::default(), Vec::new());
     };
     // The sampler's margin: only what lies within the bounds was meshed for sure.
     samples.retain(|s| s.p.cmpge(bounds.min).all() && s.p.cmple(bounds.max).all());
@@ -53,7 +62,13 @@ pub fn coverage(shape: Field<'_>, mesh: &QuadMesh, bounds: Aabb) -> Coverage {
         .collect();
     let total: f64 = far.iter().map(|f| f.1).sum();
     let missed: f64 = far.iter().filter(|f| f.0 > HELD_CELLS).map(|f| f.1).sum();
-    Coverage {
+    let points = samples
+        .iter()
+        .zip(&far)
+        .filter(|(_, f)| f.0 > HELD_CELLS)
+        .map(|(s, _)| s.p)
+        .collect();
+    let coverage = Coverage {
         // (An empty sum of floats is -0.)
         missed: if total > 0.0 {
             (missed / total).max(0.0)
@@ -62,7 +77,8 @@ pub fn coverage(shape: Field<'_>, mesh: &QuadMesh, bounds: Aabb) -> Coverage {
         },
         farthest: far.iter().map(|f| f.0).fold(0.0, f64::max),
         samples: far.len(),
-    }
+    };
+    (coverage, points)
 }
 
 /// Triangles by the cubic buckets (two cells a side, from a corner: small keys) their

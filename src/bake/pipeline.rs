@@ -3,7 +3,7 @@
 use super::charts::{ChartTable, Samples};
 use super::gpu::{BakePass, Shaded};
 use super::images;
-use super::mesh::{adaptive_contour, refine, Grid, QuadMesh, MAX_GRID};
+use super::mesh::{contour_refining, refine, Grid, QuadMesh, Refining, MAX_GRID};
 use super::mips::{self, Texel};
 use super::patches::{self, Patches};
 use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
@@ -488,33 +488,23 @@ pub fn bake<'s>(
         Refine::Auto => 1,
         Refine::Times(r) => r,
     };
-    let (mut quads, _) = contour(shape, &grid, scale, times, &mut report, progress)?;
+    let (mut quads, _) = contour(shape, &grid, scale, times, &[], &mut report, progress)?;
     lap(&mut report, "mesh");
-    report.coverage = super::coverage::coverage(shape, &quads, bounds);
+    let missed;
+    (report.coverage, missed) = super::coverage::coverage_and_missed(shape, &quads, bounds);
     lap(&mut report, "coverage");
     // The plain mesh, kept while a refined one is tried.
     let mut plain = None;
     if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
         report.plain_coverage = Some(report.coverage);
-        let (mut refined, left) = contour(
-            shape,
-            &grid,
-            scale,
-            refine::DEFAULT_REFINE,
-            &mut report,
-            progress,
-        )?;
+        let at = |r: usize, report: &mut Report| {
+            contour(shape, &grid, scale, r, &missed, report, progress)
+        };
+        let (mut refined, left) = at(refine::DEFAULT_REFINE, &mut report)?;
         // Fine cells still hold two sheets: part them, where every cell that asks
         // can be refined that far (the cells asking do not depend on the factor).
         if left > 0 && report.refine_wanted <= refine::max_refined(refine::MAX_REFINE) {
-            (refined, _) = contour(
-                shape,
-                &grid,
-                scale,
-                refine::MAX_REFINE,
-                &mut report,
-                progress,
-            )?;
+            (refined, _) = at(refine::MAX_REFINE, &mut report)?;
         }
         plain = Some(std::mem::replace(&mut quads, refined));
         lap(&mut report, "mesh, refined");
@@ -599,11 +589,13 @@ fn contour(
     grid: &Grid,
     scale: f64,
     refine: usize,
+    missed: &[DVec3],
     report: &mut Report,
     progress: &dyn Progress,
 ) -> Result<(QuadMesh, usize), BakeError> {
     progress.stage("mesh", 1);
-    let made = adaptive_contour(shape, grid, 1e-5 * scale, refine);
+    let refining = Refining::Select(missed);
+    let made = contour_refining(shape, grid, 1e-5 * scale, refine, refining);
     (report.refine, report.refined, report.refine_wanted) = (refine, made.refined, made.wanted);
     let quads = made.mesh;
     progress.finish();

@@ -101,18 +101,28 @@ pub fn adaptive_contour<'s>(
     tolerance: f64,
     refine: usize,
 ) -> Contoured {
-    contour_refining(shape, grid, tolerance, refine, None)
+    contour_refining(shape, grid, tolerance, refine, Refining::Select(&[]))
 }
 
-/// [`adaptive_contour`], refining the cells `chosen` (indices `i + nx (j + ny k)`, at
-/// most [`refine::max_refined`]) instead of those [`refine::select`] picks: for tests
-/// of the joins between coarse and fine cells.
+/// Which cells [`contour_refining`] refines.
+#[derive(Debug, Clone)]
+pub enum Refining<'a> {
+    /// Those [`refine::select`] picks, and the cells (with the cells around them) that
+    /// hold these points: surface samples a plainer mesh missed.
+    Select(&'a [DVec3]),
+    /// These cells (indices `i + nx (j + ny k)`): for tests of the joins between coarse
+    /// and fine cells.
+    Only(Vec<usize>),
+}
+
+/// [`adaptive_contour`], refining the cells `refining` names ([`refine::max_refined`]
+/// at most).
 pub fn contour_refining<'s>(
     shape: impl Into<Field<'s>>,
     grid: &Grid,
     tolerance: f64,
     refine: usize,
-    chosen: Option<Vec<usize>>,
+    refining: Refining<'_>,
 ) -> Contoured {
     let shape: Field = shape.into();
     let [nx, ny, nz] = grid.dims;
@@ -151,15 +161,19 @@ pub fn contour_refining<'s>(
         })
         .collect();
 
-    let mut chosen = match chosen {
+    let mut chosen = match refining {
         _ if refine < 2 => Vec::new(),
-        Some(mut cells) => {
+        Refining::Only(mut cells) => {
             cells.retain(|&c| c < nx * ny * nz);
             cells.sort_unstable();
             cells.dedup();
             cells
         }
-        None => refine::select(shape, grid, &field, &index, &placed),
+        Refining::Select(missed) => {
+            let mut cells = refine::select(shape, grid, &field, &index, &placed);
+            refine::add_around(grid, &mut cells, missed);
+            cells
+        }
     };
     let wanted = chosen.len();
     chosen.truncate(refine::max_refined(refine));

@@ -147,6 +147,32 @@ pub(super) fn select(
     out
 }
 
+/// Appends to `cells` (keeping its order) the cells that hold `points`, and the cells
+/// around them, that it does not hold yet: where a mesh missed a surface sample, the
+/// detail is within a cell of it.
+pub(super) fn add_around(grid: &Grid, cells: &mut Vec<usize>, points: &[DVec3]) {
+    let [nx, ny, nz] = grid.dims;
+    let mut seen: std::collections::HashSet<usize> = cells.iter().copied().collect();
+    for p in points {
+        let at = ((*p - grid.origin) / grid.cell).floor();
+        for d in 0..27 {
+            let c = at
+                + DVec3::new(
+                    (d % 3) as f64 - 1.0,
+                    ((d / 3) % 3) as f64 - 1.0,
+                    (d / 9) as f64 - 1.0,
+                );
+            if c.min_element() < 0.0 || c.x >= nx as f64 || c.y >= ny as f64 || c.z >= nz as f64 {
+                continue;
+            }
+            let index = c.x as usize + nx * (c.y as usize + ny * c.z as usize);
+            if seen.insert(index) {
+                cells.push(index);
+            }
+        }
+    }
+}
+
 /// A cell of the mesh: a coarse cell by index, or a fine cell by its lattice corner.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 enum Leaf {

@@ -296,6 +296,11 @@ fn the_bake_refines_where_the_plain_mesh_misses_surface() {
     let plain = refined.plain_coverage.expect("the plain mesh's coverage");
     assert!(plain.missed > 0.05, "{plain:?}");
     assert_eq!(refined.coverage.missed, 0.0, "{:?}", refined.coverage);
+    // The cost, reported: more charts share the atlas, each with fewer texels.
+    let plain_size = refined
+        .plain_chart_size
+        .expect("the plain mesh's chart size");
+    assert!(plain_size > refined.chart_size, "{refined:?}");
     let small = bake(256, Refine::Auto);
     assert!(small.refine_dropped.is_some(), "{small:?}");
     assert_eq!((small.refine, small.refined), (1, 0));

@@ -154,6 +154,9 @@ pub struct Report {
     pub refine_wanted: usize,
     /// With [`Refine::Auto`], what the plain mesh missed, where that made it refine.
     pub plain_coverage: Option<super::coverage::Coverage>,
+    /// With [`Refine::Auto`] in a flat atlas, the texels a side the plain mesh's charts
+    /// would have had, where the bake refined (more charts share the atlas).
+    pub plain_chart_size: Option<u32>,
     /// With [`Refine::Auto`], why the refined mesh was not baked (its charts do not
     /// fit the atlas), where the plain one was.
     pub refine_dropped: Option<String>,
@@ -507,6 +510,13 @@ pub fn bake<'s>(
             (refined, _) = at(refine::MAX_REFINE, &mut report)?;
         }
         plain = Some(std::mem::replace(&mut quads, refined));
+        // What a flat atlas would have given the plain mesh's charts, for the report.
+        if options.style == Style::Flat {
+            report.plain_chart_size = plain
+                .as_ref()
+                .and_then(|p| FlatLayout::fit_with(p.quads.len(), options.size, options.gutter))
+                .map(|l| l.chart_size);
+        }
         lap(&mut report, "mesh, refined");
         report.coverage = super::coverage::coverage(shape, &quads, bounds);
         lap(&mut report, "coverage");
@@ -519,6 +529,7 @@ pub fn bake<'s>(
         (Err(BakeError::Resource(why)), Some(plain)) => {
             quads = plain;
             report.refine_dropped = Some(why);
+            report.plain_chart_size = None;
             report.coverage = report.plain_coverage.take().unwrap_or_default();
             (report.refine, report.refined) = (1, 0);
             lay_out_charts(&mut quads, &grid, m, options)?

@@ -360,13 +360,19 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         } else {
             String::new()
         };
-        let why = match r.plain_coverage {
+        let mut why = match r.plain_coverage {
             Some(c) => format!(
                 "; the plain grid's mesh missed {:.1} % of the surface",
                 100.0 * c.missed
             ),
             None => String::new(),
         };
+        if let Some(plain) = r.plain_chart_size.filter(|&p| p > r.chart_size) {
+            why += &format!(
+                " (its charts would have had {plain}² texels, these {}²: a larger --size keeps more, --refine 1 keeps the plain mesh)",
+                r.chart_size
+            );
+        }
         eprintln!(
             "refined:        {} cells with detail finer than a cell, meshed {}× finer{capped}{why}",
             r.refined, r.refine

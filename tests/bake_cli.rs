@@ -104,7 +104,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         // its mesh holds the whole surface, and its file goes through the same checks.
         if stem == "robot" {
             assert!(
-                err.contains("cells with detail finer than a cell, meshed 4× finer; the plain grid's mesh missed"),
+                err.contains("cells with detail finer than a cell, meshed 2× finer; the plain grid's mesh missed"),
                 "{stem}: {err}"
             );
             assert!(!err.contains("warning: the mesh misses"), "{stem}: {err}");

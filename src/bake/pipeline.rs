@@ -76,8 +76,9 @@ pub struct Options {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Refine {
     /// Mesh plainly; where that mesh misses part of the surface (the coverage line),
-    /// mesh again with [`refine::DEFAULT_REFINE`]. Scenes the plain grid holds keep
-    /// their mesh and charts as they were.
+    /// mesh again with [`refine::FIRST_REFINE`], then twice as fine while fine cells
+    /// hold two sheets or surface is missed, up to [`refine::MAX_REFINE`]. Scenes the
+    /// plain grid holds keep their mesh and charts as they were.
     #[default]
     Auto,
     /// Refine this many times (1: never).
@@ -500,15 +501,24 @@ pub fn bake<'s>(
     let mut plain = None;
     if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
         report.plain_coverage = Some(report.coverage);
-        let at = |r: usize, report: &mut Report| {
-            contour(shape, &grid, scale, r, &missed, report, progress)
+        // Twice as fine each time while fine cells still hold two sheets or surface is
+        // still missed, where every cell that asks can be refined that far (the cells
+        // asking do not depend on the factor).
+        let mut r = refine::FIRST_REFINE;
+        let refined = loop {
+            let (refined, left) = contour(shape, &grid, scale, r, &missed, &mut report, progress)?;
+            let finer = 2 * r;
+            if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
+                break refined;
+            }
+            if left == 0 {
+                let held = super::coverage::coverage(shape, &refined, bounds);
+                if held.missed == 0.0 {
+                    break refined;
+                }
+            }
+            r = finer;
         };
-        let (mut refined, left) = at(refine::DEFAULT_REFINE, &mut report)?;
-        // Fine cells still hold two sheets: part them, where every cell that asks
-        // can be refined that far (the cells asking do not depend on the factor).
-        if left > 0 && report.refine_wanted <= refine::max_refined(refine::MAX_REFINE) {
-            (refined, _) = at(refine::MAX_REFINE, &mut report)?;
-        }
         plain = Some(std::mem::replace(&mut quads, refined));
         // What a flat atlas would have given the plain mesh's charts, for the report.
         if options.style == Style::Flat {

@@ -459,8 +459,9 @@ pub struct BakeArgs {
     pub gutter: u32,
     /// Mesh the cells that may hold detail finer than themselves (a part thinner than
     /// a cell, a slit, a wedge sharper than 75°) on a grid R times finer, joined to the
-    /// rest without cracks. `auto` does it (R = 4) only where the plain mesh misses part
-    /// of the surface (the report's "surface held"); 1 never does (docs/baking.md).
+    /// rest without cracks. `auto` does it only where the plain mesh misses part of the
+    /// surface (the report's "surface held"), at R = 2, 4 or 8, the first that parts
+    /// every slit and holds the surface; 1 never does (docs/baking.md).
     #[arg(long, value_name = "auto|R", default_value = "auto", value_parser = bake::parse_refine)]
     pub refine: sdfc::bake::pipeline::Refine,
     /// The atlas layout.

@@ -34,8 +34,9 @@ pub fn max_refined(r: usize) -> usize {
 /// The finest refinement: fine cells along a refined cell's side.
 pub const MAX_REFINE: usize = 8;
 
-/// The refinement `sdfc bake` uses unless told (`--refine`).
-pub const DEFAULT_REFINE: usize = 4;
+/// The first refinement `sdfc bake --refine auto` tries (then twice as fine, up to
+/// [`MAX_REFINE`], while fine cells still hold two sheets or surface is missed).
+pub const FIRST_REFINE: usize = 2;
 
 /// The plain grid's data that refinement reads.
 pub(super) struct Coarse<'a> {

@@ -398,17 +398,11 @@ fn coverage_finds_what_the_mesh_misses() {
     use sdfc::bake::coverage::coverage;
     use sdfc::bake::mesh::{dual_contour, Grid};
     let at = |name: &str, cells: usize| {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples")
-            .join(name);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let analysis = sdfc::driver::check(&text, path.parent());
-        let scene = analysis.scene.as_ref().unwrap();
-        let shape = sdfc::driver::pick_shape(scene, None).unwrap();
-        let field = analysis.field(shape);
-        let bounds = shape.root_node().bounds;
-        let mesh = dual_contour(field, &Grid::over(bounds, cells), 1e-5);
-        coverage(field, &mesh, bounds)
+        common::with_example(name, |field, shape| {
+            let bounds = shape.root_node().bounds;
+            let mesh = dual_contour(field, &Grid::over(bounds, cells), 1e-5);
+            coverage(field, &mesh, bounds)
+        })
     };
     let robot = at("robot.sdf", 48);
     assert!(robot.samples > 1000, "{robot:?}");

@@ -234,24 +234,18 @@ fn a_slit_narrower_than_a_cell_keeps_both_walls() {
 #[test]
 fn shapes_the_grid_holds_are_not_refined() {
     for name in ["sphere.sdf", "robot.sdf", "blob.sdf", "plate_hole.sdf"] {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples")
-            .join(name);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let analysis = sdfc::driver::check(&text, path.parent());
-        let scene = analysis.scene.as_ref().unwrap();
-        let shape = sdfc::driver::pick_shape(scene, None).unwrap();
-        let field = analysis.field(shape);
-        let grid = Grid::over(shape.root_node().bounds, 48);
-        let plain = dual_contour(field, &grid, 1e-5);
-        let made = adaptive_contour(field, &grid, 1e-5, 4);
-        assert_eq!(made.wanted, 0, "{name}");
-        assert_eq!(made.mesh, plain, "{name}");
-        assert_eq!(
-            adaptive_contour(field, &grid, 1e-5, 1).mesh,
-            plain,
-            "{name}"
-        );
+        crate::common::with_example(name, |field, shape| {
+            let grid = Grid::over(shape.root_node().bounds, 48);
+            let plain = dual_contour(field, &grid, 1e-5);
+            let made = adaptive_contour(field, &grid, 1e-5, 4);
+            assert_eq!(made.wanted, 0, "{name}");
+            assert_eq!(made.mesh, plain, "{name}");
+            assert_eq!(
+                adaptive_contour(field, &grid, 1e-5, 1).mesh,
+                plain,
+                "{name}"
+            );
+        });
     }
 }
 

@@ -393,3 +393,18 @@ pub fn in_own_process(path: &str) -> bool {
     );
     false
 }
+
+/// Runs `f` on the field and the shape of the `render` item of `examples/NAME`.
+pub fn with_example<T>(
+    name: &str,
+    f: impl FnOnce(sdfc::ir::Field<'_>, &sdfc::ir::Shape) -> T,
+) -> T {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(name);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let analysis = sdfc::driver::check(&text, path.parent());
+    let scene = analysis.scene.as_ref().unwrap();
+    let shape = sdfc::driver::pick_shape(scene, None).unwrap();
+    f(analysis.field(shape), shape)
+}

@@ -8,7 +8,9 @@
 //! allows. The vertex is then projected onto the surface (Π_f, to |f| < 1e-5 · scale).
 //! A quad that placement folds takes its corners' clamped placement back ([`unfold`]);
 //! vertices joined by a quad side under a tenth of a cell then share one point
-//! ([`merge_close`]).
+//! ([`merge_close`]). Cells that may hold detail finer than themselves (a thin part, a
+//! slit, a sharp wedge) can be meshed on a finer lattice, joined to the rest without
+//! cracks ([`refine`], [`adaptive_contour`]).
 
 use crate::ir::{eval, Aabb, Field};
 use glam::DVec3;
@@ -223,48 +225,50 @@ fn uniform_quads(
     index: &[u32],
     cell_at: impl Fn(usize, usize, usize) -> usize,
 ) -> Vec<[u32; 4]> {
-    let [nx, ny, nz] = grid.dims;
+    let [nx, ny, _] = grid.dims;
     let inside = |i: usize, j: usize, k: usize| field[i + (nx + 1) * (j + (ny + 1) * k)] < 0.0;
     let mut quads = Vec::new();
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
-                for axis in 0..3 {
-                    let e = [i, j, k];
-                    let mut f = e;
-                    f[axis] += 1;
-                    if f[0] > nx || f[1] > ny || f[2] > nz {
-                        continue;
-                    }
-                    let a = inside(e[0], e[1], e[2]);
-                    if a == inside(f[0], f[1], f[2]) {
-                        continue;
-                    }
-                    let (d1, d2) = ((axis + 1) % 3, (axis + 2) % 3);
-                    // The four cells around the edge must lie in the grid; with the
-                    // grid's margin they do wherever the surface stays inside it.
-                    if e[d1] == 0 || e[d2] == 0 || e[d1] >= grid.dims[d1] || e[d2] >= grid.dims[d2]
-                    {
-                        continue;
-                    }
-                    let cell = |o1: usize, o2: usize| {
-                        let mut c = e;
-                        c[d1] = c[d1] + o1 - 1;
-                        c[d2] = c[d2] + o2 - 1;
-                        index[cell_at(c[0], c[1], c[2])]
-                    };
-                    // Counter-clockwise around +axis: (-,-), (+,-), (+,+), (-,+).
-                    let q = [cell(0, 0), cell(1, 0), cell(1, 1), cell(0, 1)];
-                    if q.contains(&u32::MAX) {
-                        continue;
-                    }
-                    // Inside at the low end: the surface faces +axis.
-                    quads.push(if a { q } else { [q[0], q[3], q[2], q[1]] });
-                }
-            }
+    for (e, axis) in grid_edges(grid.dims) {
+        let mut f = e;
+        f[axis] += 1;
+        let a = inside(e[0], e[1], e[2]);
+        if a == inside(f[0], f[1], f[2]) {
+            continue;
         }
+        let (d1, d2) = ((axis + 1) % 3, (axis + 2) % 3);
+        // The four cells around the edge must lie in the grid; with the grid's margin
+        // they do wherever the surface stays inside it.
+        if e[d1] == 0 || e[d2] == 0 || e[d1] >= grid.dims[d1] || e[d2] >= grid.dims[d2] {
+            continue;
+        }
+        let cell = |o1: usize, o2: usize| {
+            let mut c = e;
+            c[d1] = c[d1] + o1 - 1;
+            c[d2] = c[d2] + o2 - 1;
+            index[cell_at(c[0], c[1], c[2])]
+        };
+        // Counter-clockwise around +axis: (-,-), (+,-), (+,+), (-,+).
+        let q = [cell(0, 0), cell(1, 0), cell(1, 1), cell(0, 1)];
+        if q.contains(&u32::MAX) {
+            continue;
+        }
+        // Inside at the low end: the surface faces +axis.
+        quads.push(if a { q } else { [q[0], q[3], q[2], q[1]] });
     }
     quads
+}
+
+/// Every edge between the corners of a grid of `dims` cells: its low corner and its
+/// axis, z slowest, then y, x, and the axis fastest.
+fn grid_edges(dims: [usize; 3]) -> impl Iterator<Item = ([usize; 3], usize)> {
+    let [nx, ny, nz] = dims;
+    (0..=nz)
+        .flat_map(move |k| {
+            (0..=ny).flat_map(move |j| {
+                (0..=nx).flat_map(move |i| (0..3).map(move |axis| ([i, j, k], axis)))
+            })
+        })
+        .filter(move |(e, axis)| e[*axis] < dims[*axis])
 }
 
 /// Vertices joined by a quad side shorter than this many cells become one point.

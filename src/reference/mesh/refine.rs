@@ -126,8 +126,8 @@ pub(super) fn select(
     // And the ring of cells near the surface around the cells with two sheets, so that
     // fine cells meet coarse ones a cell away from them, where one sheet passes: a
     // coarse vertex beside a slit would otherwise take crossings of both its walls and
-    // fold the triangles between (`waving_robot.sdf`: 108 turned triangles without the
-    // ring, 4 with it).
+    // fold the triangles between (`waving_robot.sdf` refined 4 times: 16 turned
+    // triangles without the ring, 4 with it).
     let ring = two_sheets.len();
     let mut out: Vec<usize> = two_sheets.into_iter().chain(hidden).collect();
     let mut seen: std::collections::HashSet<usize> = out.iter().copied().collect();
@@ -490,7 +490,7 @@ fn crossed_twice(lattice: &Lattice<'_>, cells: &[usize]) -> Vec<usize> {
 /// out, as in plain dual contouring.
 fn crossed_edges(lattice: &Lattice<'_>, chosen: &[usize]) -> Vec<Crossed> {
     let (grid, r) = (lattice.grid, lattice.r);
-    let [nx, ny, nz] = grid.dims;
+    let [nx, ny, _] = grid.dims;
     // An edge from lattice point `x` along `axis`, `step` lattice units long.
     let make = |x: [usize; 3], axis: usize, step: usize| -> Option<Crossed> {
         let mut y = x;
@@ -518,33 +518,23 @@ fn crossed_edges(lattice: &Lattice<'_>, chosen: &[usize]) -> Vec<Crossed> {
         })
     };
     let mut out = Vec::new();
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
-                for axis in 0..3 {
-                    let e = [i, j, k];
-                    if e[axis] == grid.dims[axis] {
-                        continue;
-                    }
-                    // Split where a refined cell has this edge on its boundary.
-                    let (d1, d2) = ((axis + 1) % 3, (axis + 2) % 3);
-                    let touched = [(0, 0), (1, 0), (0, 1), (1, 1)].iter().any(|&(o1, o2)| {
-                        let mut c = e;
-                        if (o1 == 1 && c[d1] == 0) || (o2 == 1 && c[d2] == 0) {
-                            return false;
-                        }
-                        c[d1] -= o1;
-                        c[d2] -= o2;
-                        c.iter().zip(grid.dims).all(|(v, d)| *v < d) && lattice.refined(c)
-                    });
-                    if touched {
-                        continue;
-                    }
-                    if let Some(edge) = make(e.map(|v| v * r), axis, r) {
-                        out.push(edge);
-                    }
-                }
+    for (e, axis) in super::grid_edges(grid.dims) {
+        // Split where a refined cell has this edge on its boundary.
+        let (d1, d2) = ((axis + 1) % 3, (axis + 2) % 3);
+        let touched = [(0, 0), (1, 0), (0, 1), (1, 1)].iter().any(|&(o1, o2)| {
+            let mut c = e;
+            if (o1 == 1 && c[d1] == 0) || (o2 == 1 && c[d2] == 0) {
+                return false;
             }
+            c[d1] -= o1;
+            c[d2] -= o2;
+            c.iter().zip(grid.dims).all(|(v, d)| *v < d) && lattice.refined(c)
+        });
+        if touched {
+            continue;
+        }
+        if let Some(edge) = make(e.map(|v| v * r), axis, r) {
+            out.push(edge);
         }
     }
     // Each refined cell's crossed fine edges (its faces' twice where two refined

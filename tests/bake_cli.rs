@@ -93,12 +93,9 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         // of this coarse grid.
         assert!(err.contains("surface held:"), "{stem}: {err}");
         if stem == "warps" {
+            // Refined 4 times (8 times does not fit 128²), a little is still missed.
+            assert!(err.contains("meshed 4× finer"), "{stem}: {err}");
             assert!(err.contains("warning: the mesh misses"), "{stem}: {err}");
-            // Refined, its charts do not fit 128²: the plain mesh, and why.
-            assert!(
-                err.contains("refined:        none: the refined mesh's charts do not fit"),
-                "{stem}: {err}"
-            );
         }
         // The robot's limbs fall between this coarse grid's corners: refined (packed),
         // its mesh holds the whole surface, and its file goes through the same checks.

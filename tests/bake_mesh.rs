@@ -173,7 +173,7 @@ fn measure(path: &std::path::Path, gpu: &sdfc::gpu::Gpu, size: u32) -> Option<Qu
 /// mesher refined the cells that hold such detail: they meet the goal.)
 const FINER_THAN_A_CELL: [(&str, &str, f64, f64, f64); 1] = [(
     "shell_arrows.sdf",
-    "arrows of a shell map finer than a cell, without bound at the log map's cut locus: refined, they need 157,018 charts, which do not fit the test's 256² atlas, so the bake keeps the plain grid's mesh (at 2048 it refines and holds 99.3 % of the surface)",
+    "arrows of a shell map finer than a cell, without bound at the log map's cut locus: refined even twice they need 38,347 charts, which do not fit the test's 256² atlas, so the bake keeps the plain grid's mesh (at 2048 it refines 4 times and holds 99.3 % of the surface)",
     0.125,
     0.75,
     1.95,

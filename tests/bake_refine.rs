@@ -250,8 +250,9 @@ fn shapes_the_grid_holds_are_not_refined() {
 }
 
 /// `--refine auto`: warps.sdf's plain mesh misses its thin shell and small spheres, so
-/// at 1024 the bake refines and holds the whole surface; at 256 the refined charts do
-/// not fit, and the bake keeps the plain mesh and says so.
+/// at 1024 the bake refines (8 times) and holds the whole surface; at 256 it keeps the
+/// finest refined mesh whose charts fit (2 times); at 128 none fits, and the bake keeps
+/// the plain mesh and says so.
 #[test]
 fn the_bake_refines_where_the_plain_mesh_misses_surface() {
     use sdfc::bake::pipeline::{self, Options, Quiet, Refine};
@@ -295,7 +296,13 @@ fn the_bake_refines_where_the_plain_mesh_misses_surface() {
         .plain_chart_size
         .expect("the plain mesh's chart size");
     assert!(plain_size > refined.chart_size, "{refined:?}");
-    let small = bake(256, Refine::Auto);
+    // At 256, 8 times finer does not fit, nor 4: the mesh refined twice, which fits.
+    let smaller = bake(256, Refine::Auto);
+    assert_eq!(smaller.refine, 2, "{smaller:?}");
+    assert!(smaller.refine_dropped.is_none(), "{smaller:?}");
+    assert!(smaller.coverage.missed < 0.1 * plain.missed, "{smaller:?}");
+    // At 128 not even that: the plain mesh, and why.
+    let small = bake(128, Refine::Auto);
     assert!(small.refine_dropped.is_some(), "{small:?}");
     assert_eq!((small.refine, small.refined), (1, 0));
     assert!(small.coverage.missed > 0.05);

@@ -504,9 +504,25 @@ pub fn bake<'s>(
         // Twice as fine each time while fine cells still hold two sheets or surface is
         // still missed, where every cell that asks can be refined that far (the cells
         // asking do not depend on the factor).
+        // In a flat atlas, a mesh whose charts do not fit ends the search: the last
+        // one that fits is baked (a finer one has more charts still).
+        let fits = |mesh: &QuadMesh| {
+            options.style != Style::Flat
+                || FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).is_some()
+        };
         let mut r = refine::FIRST_REFINE;
+        let mut fitted: Option<(QuadMesh, Report)> = None;
         let refined = loop {
             let (refined, left) = contour(shape, &grid, scale, r, &missed, &mut report, progress)?;
+            if !fits(&refined) {
+                match fitted.take() {
+                    Some((earlier, its)) => {
+                        report = its;
+                        break earlier;
+                    }
+                    None => break refined,
+                }
+            }
             let finer = 2 * r;
             if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
                 break refined;
@@ -517,6 +533,7 @@ pub fn bake<'s>(
                     break refined;
                 }
             }
+            fitted = Some((refined, report.clone()));
             r = finer;
         };
         plain = Some(std::mem::replace(&mut quads, refined));

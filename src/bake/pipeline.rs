@@ -501,41 +501,16 @@ pub fn bake<'s>(
     let mut plain = None;
     if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
         report.plain_coverage = Some(report.coverage);
-        // Twice as fine each time while fine cells still hold two sheets or surface is
-        // still missed, where every cell that asks can be refined that far (the cells
-        // asking do not depend on the factor).
-        // In a flat atlas, a mesh whose charts do not fit ends the search: the last
-        // one that fits is baked (a finer one has more charts still).
-        let fits = |mesh: &QuadMesh| {
-            options.style != Style::Flat
-                || FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).is_some()
-        };
-        let mut r = refine::FIRST_REFINE;
-        let mut fitted: Option<(QuadMesh, Report)> = None;
-        let refined = loop {
-            let (refined, left) = contour(shape, &grid, scale, r, &missed, &mut report, progress)?;
-            if !fits(&refined) {
-                match fitted.take() {
-                    Some((earlier, its)) => {
-                        report = its;
-                        break earlier;
-                    }
-                    None => break refined,
-                }
-            }
-            let finer = 2 * r;
-            if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
-                break refined;
-            }
-            if left == 0 {
-                let held = super::coverage::coverage(shape, &refined, bounds);
-                if held.missed == 0.0 {
-                    break refined;
-                }
-            }
-            fitted = Some((refined, report.clone()));
-            r = finer;
-        };
+        let refined = refine_auto(
+            shape,
+            &grid,
+            scale,
+            bounds,
+            &missed,
+            options,
+            &mut report,
+            progress,
+        )?;
         plain = Some(std::mem::replace(&mut quads, refined));
         // What a flat atlas would have given the plain mesh's charts, for the report.
         if options.style == Style::Flat {
@@ -617,6 +592,53 @@ pub fn bake<'s>(
         textures,
         report,
     })
+}
+
+/// `--refine auto`'s search, once the plain mesh missed the samples `missed`: refined
+/// at [`refine::FIRST_REFINE`], then twice as fine each time while fine cells still
+/// hold two sheets or surface is still missed, where every cell that asks can be
+/// refined that far (the cells asking do not depend on the factor). In a flat atlas, a
+/// mesh whose charts do not fit ends the search: the last one that fits is returned (a
+/// finer one has more charts still), or this one where none does (the caller then
+/// bakes the plain mesh).
+#[allow(clippy::too_many_arguments)]
+fn refine_auto(
+    shape: crate::ir::Field,
+    grid: &Grid,
+    scale: f64,
+    bounds: Aabb,
+    missed: &[DVec3],
+    options: &Options,
+    report: &mut Report,
+    progress: &dyn Progress,
+) -> Result<QuadMesh, BakeError> {
+    let fits = |mesh: &QuadMesh| {
+        options.style != Style::Flat
+            || FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).is_some()
+    };
+    let mut r = refine::FIRST_REFINE;
+    let mut fitted: Option<(QuadMesh, Report)> = None;
+    loop {
+        let (refined, left) = contour(shape, grid, scale, r, missed, report, progress)?;
+        if !fits(&refined) {
+            return Ok(match fitted.take() {
+                Some((earlier, its)) => {
+                    *report = its;
+                    earlier
+                }
+                None => refined,
+            });
+        }
+        let finer = 2 * r;
+        if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
+            return Ok(refined);
+        }
+        if left == 0 && super::coverage::coverage(shape, &refined, bounds).missed == 0.0 {
+            return Ok(refined);
+        }
+        fitted = Some((refined, report.clone()));
+        r = finer;
+    }
 }
 
 /// Stage 1: the mesh of `shape` by dual contouring over `grid`, cells with finer

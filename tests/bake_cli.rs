@@ -581,3 +581,41 @@ fn bakes_over_the_memory_limit_are_refused_before_any_work() {
         assert!(!out.exists());
     }
 }
+
+/// `sdfc bench --bake`: one bake, its report and the slowest stage, and its `--json`
+/// with the refinement (waving_robot's slit: refined twice, all its surface held).
+#[test]
+fn bench_bake_reports_the_stages_and_the_refinement() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bake.json");
+    let (code, out, err) = sdfc(&[
+        "bench",
+        "--bake",
+        "examples/waving_robot.sdf",
+        "--atlas-size",
+        "256",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("bake: ") && out.contains("the slowest stage"),
+        "{out}"
+    );
+    assert!(err.contains("refined:        "), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["bench"], "bake");
+    assert_eq!(v["refine"], 2, "{v}");
+    assert!(v["refined_cells"].as_u64().unwrap() > 0, "{v}");
+    assert_eq!(v["surface_missed"], 0.0, "{v}");
+    let stages: Vec<&str> = v["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert!(stages.contains(&"mesh, refined"), "{stages:?}");
+}

@@ -522,6 +522,10 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             "atlas": [baked.atlas.width(), baked.atlas.height()],
             "levels": baked.atlas.levels(),
             "samples": r.samples,
+            "charts": r.charts,
+            "refined_cells": r.refined,
+            "refine": r.refine,
+            "surface_missed": r.coverage.missed,
             "total_s": total,
             "stages": r.stages.iter().map(|(n, d)| serde_json::json!({
                 "name": n,

@@ -501,7 +501,7 @@ pub fn bake<'s>(
     let mut plain = None;
     if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
         report.plain_coverage = Some(report.coverage);
-        let refined = refine_auto(
+        let (refined, held) = refine_auto(
             shape,
             &grid,
             scale,
@@ -520,7 +520,8 @@ pub fn bake<'s>(
                 .map(|l| l.chart_size);
         }
         lap(&mut report, "mesh, refined");
-        report.coverage = super::coverage::coverage(shape, &quads, bounds);
+        // (The search measured the mesh it stopped at when it stopped for that.)
+        report.coverage = held.unwrap_or_else(|| super::coverage::coverage(shape, &quads, bounds));
         lap(&mut report, "coverage");
     }
 
@@ -600,7 +601,7 @@ pub fn bake<'s>(
 /// refined that far (the cells asking do not depend on the factor). In a flat atlas, a
 /// mesh whose charts do not fit ends the search: the last one that fits is returned (a
 /// finer one has more charts still), or this one where none does (the caller then
-/// bakes the plain mesh).
+/// bakes the plain mesh). With the mesh, its coverage where the search measured it.
 #[allow(clippy::too_many_arguments)]
 fn refine_auto(
     shape: crate::ir::Field,
@@ -611,7 +612,7 @@ fn refine_auto(
     options: &Options,
     report: &mut Report,
     progress: &dyn Progress,
-) -> Result<QuadMesh, BakeError> {
+) -> Result<(QuadMesh, Option<super::coverage::Coverage>), BakeError> {
     let fits = |mesh: &QuadMesh| {
         options.style != Style::Flat
             || FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).is_some()
@@ -624,17 +625,20 @@ fn refine_auto(
             return Ok(match fitted.take() {
                 Some((earlier, its)) => {
                     *report = its;
-                    earlier
+                    (earlier, None)
                 }
-                None => refined,
+                None => (refined, None),
             });
         }
         let finer = 2 * r;
         if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
-            return Ok(refined);
+            return Ok((refined, None));
         }
-        if left == 0 && super::coverage::coverage(shape, &refined, bounds).missed == 0.0 {
-            return Ok(refined);
+        if left == 0 {
+            let held = super::coverage::coverage(shape, &refined, bounds);
+            if held.missed == 0.0 {
+                return Ok((refined, Some(held)));
+            }
         }
         fitted = Some((refined, report.clone()));
         r = finer;

@@ -59,7 +59,7 @@ pub fn corner_tangents(mesh: &QuadMesh, patches: &Patches) -> Vec<[DVec3; 4]> {
 /// (a rasterizer interpolates w, and a w between −1 and 1 shrinks the bitangent). Taken
 /// vertex by vertex, the sign flipped where a vertex's normal stood across the chart's
 /// own plane (a crease's corner): a twisted box at `--grid 12` mixed signs in 96 of its
-/// 364 triangles, `warps.sdf` at its default grid in 486 of 2,876, and the normal map
+/// 364 triangles, `warps.sdf` at its default grid, unrefined, in 486 of 2,876, and the normal map
 /// drew dark wedges from the creases there (`tests/bake.rs`).
 pub fn chart_signs(mesh: &QuadMesh, patches: &Patches, tangents: &[[DVec3; 4]]) -> Vec<f64> {
     let mut out = vec![1.0; mesh.quads.len()];

@@ -28,6 +28,10 @@ const [url, rawOut] = process.argv.slice(live ? 3 : 2);
 const browser = await puppeteer.launch({
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
   headless: "new",
+  // A waitForFunction below is one protocol call for as long as it waits: past
+  // puppeteer's default protocol timeout (180 s) it failed before its own 240 s, on a
+  // slow machine running the rest of the suite beside it.
+  protocolTimeout: 300000,
   dumpio: !!process.env.SDFC_BROWSER_LOG,
   args: [
     "--headless=new",

@@ -758,17 +758,6 @@ fn a_quad_is_split_along_the_diagonal_that_does_not_fold_it() {
     assert!(!split_along_02(folded));
 }
 
-/// A twisted box: creases whose faces turn along them. At a vertex on a crease the
-/// field's gradient is either face's normal, or anything between.
-const TWISTED: &str = "
-let twisted = box([0.6, 2, 0.6]).twist(axis: [0, 1, 0], rate: 1.2);
-material paint {
-    color = 0.5 + 0.5 * normal;
-    roughness = 0.35;
-}
-render twisted.paint(paint);
-";
-
 /// Every exported triangle has one bitangent sign (glTF's TANGENT w) at its three
 /// vertices, ±1. A rasterizer interpolates w: between vertices of opposite signs the
 /// bitangent shrinks through zero and the normal map draws wedges (issue 40: the dark
@@ -786,10 +775,10 @@ fn every_triangle_keeps_one_bitangent_sign() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/csg.sdf"))
             .unwrap();
     let cases = [
-        ("twisted", TWISTED, 12, Style::Flat),
-        ("twisted", TWISTED, 12, Style::Packed),
-        ("twisted", TWISTED, 24, Style::Flat),
-        ("twisted", TWISTED, 24, Style::Packed),
+        ("twisted", common::TWISTED_BOX, 12, Style::Flat),
+        ("twisted", common::TWISTED_BOX, 12, Style::Packed),
+        ("twisted", common::TWISTED_BOX, 24, Style::Flat),
+        ("twisted", common::TWISTED_BOX, 24, Style::Packed),
         ("csg", csg.as_str(), 24, Style::Flat),
     ];
     for (name, source, grid, style) in cases {

@@ -428,20 +428,6 @@ fn close_ups_register_texels_where_the_implicit_render_shows_them() {
     }
 }
 
-/// A twisted box: creases whose faces turn along them, where a vertex's gradient
-/// can be either face's normal.
-const TWISTED: &str = "
-let twisted = box([0.6, 2, 0.6]).twist(axis: [0, 1, 0], rate: 1.2);
-material paint {
-    color = 0.5 + 0.5 * normal;
-    roughness = 0.35;
-}
-render twisted.paint(paint) {
-    camera = orbit(target: [0, 0, 0], distance: 2, yaw: 20deg, pitch: 25deg);
-    light = sun(direction: [0.3, 1, 0.4]);
-}
-";
-
 /// The twisted box baked and drawn against its implicit render: creases whose faces
 /// turn along them, where a corner's gradient can be either face's normal. With a
 /// bitangent sign taken vertex by vertex, triangles across such corners mixed signs
@@ -453,7 +439,7 @@ fn twisted_creases_shade_as_the_implicit_render() {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let Some((implicit, drawn)) = compare_frames(
         "twisted",
-        TWISTED,
+        crate::common::TWISTED_BOX,
         &base,
         (1024, 48, 1, 0),
         (480, 480),

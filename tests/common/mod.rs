@@ -408,3 +408,19 @@ pub fn with_example<T>(
     let shape = sdfc::driver::pick_shape(scene, None).unwrap();
     f(analysis.field(shape), shape)
 }
+
+/// A twisted box with a material that shows its normals: creases whose faces turn
+/// along them, where a corner's gradient can be either face's normal (`warps.sdf`'s
+/// twisted box, alone). For the bake's tangent frames (`tests/bake.rs`) and its
+/// close-up against the implicit render (`tests/bake_fidelity.rs`).
+pub const TWISTED_BOX: &str = "
+let twisted = box([0.6, 2, 0.6]).twist(axis: [0, 1, 0], rate: 1.2);
+material paint {
+    color = 0.5 + 0.5 * normal;
+    roughness = 0.35;
+}
+render twisted.paint(paint) {
+    camera = orbit(target: [0, 0, 0], distance: 2, yaw: 20deg, pitch: 25deg);
+    light = sun(direction: [0.3, 1, 0.4]);
+}
+";

@@ -45,6 +45,9 @@ fn library_files_validate_on_their_own() {
 fn every_target(name: &str, module: &codegen::Module) {
     let full = codegen::validate(&module.wgsl)
         .unwrap_or_else(|e| panic!("{name}: naga rejects the generated WGSL:\n{e}"));
+    // With the entry point the runtime appends where AOVs are rgba32uint (GL).
+    codegen::validate(&codegen::aov::with_scene_bits(&module.wgsl))
+        .unwrap_or_else(|e| panic!("{name}: naga rejects the module with fs_aov_bits:\n{e}"));
     let v = codegen::compact(&full).unwrap_or_else(|e| panic!("{name}: compaction: {e}"));
     // The library's functions, as naga names them before and after compaction.
     let library = codegen::shake::full_library();

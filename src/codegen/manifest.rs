@@ -207,8 +207,9 @@ pub struct RenderTargets {
 }
 
 /// The render targets of every module: `fs_main` into one `rgba8unorm-srgb` target,
-/// `fs_aov` into it and three `rgba32float` AOVs (a runtime may use `rgba16float` where
-/// the adapter cannot render 32-bit floats, as sdfc's does on GL ES).
+/// `fs_aov` into it and three `rgba32float` AOVs. (Where an adapter cannot render
+/// 32-bit floats, sdfc's runtime appends `codegen::aov`'s entry point, which writes
+/// their bits to `rgba32uint` targets; a module as exported does not carry it.)
 pub fn render_targets() -> Vec<RenderTargets> {
     vec![
         RenderTargets {

@@ -10,6 +10,7 @@
 //! ([`bindings`]) and the entry points (`shaders/entry.wgsl.in`). Its header
 //! documents the bind groups; [`Manifest`] describes them as JSON.
 
+pub mod aov;
 mod atlas;
 mod atlases;
 pub mod bindings;

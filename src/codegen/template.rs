@@ -15,6 +15,9 @@ pub const TRACE: &str = include_str!("../../shaders/trace.wgsl.in");
 pub const COARSE: &str = include_str!("../../shaders/coarse.wgsl.in");
 /// A baked mesh's renderer, with the flat layout's constants.
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl.in");
+/// A fragment entry point writing the AOVs as the bits of their floats (rgba32uint
+/// targets), for adapters without rgba32float targets: `shaders/aov_bits.wgsl.in`.
+pub const AOV_BITS: &str = include_str!("../../shaders/aov_bits.wgsl.in");
 
 /// The placeholders of a template, in order of first use.
 pub fn placeholders(template: &str) -> Vec<&str> {

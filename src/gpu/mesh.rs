@@ -585,11 +585,24 @@ impl MeshRenderer {
                 a: -1.0,
             },
         ];
+        // rgba32uint AOVs (`codegen::aov`) clear to the bits of the same floats.
+        let to_bits = |c: f64| f64::from((c as f32).to_bits());
+        let bits = self.formats[1] == wgpu::TextureFormat::Rgba32Uint;
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
             .views
             .iter()
             .zip(clears)
-            .map(|(v, clear)| {
+            .enumerate()
+            .map(|(k, (v, clear))| {
+                let clear = match bits && k > 0 {
+                    true => wgpu::Color {
+                        r: to_bits(clear.r),
+                        g: to_bits(clear.g),
+                        b: to_bits(clear.b),
+                        a: to_bits(clear.a),
+                    },
+                    false => clear,
+                };
                 Some(wgpu::RenderPassColorAttachment {
                     view: v,
                     depth_slice: None,
@@ -743,7 +756,10 @@ fn pipeline(
         multisample: wgpu::MultisampleState::default(),
         fragment: formats.map(|_| wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_main"),
+            entry_point: Some(match formats.map(|f| f[1]) {
+                Some(wgpu::TextureFormat::Rgba32Uint) => crate::codegen::aov::MESH_ENTRY,
+                _ => "fs_main",
+            }),
             compilation_options: Default::default(),
             targets: &targets,
         }),

@@ -787,7 +787,7 @@ pub(super) fn copy_out(enc: &mut wgpu::CommandEncoder, targets: &Targets) {
     }
 }
 
-/// RGBA texels of 32-bit or (`half`) 16-bit floats.
+/// RGBA texels of 32-bit floats (or their bits, `rgba32uint`) or (`half`) 16-bit floats.
 fn floats(bytes: &[u8], half: bool) -> Vec<[f32; 4]> {
     if half {
         bytes

@@ -12,9 +12,16 @@ pub(super) fn pipeline(
     formats: &[wgpu::TextureFormat; 4],
     cache: Option<&wgpu::PipelineCache>,
 ) -> wgpu::RenderPipeline {
+    // Where the AOVs are rgba32uint, the module gets the entry point that writes them
+    // as bits (`codegen::aov`).
+    let bits = formats[1] == wgpu::TextureFormat::Rgba32Uint;
+    let source = match bits {
+        true => crate::codegen::aov::with_scene_bits(wgsl),
+        false => wgsl.to_string(),
+    };
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("scene"),
-        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     let targets = opaque_targets(formats);
     let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -39,7 +46,10 @@ pub(super) fn pipeline(
         multisample: wgpu::MultisampleState::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_aov"),
+            entry_point: Some(match bits {
+                true => crate::codegen::aov::SCENE_ENTRY,
+                false => "fs_aov",
+            }),
             compilation_options: wgpu::PipelineCompilationOptions {
                 constants,
                 ..Default::default()
@@ -69,18 +79,24 @@ pub(super) fn opaque_targets<'f>(
 }
 
 /// The formats of the colour target and the three AOV targets. AOVs are 32-bit float
-/// where the adapter can render to it; otherwise (GL ES, for one) 16-bit float.
+/// where the adapter can render to it; otherwise the bits of 32-bit floats in
+/// `rgba32uint` (wgpu's GL backend on a desktop GL core profile, llvmpipe's among them,
+/// does not report float colour buffers: `codegen::aov`), and 16-bit float only where
+/// neither is renderable. `read` takes the first two back exactly.
 pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
-    let f32_ok = gpu
-        .adapter
-        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
-        .allowed_usages
-        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT);
-    let aov = if f32_ok {
-        wgpu::TextureFormat::Rgba32Float
-    } else {
-        wgpu::TextureFormat::Rgba16Float
+    let renderable = |f| {
+        gpu.adapter
+            .get_texture_format_features(f)
+            .allowed_usages
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
     };
+    let aov = [
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Rgba32Uint,
+    ]
+    .into_iter()
+    .find(|&f| renderable(f))
+    .unwrap_or(wgpu::TextureFormat::Rgba16Float);
     [wgpu::TextureFormat::Rgba8UnormSrgb, aov, aov, aov]
 }
 

@@ -424,3 +424,13 @@ render twisted.paint(paint) {
     light = sun(direction: [0.3, 1, 0.4]);
 }
 ";
+
+/// The default adapter and llvmpipe's GL backend, for a test that holds on both (the
+/// GL backend renders its AOVs through rgba32uint targets: `sdfc::codegen::aov`); each
+/// one missing is skipped or fails as `gpu_for_tests` and `gl_for_tests` say.
+pub fn both_for_tests() -> Vec<sdfc::gpu::Gpu> {
+    [sdfc::gpu::gpu_for_tests(), gl_for_tests()]
+        .into_iter()
+        .flatten()
+        .collect()
+}

@@ -701,7 +701,8 @@ fn tonemap(c: DVec3) -> [f64; 3] {
 }
 
 /// The mesh pipeline: one interleaved vertex buffer, a depth test, no culling, no MSAA;
-/// vs_main and fs_main into `formats`, or with no formats the shadow map's pipeline:
+/// vs_main and fs_main (fs_bits with rgba32uint AOVs) into `formats`, or with no
+/// formats the shadow map's pipeline:
 /// vs_shadow into the depth target alone.
 fn pipeline(
     d: &wgpu::Device,

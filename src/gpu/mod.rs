@@ -35,7 +35,7 @@ crate::choice::choice_enum! {
     pub enum Backend {
         Auto = "auto": "The best available adapter.",
         Vulkan = "vulkan": "Vulkan (Mesa's lavapipe where there is no GPU).",
-        Gl = "gl": "OpenGL ES through EGL (Mesa's llvmpipe where there is no GPU).",
+        Gl = "gl": "OpenGL through EGL, desktop GL or GL ES (Mesa's llvmpipe where there is no GPU).",
     }
 }
 

@@ -3,7 +3,8 @@
 
 use super::{Gpu, GpuError};
 
-/// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs) into
+/// The render pipeline of a module's vs_main and fs_aov (the colour and its AOVs; with
+/// rgba32uint AOV targets, `codegen::aov`'s fs_aov_bits appended to the module) into
 /// the targets' formats, with its pipeline-overridable constants.
 pub(super) fn pipeline(
     d: &wgpu::Device,
@@ -82,10 +83,18 @@ pub(super) fn opaque_targets<'f>(
 /// where the adapter can render to it; otherwise the bits of 32-bit floats in
 /// `rgba32uint` (wgpu's GL backend on a desktop GL core profile, llvmpipe's among them,
 /// does not report float colour buffers: `codegen::aov`), and 16-bit float only where
-/// neither is renderable. `read` takes the first two back exactly.
+/// neither is renderable, or where the adapter's `max_color_attachment_bytes_per_sample`
+/// is below the 56 bytes a sample of 32-bit AOVs takes (the manifest's
+/// `bytes_per_sample`; 16-bit ones take 32). `read` takes the first two back exactly.
 pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
+    let needed = crate::codegen::render_targets()
+        .iter()
+        .find(|t| t.entry == "fs_aov")
+        .map_or(8 + 3 * 16, |t| t.bytes_per_sample);
+    let room = gpu.device.limits().max_color_attachment_bytes_per_sample >= needed;
     let renderable = |f| {
-        gpu.adapter
+        room && gpu
+            .adapter
             .get_texture_format_features(f)
             .allowed_usages
             .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)

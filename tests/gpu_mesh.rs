@@ -395,21 +395,21 @@ fn refuses_on(gpu: &Gpu) {
     let mut small = textures.clone();
     small.normal = image::RgbaImage::new(32, 32);
     for (m, t) in [(&short, &textures), (&mesh, &small)] {
-        match MeshRenderer::new(&gpu, m, t, &layout.clone().into()) {
+        match MeshRenderer::new(gpu, m, t, &layout.clone().into()) {
             Err(MeshError::Input(_)) => {}
             Err(e) => panic!("{e}"),
             Ok(_) => panic!("accepted"),
         }
     }
-    let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout.clone().into()).unwrap();
+    let r = MeshRenderer::new(gpu, &mesh, &textures, &layout.clone().into()).unwrap();
     let v = view(1, 2.0, 16);
     assert_eq!(
-        r.render(&gpu, &v, ViewMode::Steps).unwrap_err(),
+        r.render(gpu, &v, ViewMode::Steps).unwrap_err(),
         MeshError::View(ViewMode::Steps)
     );
     // Background where the quad is not.
     let v = view(1, 20.0, 16);
-    let frame = r.render(&gpu, &v, ViewMode::Color).unwrap();
+    let frame = r.render(gpu, &v, ViewMode::Color).unwrap();
     let bg = v.background.to_array().map(|c| byte(tonemap(c)));
     assert!(
         frame.color[..3]

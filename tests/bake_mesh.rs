@@ -308,6 +308,16 @@ fn rim_distances(twist: f64, head: bool, refine: usize) -> Vec<(f64, f64)> {
         let tolerance = 1e-5 * (bounds.max - bounds.min).max_element();
         let mesh = adaptive_contour(field, &grid, tolerance, refine).mesh;
         let tris = mesh.triangles();
+        // The nearest triangle through buckets (exact within two cells), and over all
+        // triangles where none is that near.
+        let near = sdfc::bake::coverage::Nearby::new(tris.clone(), grid.cell, DVec3::ZERO);
+        let nearest = |p: DVec3| match near.distance(p) {
+            d if d <= 2.0 * grid.cell => d,
+            _ => tris
+                .iter()
+                .map(|[a, b, c]| to_triangle(p, *a, *b, *c))
+                .fold(f64::INFINITY, f64::min),
+        };
         let mut worst = 0.0f64;
         let mut rim_points = Vec::new();
         for i in 0..720 {
@@ -319,20 +329,25 @@ fn rim_distances(twist: f64, head: bool, refine: usize) -> Vec<(f64, f64)> {
                 rim_points.push(rim);
                 // On the zero set: both the body and the hole are 0 there.
                 assert!(eval::distance(field, rim).abs() < 1e-9, "{rim}");
-                let near = tris
-                    .iter()
-                    .map(|[a, b, c]| to_triangle(rim, *a, *b, *c))
-                    .fold(f64::INFINITY, f64::min);
-                worst = worst.max(near);
+                worst = worst.max(nearest(rim));
             }
         }
         // The mesh near the rim (triangles within a cell of it) against the zero set.
         let mut off = 0.0f64;
+        let (lo, hi) = rim_points
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), r| {
+                (lo.min(*r), hi.max(*r))
+            });
         for [a, b, c] in &tris {
             let centroid = (*a + *b + *c) / 3.0;
-            if rim_points
-                .iter()
-                .all(|r| (*r - centroid).length() > grid.cell)
+            // (Outside the rim's box grown by a cell, no rim point is within a cell.)
+            let outside =
+                centroid.cmplt(lo - grid.cell).any() || centroid.cmpgt(hi + grid.cell).any();
+            if outside
+                || rim_points
+                    .iter()
+                    .all(|r| (*r - centroid).length() > grid.cell)
             {
                 continue;
             }

@@ -174,9 +174,27 @@ fn every_example_compiles_in_tint_and_builds_from_the_manifest_under_default_lim
         &["--walk", "loop", "--multiscale"],
     );
     names.push("robot_multiscale".into());
+    // SwiftShader compiles a compute pipeline to machine code when it is created (a
+    // render pipeline waits for its first draw), and those builds were 70 % of this
+    // check (88 of 121 s on 2 cores). Tint's front end reads every entry point of every
+    // module (createShaderModule), every module's fs_main goes through Tint's back end
+    // (the unrolled walk's too), and
+    // `manifest::pipelines_build_with_layouts_from_the_manifest_users_alone` builds
+    // every entry point of every example from its manifest on wgpu. The compute entry
+    // points are built here on the modules that hold what changes their bindings or
+    // their code: a field that reads a texture (displacement), run-time parameters and
+    // time, and the multi-scale pass (cs_coarse) with a merge graph.
+    const COMPUTE_ON: [&str; 3] = ["displaced_sphere", "animated_bar", "robot_multiscale"];
+    for name in COMPUTE_ON {
+        assert!(names.iter().any(|n| n == name), "{name} is not an example");
+    }
+    let queue: Vec<serde_json::Value> = names
+        .iter()
+        .map(|n| serde_json::json!({ "name": n, "compute": COMPUTE_ON.contains(&n.as_str()) }))
+        .collect();
     std::fs::write(
         root.path().join("modules.json"),
-        serde_json::to_vec(&names).unwrap(),
+        serde_json::to_vec(&queue).unwrap(),
     )
     .unwrap();
     for f in ["check.html", "check.js"] {
@@ -200,6 +218,20 @@ fn every_example_compiles_in_tint_and_builds_from_the_manifest_under_default_lim
         .collect();
     eprintln!("per module: {}", times.join(", "));
     for m in modules {
+        // What was built: fs_main everywhere, every compute entry point where asked.
+        let built: Vec<&str> = m["built"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_str().unwrap())
+            .collect();
+        let compute = built.iter().filter(|b| b.starts_with("cs_")).count();
+        let asked = COMPUTE_ON.contains(&m["name"].as_str().unwrap());
+        let (fs, cs) = (
+            built.contains(&"fs_main"),
+            if asked { compute >= 5 } else { compute == 0 },
+        );
+        assert!(fs && cs, "{m}");
         let (msgs, errs) = (
             m["messages"].as_array().unwrap(),
             m["errors"].as_array().unwrap(),

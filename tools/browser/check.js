@@ -2,7 +2,9 @@
 // modules.json (folders written by `sdfc export-web`), Tint compiles the WGSL with no
 // message, and every entry point's pipeline builds with one bind group layout per
 // group made from the manifest's bindings whose `used_by` names that entry point, on
-// a device with WebGPU's default limits (no limit is requested). Sets
+// a device with WebGPU's default limits (no limit is requested). The compute entry
+// points are built only for modules listed with `compute: true` (tests/web.rs says
+// why). Sets
 // window.sdfcCheck = { modules: [{ name, messages, errors }] }.
 
 const KINDS = {
@@ -25,19 +27,20 @@ function layouts(device, manifest, entries, visibility) {
   return groups.map((entries) => device.createBindGroupLayout({ entries }));
 }
 
-async function check(device, name) {
+async function check(device, { name, compute }) {
   const wgsl = await (await fetch(`${name}/scene.wgsl`)).text();
   const manifest = await (await fetch(`${name}/manifest.json`)).json();
   device.pushErrorScope("validation");
   const module = device.createShaderModule({ code: wgsl });
   const info = await module.getCompilationInfo();
   const errors = [];
+  const built = [];
   const shaderError = await device.popErrorScope();
   if (shaderError) errors.push(`module: ${shaderError.message}`);
   // Every pipeline at once (the browser may compile them in parallel), each in its
   // own error scope.
   await Promise.all(manifest.entry_points.map(async (ep) => {
-    if (ep.name === "vs_main") return;
+    if (ep.name === "vs_main" || (ep.stage === "compute" && !compute)) return;
     const targets = ep.stage === "compute"
       ? null
       : manifest.render_targets.find((t) => t.entry === ep.name);
@@ -46,6 +49,7 @@ async function check(device, name) {
     if (targets && targets.bytes_per_sample > device.limits.maxColorAttachmentBytesPerSample) {
       return;
     }
+    built.push(ep.name);
     device.pushErrorScope("validation");
     const created = ep.stage === "compute"
       ? device.createComputePipelineAsync({
@@ -68,7 +72,7 @@ async function check(device, name) {
     const scoped = await e;
     if (scoped) errors.push(`${ep.name}: ${scoped.message}`);
   }));
-  return { name, messages: info.messages.map((m) => `${m.type}: ${m.message}`), errors };
+  return { name, messages: info.messages.map((m) => `${m.type}: ${m.message}`), errors, built };
 }
 
 // Two lanes, each with its own adapter and device (an error scope belongs to one device,
@@ -82,9 +86,9 @@ async function lane(queue, modules) {
   const device = await adapter.requestDevice();
   window.keep.push({ adapter, device });
   while (queue.length > 0) {
-    const name = queue.shift();
+    const item = queue.shift();
     const t = performance.now();
-    const m = await check(device, name);
+    const m = await check(device, item);
     m.ms = Math.round(performance.now() - t);
     modules.push(m);
   }

@@ -4,8 +4,10 @@
 //! http://127.0.0.1 by a small file server in this test.
 //!
 //! - Every example (loop walk, and `sphere.sdf` unrolled too) compiles in Tint with no
-//!   message, and every pipeline builds with one bind group layout per group from the manifest's users alone, on a
-//!   device with WebGPU's default limits.
+//!   message, and its render pipeline builds with one bind group layout per group from
+//!   the manifest's users alone, on a device with WebGPU's default limits; so do the
+//!   compute pipelines of the modules that hold what changes them (the test says
+//!   which, and why not all).
 //! - The page `sdfc export-web` writes renders `capsule.sdf`, `normal_map.sdf`, the
 //!   displaced, shell-mapped and many-seed examples and an animated one (its first frame, `?still`)
 //!   within the reference-image tolerance of `sdfc render` at the same size.
@@ -186,7 +188,10 @@ fn every_example_compiles_in_tint_and_builds_from_the_manifest_under_default_lim
     // time, and the multi-scale pass (cs_coarse) with a merge graph.
     const COMPUTE_ON: [&str; 3] = ["displaced_sphere", "animated_bar", "robot_multiscale"];
     for name in COMPUTE_ON {
-        assert!(names.iter().any(|n| n == name), "{name} is not an example");
+        assert!(
+            names.iter().any(|n| n == name),
+            "{name} is not a module here"
+        );
     }
     let queue: Vec<serde_json::Value> = names
         .iter()

@@ -5,7 +5,8 @@
 // a device with WebGPU's default limits (no limit is requested). The compute entry
 // points are built only for modules listed with `compute: true` (tests/web.rs says
 // why). Sets
-// window.sdfcCheck = { modules: [{ name, messages, errors }] }.
+// window.sdfcCheck = { modules: [{ name, messages, errors, built, ms }] }, where
+// `built` names the entry points whose pipelines were built.
 
 const KINDS = {
   "uniform": { buffer: { type: "uniform" } },

@@ -150,6 +150,31 @@ pub fn render_frame(
     (tan, nrm, if sign >= 0.0 { 1.0 } else { -1.0 })
 }
 
+/// The texel of a tangent-space normal map for the baked (object-space) normal in
+/// `t[8..11]`, against the frame `(T, N, bitangent sign)` a rasterizer rebuilds there
+/// ([`render_frame`]): `(n · T, n · B, n · N) · 0.5 + 0.5` in 8 bits.
+///
+/// A normal map's normals point out of the surface (z ≥ 0): engines that store two
+/// channels rebuild z as `√(1 − x² − y²)`, and a normal that points into the mesh
+/// shades its texel black in the others. The baked normal can point into the mesh
+/// where the mesh's interpolated normal is far from the field's gradient (a crease's
+/// triangle, such as the capsule's drilled rim: 232 of its 130,560 level-0 texels at 512², the
+/// default grid, before this clamp), so such a normal is replaced by the nearest one
+/// on the hemisphere: its tangent-plane direction at z = 0 (a grazing normal; straight
+/// out if it had none).
+pub fn tangent_space_texel((tan, nrm, sign): (DVec3, DVec3, f64), t: &Texel<CHANNELS>) -> Rgba<u8> {
+    let bit = nrm.cross(tan) * sign;
+    let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
+    let mut ts = DVec3::new(o.dot(tan), o.dot(bit), o.dot(nrm));
+    if ts.z < 0.0 {
+        ts = DVec3::new(ts.x, ts.y, 0.0)
+            .try_normalize()
+            .unwrap_or(DVec3::Z);
+    }
+    let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
+    Rgba([enc(ts.x), enc(ts.y), enc(ts.z), 255])
+}
+
 /// Writes every level of every cell into the atlas: base colour (sRGB),
 /// metallic-roughness, tangent-space normals and emission (when any). In a packed
 /// atlas the cells of a chart share their common rows and columns of texels (the same
@@ -183,12 +208,8 @@ pub fn atlas_images(
                     emits |= t[5] > 0.0 || t[6] > 0.0 || t[7] > 0.0;
                     emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
                     let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
-                    let (tan, nrm, sign) = render_frame(exported, m, c, u, v);
-                    let bit = nrm.cross(tan) * sign;
-                    let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
-                    let ts = DVec3::new(o.dot(tan), o.dot(bit), o.dot(nrm));
-                    let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
-                    normal.put_pixel(x, y, Rgba([enc(ts.x), enc(ts.y), enc(ts.z), 255]));
+                    let frame = render_frame(exported, m, c, u, v);
+                    normal.put_pixel(x, y, tangent_space_texel(frame, t));
                 }
             }
         }
@@ -243,15 +264,8 @@ pub fn atlas_images(
                         i.clamp(0, n - 1) as f64 / (n - 1) as f64,
                         jc as f64 / (n - 1) as f64,
                     );
-                    let (tan, nrm, sign) = render_frame(exported, m, c, u, v);
-                    let bit = nrm.cross(tan) * sign;
-                    let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);
-                    let enc = |x: f64| unorm8((x * 0.5 + 0.5) as f32);
-                    normal.put_pixel(
-                        x,
-                        y,
-                        Rgba([enc(o.dot(tan)), enc(o.dot(bit)), enc(o.dot(nrm)), 255]),
-                    );
+                    let frame = render_frame(exported, m, c, u, v);
+                    normal.put_pixel(x, y, tangent_space_texel(frame, &t));
                 }
             }
         }

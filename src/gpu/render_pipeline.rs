@@ -90,7 +90,8 @@ pub(super) fn formats(gpu: &Gpu) -> [wgpu::TextureFormat; 4] {
     let needed = crate::codegen::render_targets()
         .iter()
         .find(|t| t.entry == "fs_aov")
-        .map_or(8 + 3 * 16, |t| t.bytes_per_sample);
+        .expect("the codegen's render targets list fs_aov")
+        .bytes_per_sample;
     let room = gpu.device.limits().max_color_attachment_bytes_per_sample >= needed;
     let renderable = |f| {
         room && gpu

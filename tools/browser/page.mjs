@@ -71,9 +71,10 @@ try {
   }
 } finally {
   // The page has said what it was asked, so the browser is killed rather than closed:
-  // Chromium's orderly exit with SwiftShader kept a core busy for 3-4 s a page on the
-  // 2-core machine (browser.close(): 3.4-4.3 s, a kill: 0.1 s). Its other processes exit
-  // with it, and puppeteer removes its temporary profile when the process ends.
+  // on the 2-core machine Chromium's orderly exit made each exported page 0.4-1.2 s
+  // slower (7.0-7.3 s against 6.1-6.7 s), and 3.4-4.3 s, with a core busy, while a page
+  // still drew. Its other processes exit with it, and puppeteer removes its temporary
+  // profile when the process ends.
   browser.process().kill("SIGKILL");
 }
 process.stdout.write(JSON.stringify(out) + "\n");

@@ -158,10 +158,10 @@ pub fn render_frame(
 /// channels rebuild z as `√(1 − x² − y²)`, and a normal that points into the mesh
 /// shades its texel black in the others. The baked normal can point into the mesh
 /// where the mesh's interpolated normal is far from the field's gradient (a crease's
-/// triangle, such as the capsule's drilled rim: 232 of its 130,560 level-0 texels at 512², the
-/// default grid, before this clamp), so such a normal is replaced by the nearest one
-/// on the hemisphere: its tangent-plane direction at z = 0 (a grazing normal; straight
-/// out if it had none).
+/// triangle, such as the capsule's drilled rim: 232 of its 130,560 level-0 texels at
+/// 512², the default grid, before this clamp), so such a normal is replaced by the
+/// nearest one on the hemisphere: its tangent-plane direction at z = 0 (a grazing
+/// normal; straight out if it had none).
 pub fn tangent_space_texel((tan, nrm, sign): (DVec3, DVec3, f64), t: &Texel<CHANNELS>) -> Rgba<u8> {
     let bit = nrm.cross(tan) * sign;
     let o = DVec3::new(t[8] as f64, t[9] as f64, t[10] as f64).normalize_or(nrm);

@@ -424,6 +424,7 @@ fn the_bake_memory_model_is_its_formula() {
             (80 * s + 272 * s.min(1 << 20), "shade"),
             (120 * s, "handover"),
             (81 * s + 48 * f.texels, "encode"),
+            (56 * s + 396 * f.fit_batch, "fit"),
         ];
         let (most, phase) = phases.into_iter().max_by_key(|p| p.0).unwrap();
         let after = 800 * f.cells + 168 * f.vertices + most;
@@ -437,6 +438,7 @@ fn the_bake_memory_model_is_its_formula() {
         vertices: 4 * 10746,
         samples,
         texels,
+        fit_batch: 0,
     };
     let cases = [
         // The one-sphere scene at --size 1024, 4096 and 16384 (flat, grid 48).
@@ -445,6 +447,15 @@ fn the_bake_memory_model_is_its_formula() {
         (sphere(173_322_236, 16384 * 16128), "encode"),
         // Many samples in a small image (no such layout exists; the phase does).
         (sphere(50_000_000, 1000), "handover"),
+        // A small bake fitting its texels (--texels fit at --size 256: one batch of
+        // 2^18 sub-texel samples outweighs its 30,000 texels).
+        (
+            Footprint {
+                fit_batch: 1 << 18,
+                ..sphere(30_000, 256 * 256)
+            },
+            "fit",
+        ),
         (
             Footprint {
                 grid_corners: 515 * 515 * 515,
@@ -520,7 +531,8 @@ fn the_bake_memory_check_accepts_just_under_its_limit() {
 #[test]
 fn the_footprint_counts_the_samples_the_bake_shades() {
     use sdfc::bake::charts::ChartTable;
-    use sdfc::bake::pipeline::{sample_points, Footprint};
+    use sdfc::bake::fit::{half_points, BATCH_POINTS};
+    use sdfc::bake::pipeline::{sample_points, Footprint, Texels};
     use sdfc::bake::{ChartLayout, FlatLayout, PackedLayout, Patches};
     use sdfc::reference::mesh::{dual_contour, Grid};
     let dir = tempfile::tempdir().unwrap();
@@ -537,7 +549,22 @@ fn the_footprint_counts_the_samples_the_bake_shades() {
             ChartLayout::Flat(FlatLayout::fit(table.len(), size).unwrap()),
             ChartLayout::Packed(PackedLayout::fit(&singles.dims, size).unwrap()),
         ] {
-            let f = Footprint::of(&grid, &table, quads.vertices.len(), &atlas, m);
+            let of = |texels| Footprint::of(&grid, &table, quads.vertices.len(), &atlas, m, texels);
+            let f = of(Texels::Points);
+            assert_eq!(f.fit_batch, 0);
+            // --texels fit holds at most a batch of whole charts' sub-texel samples.
+            let per_chart = half_points(atlas.cell_size() as usize).len();
+            let fit = of(Texels::Fit);
+            assert_eq!(fit.fit_batch % per_chart as u64, 0);
+            assert!(fit.fit_batch <= (per_chart * table.len()) as u64);
+            assert!(fit.fit_batch <= BATCH_POINTS.max(per_chart) as u64);
+            assert_eq!(
+                Footprint {
+                    fit_batch: 0,
+                    ..fit
+                },
+                f
+            );
             let grid_points = sdfc::bake::images::vertex_grid(&quads, &table, m, &|p| p);
             let points = sample_points(&quads, &table, atlas.cell_size() as usize, &grid_points);
             let shaded = points.corners.len() + points.edges.len() + points.interiors.len();

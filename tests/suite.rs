@@ -21,6 +21,8 @@ mod bake_cli;
 mod bake_export;
 #[path = "bake_fidelity.rs"]
 mod bake_fidelity;
+#[path = "bake_fit.rs"]
+mod bake_fit;
 #[path = "bake_mesh.rs"]
 mod bake_mesh;
 #[path = "bake_packed.rs"]

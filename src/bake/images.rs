@@ -375,6 +375,25 @@ pub fn on_triangles(
     p[0] * w[0] + p[1] * w[1] + p[2] * w[2] + p[3] * w[3]
 }
 
+/// A bake's sample of chart `c` at chart-local `(u, v)`: the exported mesh's point
+/// there ([`on_triangles`]), with the footprint of a sample `spacing` apart (in chart
+/// units) as the fourth value, the longer of the chart's mean side lengths times it.
+pub fn interior_point(
+    mesh: &QuadMesh,
+    table: &ChartTable,
+    grid: &Samples<[f64; 3]>,
+    c: usize,
+    (u, v): (f64, f64),
+    spacing: f64,
+) -> [f32; 4] {
+    let q = table.corners[c].map(|i| mesh.vertices[i as usize]);
+    let p = on_triangles(grid, table, c, u, v);
+    let size = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) * 0.5;
+    let size = size.max(((q[3] - q[0]).length() + (q[2] - q[1]).length()) * 0.5);
+    let f = size * spacing;
+    [p.x as f32, p.y as f32, p.z as f32, f as f32]
+}
+
 /// The point of the exported mesh on edge `e` at `t` (from `a` to `b`): linear between
 /// the edge's consecutive vertices, which both charts of the edge share.
 pub fn on_edge(grid: &Samples<[f64; 3]>, table: &ChartTable, e: usize, t: f64) -> DVec3 {

@@ -14,6 +14,7 @@
 pub mod charts;
 pub mod coverage;
 pub mod export;
+pub mod fit;
 pub mod gpu;
 pub mod images;
 /// The mesher lives with the CPU geometry (dual contouring, surface samples).

@@ -1,6 +1,8 @@
 //! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
 
 use super::charts::{ChartTable, Samples};
+use super::fit;
+pub use super::fit::Texels;
 use super::gpu::{BakePass, Shaded};
 use super::images;
 use super::mesh::{contour_refining, refine, Grid, QuadMesh, Refining, MAX_GRID};
@@ -70,6 +72,8 @@ pub struct Options {
     /// Whether cells that may hold detail finer than themselves are meshed on a finer
     /// grid ([`refine`]).
     pub refine: Refine,
+    /// Level-0 texels point-sampled, or fitted for a bilinear reader ([`fit`]).
+    pub texels: Texels,
 }
 
 /// Refinement of the mesh where a cell may hold detail finer than itself.
@@ -96,6 +100,7 @@ impl Default for Options {
             style: Style::Flat,
             max_chart: DEFAULT_MAX_CHART,
             refine: Refine::Auto,
+            texels: Texels::Points,
         }
     }
 }
@@ -180,6 +185,8 @@ pub struct Report {
     /// How much of the surface the mesh holds ([`super::coverage`]).
     pub coverage: super::coverage::Coverage,
     pub samples: usize,
+    /// The sub-texel samples shaded for [`Texels::Fit`] (0 with `Points`).
+    pub fit_samples: usize,
     pub stages: Vec<(&'static str, Duration)>,
 }
 
@@ -247,13 +254,7 @@ pub fn sample_points(
                 (b - a).length() * spacing,
             )
         },
-        |c, s, t| {
-            let q = table.corners[c].map(|i| v[i as usize]);
-            let p = images::on_triangles(grid, table, c, s, t);
-            let size = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) * 0.5;
-            let size = size.max(((q[3] - q[0]).length() + (q[2] - q[1]).length()) * 0.5);
-            pack(p, size * spacing)
-        },
+        |c, s, t| images::interior_point(mesh, table, grid, c, (s, t), spacing),
     )
 }
 
@@ -270,6 +271,8 @@ pub struct Footprint {
     pub samples: u64,
     /// The atlas image's texels, width × height.
     pub texels: u64,
+    /// The sub-texel samples `--texels fit` holds at once (0 without it).
+    pub fit_batch: u64,
 }
 
 impl Footprint {
@@ -289,8 +292,13 @@ impl Footprint {
         vertices: usize,
         atlas: &ChartLayout,
         m: usize,
+        texels: Texels,
     ) -> Self {
         let n = atlas.cell_size() as u64;
+        let fit_batch = match texels {
+            Texels::Points => 0,
+            Texels::Fit => fit::batch_samples(n as usize, table.len()) as u64,
+        };
         let inner = n.saturating_sub(2);
         let cells = table.len() as u64;
         Footprint {
@@ -298,6 +306,7 @@ impl Footprint {
             texels: atlas.width() as u64 * atlas.height() as u64,
             cells,
             vertices: cells * (m as u64 + 1).pow(2),
+            fit_batch,
             ..Footprint::grid(grid)
         }
     }
@@ -325,6 +334,13 @@ pub const HANDOVER_SAMPLE_BYTES: u64 = 64 + LEVEL_SAMPLE_BYTES + 12;
 /// A level-0 sample while the outputs are encoded: every level (44 × 4/3 ≤ 59), the
 /// projected point (12) and `--ktx2`'s stacked levels (4 × 4/3, twice: 11).
 pub const ENCODE_SAMPLE_BYTES: u64 = LEVEL_SAMPLE_BYTES * 4 / 3 + 12 + 11;
+/// A level-0 sample while `--texels fit` runs: level 0 ([`LEVEL_SAMPLE_BYTES`]) and the
+/// projected point (12).
+pub const FIT_HELD_SAMPLE_BYTES: u64 = LEVEL_SAMPLE_BYTES + 12;
+/// A sub-texel sample of the fit's batch: its point (16), its [`Shaded`] result (64),
+/// its share of the dispatch in flight ([`DISPATCH_POINT_BYTES`]; a batch is at most
+/// one dispatch) and of the fitted texels (at most one each, [`LEVEL_SAMPLE_BYTES`]).
+pub const FIT_BATCH_SAMPLE_BYTES: u64 = 16 + 64 + DISPATCH_POINT_BYTES + LEVEL_SAMPLE_BYTES;
 /// An atlas texel while the outputs are encoded: four RGBA8 images (16), the .glb's
 /// PNGs in its buffer and in the file (at worst 12 each: RGB, incompressible), and
 /// `--object-normals` (an RGBA8 image and its PNG: 8).
@@ -347,6 +363,7 @@ pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
 /// after:  800 B × cells + 168 B × exported vertices
 ///         + max(80 B × S + 272 B × min(S, 2^20),    shading, one dispatch in flight
 ///               120 B × S,                          shaded results → level 0
+///               56 B × S + 396 B × F,               --texels fit, F at once
 ///               81 B × S + 48 B × T)                encoding the outputs
 /// ```
 ///
@@ -360,7 +377,9 @@ pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
     let shade = SHADE_SAMPLE_BYTES * s + DISPATCH_POINT_BYTES * dispatch;
     let handover = HANDOVER_SAMPLE_BYTES * s;
     let encode = ENCODE_SAMPLE_BYTES * s + ENCODE_TEXEL_BYTES * f.texels;
-    let after = CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode);
+    let fit = FIT_HELD_SAMPLE_BYTES * s + FIT_BATCH_SAMPLE_BYTES * f.fit_batch;
+    let after =
+        CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode).max(fit);
     BASE_BYTES + mesh.max(after)
 }
 
@@ -560,6 +579,7 @@ pub fn bake<'s>(
         &table,
         n,
         &grid_points,
+        options.texels,
         progress,
         &mut report,
         &mut lap,
@@ -705,6 +725,7 @@ fn lay_out_charts(
         quads.vertices.len(),
         &atlas,
         m,
+        options.texels,
     ))?;
     Ok((patches, table, atlas))
 }
@@ -722,6 +743,7 @@ fn shade(
     table: &ChartTable,
     n: usize,
     grid: &Samples<[f64; 3]>,
+    texels: Texels,
     progress: &dyn Progress,
     report: &mut Report,
     lap: &mut dyn FnMut(&mut Report, &'static str),
@@ -755,7 +777,7 @@ fn shade(
             s.normal[2],
         ]
     };
-    let level0 = Samples {
+    let mut level0 = Samples {
         n,
         corners: shaded[..nc].iter().map(texel).collect(),
         edges: shaded[nc..nc + ne].iter().map(texel).collect(),
@@ -771,6 +793,14 @@ fn shade(
     report.max_residual = shaded.iter().map(|s| s.residual as f64).fold(0.0, f64::max);
     drop(shaded);
     lap(report, "shade (GPU)");
+    if texels == Texels::Fit {
+        progress.stage("fit", fit::half_points(n).len() * table.len());
+        report.fit_samples = fit::fit(gpu, &pass, quads, table, grid, &mut level0, &|k| {
+            progress.advance(k)
+        })?;
+        progress.finish();
+        lap(report, "fit (GPU)");
+    }
     Ok((level0, projected))
 }
 

@@ -2,7 +2,7 @@
 
 use super::{compile, exit, BakeArgs};
 use indicatif::{ProgressBar, ProgressStyle};
-use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Refine, Resolution};
+use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Refine, Resolution, Texels};
 use sdfc::bake::{export, table::ChartsFile};
 use sdfc::fsutil::write_output;
 use sdfc::gpu::Gpu;
@@ -26,6 +26,15 @@ pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
         }
     }
     Ok(out)
+}
+
+/// Parses `--texels`: `fit` or `points`.
+pub fn parse_texels(s: &str) -> Result<Texels, String> {
+    match s {
+        "fit" => Ok(Texels::Fit),
+        "points" => Ok(Texels::Points),
+        _ => Err(format!("expected fit or points, found {s:?}")),
+    }
 }
 
 /// Parses `--refine`: `auto` or a factor from 1 to [`refine::MAX_REFINE`].
@@ -129,6 +138,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         style,
         max_chart: args.max_chart,
         refine: args.refine,
+        texels: args.texels,
     })
 }
 

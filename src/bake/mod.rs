@@ -7,7 +7,8 @@
 //! ```text
 //!  shape ──mesh──▶ chart grid (dual contouring, quads) ──charts──▶ chart table
 //!        ──texels──▶ level-0 sample points (shared boundaries computed once)
-//!        ──GPU material pass──▶ attributes ──mips──▶ boundary-symmetric levels
+//!        ──GPU material pass──▶ attributes (──fit──▶ least-squares inner texels)
+//!        ──mips──▶ boundary-symmetric levels
 //!        ──layout──▶ flat atlas image ──export──▶ .glb / .ktx2 / charts.json
 //! ```
 

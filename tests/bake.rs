@@ -20,16 +20,7 @@ fn bake_source(
     base: &Path,
     options: &Options,
 ) -> Result<Baked, BakeError> {
-    let analysis = sdfc::driver::check(source, Some(base));
-    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
-    let compiled = sdfc::driver::compile(
-        &analysis,
-        &sdfc::codegen::Options {
-            walk: sdfc::codegen::WalkForm::Loop,
-            ..Default::default()
-        },
-    )
-    .expect("compiles");
+    let (analysis, compiled) = common::check_and_compile_loop(source, base);
     let scene = analysis.scene.as_ref().expect("scene");
     let shape = sdfc::driver::pick_shape(scene, None).expect("shape");
     pipeline::bake(

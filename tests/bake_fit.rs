@@ -206,16 +206,7 @@ render s.paint(m);
 fn fitted_texels_keep_the_borders_and_draw_the_material_closer_between_texels() {
     let Some(gpu) = gpu_for_tests() else { return };
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let analysis = sdfc::driver::check(BRICKS, Some(&base));
-    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
-    let compiled = sdfc::driver::compile(
-        &analysis,
-        &sdfc::codegen::Options {
-            walk: sdfc::codegen::WalkForm::Loop,
-            ..Default::default()
-        },
-    )
-    .expect("compiles");
+    let (analysis, compiled) = common::check_and_compile_loop(BRICKS, &base);
     let scene = analysis.scene.as_ref().unwrap();
     let shape = sdfc::driver::pick_shape(scene, None).unwrap();
     let bake = |texels: Texels| -> Baked {

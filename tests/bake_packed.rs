@@ -30,16 +30,7 @@ render s.paint(m) {
 
 fn bake(gpu: &Gpu, style: Style, max_chart: usize) -> Baked {
     let dir = tempfile::tempdir().unwrap();
-    let analysis = sdfc::driver::check(SCENE, Some(dir.path()));
-    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
-    let compiled = sdfc::driver::compile(
-        &analysis,
-        &sdfc::codegen::Options {
-            walk: sdfc::codegen::WalkForm::Loop,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let (analysis, compiled) = common::check_and_compile_loop(SCENE, dir.path());
     let shape = sdfc::driver::pick_shape(analysis.scene.as_ref().unwrap(), None).unwrap();
     let options = Options {
         size: 512,

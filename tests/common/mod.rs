@@ -434,3 +434,23 @@ pub fn both_for_tests() -> Vec<sdfc::gpu::Gpu> {
         .flatten()
         .collect()
 }
+
+/// A scene checked without errors (asserted) and compiled with the loop walk, as the
+/// bake's tests compile theirs (the unrolled walk's pipeline is slow to build on a
+/// software adapter, and the bake does not depend on the walk's form).
+pub fn check_and_compile_loop(
+    source: &str,
+    base: &std::path::Path,
+) -> (sdfc::driver::Analysis, sdfc::driver::Compiled) {
+    let analysis = sdfc::driver::check(source, Some(base));
+    assert!(!analysis.has_errors(), "{:?}", analysis.diagnostics);
+    let compiled = sdfc::driver::compile(
+        &analysis,
+        &sdfc::codegen::Options {
+            walk: sdfc::codegen::WalkForm::Loop,
+            ..Default::default()
+        },
+    )
+    .expect("compiles");
+    (analysis, compiled)
+}

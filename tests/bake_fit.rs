@@ -120,6 +120,16 @@ fn the_fit_is_the_least_squares_solution_and_reproduces_a_bilinear_material() {
             }
         }
 
+        // A sample the material left undefined: the chart keeps its point samples.
+        let (texels, offsets, mut samples) = chart(n, &g);
+        samples[offsets.len() / 2].color[1] = f32::NAN;
+        let texel = |i: usize, j: usize| as_texel(texels[j * n + i]);
+        let kept = fit_chart(n, &texel, &offsets, &samples);
+        let m = n - 2;
+        for (r, t) in kept.iter().enumerate() {
+            assert_eq!(*t, texel(r % m + 1, r / m + 1), "n = {n}");
+        }
+
         // A material that is not: a sharp edge at an angle, and ripples. The fit is
         // the dense least-squares solution over the half-texel samples.
         let phase: [f64; FITTED] = std::array::from_fn(|_| rng.unit() * 6.0);
@@ -129,7 +139,6 @@ fn the_fit_is_the_least_squares_solution_and_reproduces_a_bilinear_material() {
         };
         let (texels, offsets, samples) = chart(n, &g);
         let got = fitted(n, &texels, &offsets, &samples);
-        let m = n - 2;
         let last = 2 * n - 3;
         for k in 0..FITTED {
             // Rows: every half point the fit reads; columns: the inner texels.

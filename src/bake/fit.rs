@@ -167,6 +167,10 @@ pub fn fit_chart(
     for (&(a, b), s) in offsets.iter().zip(samples) {
         data[b * side + a] = channels(s);
     }
+    // A sample the material left undefined: the chart keeps its point samples.
+    if data.iter().flatten().any(|x| !x.is_finite()) {
+        return inner;
+    }
     // The texels: borders as they are, the inner ones (the unknowns) zero.
     let mut coef = vec![[0.0; FITTED]; n * n];
     for j in 0..n {

@@ -466,7 +466,7 @@ pub struct BakeArgs {
     pub refine: sdfc::bake::pipeline::Refine,
     /// How level-0 texels are chosen: `fit` sets each chart's inner texels so that a
     /// reader's bilinear filter draws the material between texels too (it shades four
-    /// samples a texel, about twice the bake's time); `points` takes the material at
+    /// samples a texel: about three times the bake's time); `points` takes the material at
     /// each texel's point. Chart borders are point samples either way (docs/baking.md).
     #[arg(long, value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels)]
     pub texels: sdfc::bake::pipeline::Texels,

@@ -77,6 +77,11 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         if stem == "capsule" {
             args.push("--gutter");
         }
+        // Two with fitted texels, one in each layout: the same checks hold.
+        let fit = ["normal_map", "robot"].contains(&stem.as_str());
+        if fit {
+            args.extend(["--texels", "fit"]);
+        }
         let (mut code, _, mut err) = sdfc(&args);
         // Other examples on a ground plane: the message names --bounds; bake the
         // region above the floor, as a user would.
@@ -89,6 +94,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             err.contains("utilisation:") && err.contains("shade (GPU)"),
             "{stem}: {err}"
         );
+        assert_eq!(err.contains("--texels fit)"), fit, "{stem}: {err}");
         // The coverage line, and its warning where a thin shell falls between the corners
         // of this coarse grid.
         assert!(err.contains("surface held:"), "{stem}: {err}");
@@ -316,6 +322,11 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             "expected auto or a whole number from 1 to 8",
         ),
         (vec![&sphere, "--grid", "1"], 2, "cells"),
+        (
+            vec![&sphere, "--texels", "nearest"],
+            2,
+            "expected fit or points",
+        ),
         (
             vec![&sphere, "--grid", "8", "--size", "16"],
             5,

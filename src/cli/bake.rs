@@ -429,6 +429,12 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         "projection:     largest |f| at a texel point {:.2e} of the scale ({} samples)",
         r.max_residual, r.samples
     );
+    if r.fit_samples > 0 {
+        eprintln!(
+            "texels:         inner texels fitted for a bilinear reader from {} more samples (--texels fit)",
+            r.fit_samples
+        );
+    }
     let c = &r.coverage;
     // (Samples are not looked at past two cells.)
     let farthest = if c.farthest >= 2.0 {

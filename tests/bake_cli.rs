@@ -656,4 +656,31 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
         .map(|s| s["name"].as_str().unwrap())
         .collect();
     assert!(stages.contains(&"mesh, refined"), "{stages:?}");
+    assert!(!stages.contains(&"fit (GPU)"), "{stages:?}");
+    assert_eq!(v["fit_samples"], 0, "{v}");
+
+    // With fitted texels: the fit's stage and its samples.
+    let (code, _, err) = sdfc(&[
+        "bench",
+        "--bake",
+        "examples/robot.sdf",
+        "--atlas-size",
+        "512",
+        "--bake-texels",
+        "fit",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("--texels fit)"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert!(v["fit_samples"].as_u64().unwrap() > 0, "{v}");
+    assert!(
+        v["stages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|s| s["name"] == "fit (GPU)"),
+        "{v}"
+    );
 }

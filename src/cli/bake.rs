@@ -474,6 +474,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             super::Layout::Flat => pipeline::Style::Flat,
             super::Layout::Packed => pipeline::Style::Packed,
         },
+        texels: args.bake_texels,
         ..Options::default()
     };
     let base = super::base_dir(scene);
@@ -538,6 +539,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             "atlas": [baked.atlas.width(), baked.atlas.height()],
             "levels": baked.atlas.levels(),
             "samples": r.samples,
+            "fit_samples": r.fit_samples,
             "charts": r.charts,
             "refined_cells": r.refined,
             "refine": r.refine,

@@ -295,6 +295,9 @@ pub struct BenchArgs {
     /// The atlas layout for --bake.
     #[arg(long = "bake-layout", value_enum, default_value = "flat")]
     pub bake_layout: Layout,
+    /// How --bake chooses its level-0 texels (as `sdfc bake --texels`).
+    #[arg(long = "bake-texels", value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels)]
+    pub bake_texels: sdfc::bake::pipeline::Texels,
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
     pub edits: u32,

@@ -88,7 +88,7 @@ pub fn fit(
 ) -> Result<usize, GpuError> {
     let n = level0.n;
     let offsets = half_points(n);
-    if offsets.is_empty() || table.len() == 0 {
+    if offsets.is_empty() || table.is_empty() {
         return Ok(0);
     }
     let m = n - 2;

@@ -435,7 +435,10 @@ fn the_bake_memory_model_is_its_formula() {
             (80 * s + 272 * s.min(1 << 20), "shade"),
             (120 * s, "handover"),
             (81 * s + 48 * f.texels, "encode"),
-            (56 * s + 396 * f.fit_batch, "fit"),
+            (
+                56 * s + 124 * f.fit_batch + 272 * f.fit_batch.min(1 << 20),
+                "fit",
+            ),
         ];
         let (most, phase) = phases.into_iter().max_by_key(|p| p.0).unwrap();
         let after = 800 * f.cells + 168 * f.vertices + most;
@@ -458,11 +461,11 @@ fn the_bake_memory_model_is_its_formula() {
         (sphere(173_322_236, 16384 * 16128), "encode"),
         // Many samples in a small image (no such layout exists; the phase does).
         (sphere(50_000_000, 1000), "handover"),
-        // A small bake fitting its texels (--texels fit at --size 256: one batch of
-        // 2^18 sub-texel samples outweighs its 30,000 texels).
+        // A small bake fitting its texels (--texels fit at --size 256: all its charts
+        // in one batch, three sub-texel samples a texel, outweigh its 30,000 samples).
         (
             Footprint {
-                fit_batch: 1 << 18,
+                fit_batch: 90_000,
                 ..sphere(30_000, 256 * 256)
             },
             "fit",
@@ -542,7 +545,7 @@ fn the_bake_memory_check_accepts_just_under_its_limit() {
 #[test]
 fn the_footprint_counts_the_samples_the_bake_shades() {
     use sdfc::bake::charts::ChartTable;
-    use sdfc::bake::fit::{half_points, BATCH_POINTS};
+    use sdfc::bake::fit::{half_count, half_points, BATCH_POINTS};
     use sdfc::bake::pipeline::{sample_points, Footprint, Texels};
     use sdfc::bake::{ChartLayout, FlatLayout, PackedLayout, Patches};
     use sdfc::reference::mesh::{dual_contour, Grid};
@@ -564,11 +567,13 @@ fn the_footprint_counts_the_samples_the_bake_shades() {
             let f = of(Texels::Points);
             assert_eq!(f.fit_batch, 0);
             // --texels fit holds at most a batch of whole charts' sub-texel samples.
-            let per_chart = half_points(atlas.cell_size() as usize).len();
+            let n = atlas.cell_size() as usize;
+            let per_chart = half_points(n).len();
+            assert!(per_chart > 0, "{n}² texels a chart");
+            assert_eq!(half_count(n), per_chart);
+            let charts = (BATCH_POINTS / per_chart).max(1).min(table.len());
             let fit = of(Texels::Fit);
-            assert_eq!(fit.fit_batch % per_chart as u64, 0);
-            assert!(fit.fit_batch <= (per_chart * table.len()) as u64);
-            assert!(fit.fit_batch <= BATCH_POINTS.max(per_chart) as u64);
+            assert_eq!(fit.fit_batch, (per_chart * charts) as u64);
             assert_eq!(
                 Footprint {
                     fit_batch: 0,

@@ -120,14 +120,28 @@ fn the_fit_is_the_least_squares_solution_and_reproduces_a_bilinear_material() {
             }
         }
 
-        // A sample the material left undefined: the chart keeps its point samples.
-        let (texels, offsets, mut samples) = chart(n, &g);
-        samples[offsets.len() / 2].color[1] = f32::NAN;
-        let texel = |i: usize, j: usize| as_texel(texels[j * n + i]);
-        let kept = fit_chart(n, &texel, &offsets, &samples);
+        // A sample or a texel the material left undefined (inside the chart or on
+        // its border): the chart keeps its point samples.
         let m = n - 2;
-        for (r, t) in kept.iter().enumerate() {
-            assert_eq!(*t, texel(r % m + 1, r / m + 1), "n = {n}");
+        let (texels, offsets, samples) = chart(n, &g);
+        for undefined in 0..3 {
+            let (mut texels, mut samples) = (texels.clone(), samples.clone());
+            match undefined {
+                0 => samples[offsets.len() / 2].color[1] = f32::NAN,
+                1 => texels[n + 1][2] = f64::NAN,
+                _ => texels[n - 1][0] = f64::INFINITY,
+            }
+            let texel = |i: usize, j: usize| as_texel(texels[j * n + i]);
+            let kept = fit_chart(n, &texel, &offsets, &samples);
+            for (r, t) in kept.iter().enumerate() {
+                let want = texel(r % m + 1, r / m + 1);
+                assert!(
+                    t.iter()
+                        .zip(&want)
+                        .all(|(a, b)| a == b || (a.is_nan() && b.is_nan())),
+                    "n = {n}, case {undefined}"
+                );
+            }
         }
 
         // A material that is not: a sharp edge at an angle, and ripples. The fit is

@@ -37,15 +37,25 @@ pub const FITTED: usize = 8;
 /// 100 MiB at this count ([`super::pipeline::FIT_BATCH_SAMPLE_BYTES`]).
 pub const BATCH_POINTS: usize = 1 << 18;
 
+/// How many [`half_points`] a chart of `n` texels a side has, without listing them:
+/// `(2n − 3)² − (n − 2)²`.
+pub fn half_count(n: usize) -> usize {
+    if n < 3 {
+        0
+    } else {
+        (2 * n - 3).pow(2) - (n - 2).pow(2)
+    }
+}
+
 /// How many charts of `n` texels a side are fitted at once.
 fn batch_charts(n: usize) -> usize {
-    (BATCH_POINTS / half_points(n).len().max(1)).max(1)
+    (BATCH_POINTS / half_count(n).max(1)).max(1)
 }
 
 /// The most sub-texel samples held at once when `cells` charts of `n` texels a side
 /// are fitted (for the bake's memory estimate).
 pub fn batch_samples(n: usize, cells: usize) -> usize {
-    half_points(n).len() * batch_charts(n).min(cells)
+    half_count(n) * batch_charts(n).min(cells)
 }
 
 /// How a bake chooses its level-0 texels.
@@ -157,6 +167,9 @@ pub fn fit_chart(
     offsets: &[(usize, usize)],
     samples: &[Shaded],
 ) -> Vec<Texel<CHANNELS>> {
+    if n < 3 {
+        return Vec::new();
+    }
     let m = n - 2;
     let side = 2 * n - 1;
     let inner: Vec<Texel<CHANNELS>> = (1..=m)
@@ -166,10 +179,6 @@ pub fn fit_chart(
     let mut data = vec![[0.0; FITTED]; side * side];
     for (&(a, b), s) in offsets.iter().zip(samples) {
         data[b * side + a] = channels(s);
-    }
-    // A sample the material left undefined: the chart keeps its point samples.
-    if data.iter().flatten().any(|x| !x.is_finite()) {
-        return inner;
     }
     // The texels: borders as they are, the inner ones (the unknowns) zero.
     let mut coef = vec![[0.0; FITTED]; n * n];
@@ -183,6 +192,11 @@ pub fn fit_chart(
                 coef[j * n + i] = v;
             }
         }
+    }
+    // A sample or texel the material left undefined: the chart keeps its point
+    // samples (a fit would spread it over the whole chart).
+    if data.iter().chain(&coef).flatten().any(|x| !x.is_finite()) {
+        return inner;
     }
     // The range of the chart's samples, which the fitted texels keep to.
     let (mut lo, mut hi) = ([f64::INFINITY; FITTED], [f64::NEG_INFINITY; FITTED]);

@@ -337,10 +337,12 @@ pub const ENCODE_SAMPLE_BYTES: u64 = LEVEL_SAMPLE_BYTES * 4 / 3 + 12 + 11;
 /// A level-0 sample while `--texels fit` runs: level 0 ([`LEVEL_SAMPLE_BYTES`]) and the
 /// projected point (12).
 pub const FIT_HELD_SAMPLE_BYTES: u64 = LEVEL_SAMPLE_BYTES + 12;
-/// A sub-texel sample of the fit's batch: its point (16), its [`Shaded`] result (64),
-/// its share of the dispatch in flight ([`DISPATCH_POINT_BYTES`]; a batch is at most
-/// one dispatch) and of the fitted texels (at most one each, [`LEVEL_SAMPLE_BYTES`]).
-pub const FIT_BATCH_SAMPLE_BYTES: u64 = 16 + 64 + DISPATCH_POINT_BYTES + LEVEL_SAMPLE_BYTES;
+/// A sub-texel sample of the fit's batch: its point (16) and its [`Shaded`] result
+/// (64), held together while the batch is shaded, then the result with the batch's
+/// fitted texels (fewer than its samples: [`LEVEL_SAMPLE_BYTES`] covers them and each
+/// chart's f64 scratch). The dispatch in flight adds [`DISPATCH_POINT_BYTES`] per point,
+/// at most [`MAX_POINTS_PER_DISPATCH`] of them.
+pub const FIT_BATCH_SAMPLE_BYTES: u64 = 16 + 64 + LEVEL_SAMPLE_BYTES;
 /// An atlas texel while the outputs are encoded: four RGBA8 images (16), the .glb's
 /// PNGs in its buffer and in the file (at worst 12 each: RGB, incompressible), and
 /// `--object-normals` (an RGBA8 image and its PNG: 8).
@@ -363,7 +365,8 @@ pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
 /// after:  800 B × cells + 168 B × exported vertices
 ///         + max(80 B × S + 272 B × min(S, 2^20),    shading, one dispatch in flight
 ///               120 B × S,                          shaded results → level 0
-///               56 B × S + 396 B × F,               --texels fit, F at once
+///               56 B × S + 124 B × F                --texels fit, F at once,
+///               + 272 B × min(F, 2^20),
 ///               81 B × S + 48 B × T)                encoding the outputs
 /// ```
 ///
@@ -377,7 +380,9 @@ pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
     let shade = SHADE_SAMPLE_BYTES * s + DISPATCH_POINT_BYTES * dispatch;
     let handover = HANDOVER_SAMPLE_BYTES * s;
     let encode = ENCODE_SAMPLE_BYTES * s + ENCODE_TEXEL_BYTES * f.texels;
-    let fit = FIT_HELD_SAMPLE_BYTES * s + FIT_BATCH_SAMPLE_BYTES * f.fit_batch;
+    let fit = FIT_HELD_SAMPLE_BYTES * s
+        + FIT_BATCH_SAMPLE_BYTES * f.fit_batch
+        + DISPATCH_POINT_BYTES * f.fit_batch.min(MAX_POINTS_PER_DISPATCH as u64);
     let after =
         CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode).max(fit);
     BASE_BYTES + mesh.max(after)
@@ -794,7 +799,7 @@ fn shade(
     drop(shaded);
     lap(report, "shade (GPU)");
     if texels == Texels::Fit {
-        progress.stage("fit", fit::half_points(n).len() * table.len());
+        progress.stage("fit", fit::half_count(n) * table.len());
         report.fit_samples = fit::fit(gpu, &pass, quads, table, grid, &mut level0, &|k| {
             progress.advance(k)
         })?;

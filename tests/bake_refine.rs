@@ -301,6 +301,23 @@ fn the_bake_refines_where_the_plain_mesh_misses_surface() {
     assert!(small.refine_dropped.is_some(), "{small:?}");
     assert_eq!((small.refine, small.refined), (1, 0));
     assert!(small.coverage.missed > 0.05);
+    // The dropped mesh's coverage is never measured: one coverage stage, the plain
+    // mesh's; a kept refined mesh's comes after its charts are laid out.
+    let stages = |r: &sdfc::bake::pipeline::Report| -> Vec<&'static str> {
+        r.stages.iter().map(|s| s.0).collect()
+    };
+    assert_eq!(
+        stages(&small).iter().filter(|s| **s == "coverage").count(),
+        1,
+        "{:?}",
+        stages(&small)
+    );
+    let kept = stages(&refined);
+    let charts = kept.iter().position(|s| *s == "charts").unwrap();
+    assert!(
+        kept.iter().rposition(|s| *s == "coverage").unwrap() > charts,
+        "{kept:?}"
+    );
     let never = bake(1024, Refine::Times(1));
     assert_eq!((never.refined, never.plain_coverage), (0, None));
     assert_eq!(never.coverage, plain);

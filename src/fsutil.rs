@@ -328,3 +328,42 @@ pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> 
     }
     Ok(())
 }
+
+/// The longest file name most file systems take (Linux's NAME_MAX), in bytes.
+pub const MAX_NAME_BYTES: usize = 255;
+
+/// Whether `path` can be written, checked before the work that produces it: not a
+/// folder (nor a name ending in a separator), a name the file system takes, in a folder
+/// that exists and takes a new file (tried with a temporary file there, removed at
+/// once). Streams under `/dev` and `/proc` are written through and pass.
+pub fn check_writable(path: &Path) -> Result<(), String> {
+    let text = path.as_os_str().to_string_lossy();
+    if path.is_dir() || text.ends_with(std::path::MAIN_SEPARATOR) || text.ends_with('/') {
+        return Err("it names a folder, not a file".into());
+    }
+    if is_system(path) {
+        return Ok(());
+    }
+    match path.file_name() {
+        Some(name) if name.len() > MAX_NAME_BYTES => {
+            return Err(format!(
+                "its file name is {} bytes long; file systems take at most {MAX_NAME_BYTES}",
+                name.len()
+            ));
+        }
+        None => return Err("it names no file".into()),
+        Some(_) => {}
+    }
+    let parent = match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(p) => p,
+        None => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err("its folder does not exist".into());
+    }
+    tempfile::Builder::new()
+        .prefix(".sdfc-write-check")
+        .tempfile_in(parent)
+        .map(drop)
+        .map_err(|e| format!("its folder does not take new files ({e})"))
+}

@@ -297,6 +297,18 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
         "sphere.sdf",
         "material m { color = [1, 0, 0]; }\nrender sphere(1).paint(m);",
     );
+    let far = write(
+        "far.sdf",
+        "material m { color = [1, 0, 0]; }\nrender sphere(1).translate([1e7, 0, 0]).paint(m);",
+    );
+    let huge = write(
+        "huge.sdf",
+        "material m { color = [1, 0, 0]; }\nrender sphere(1e11).paint(m);",
+    );
+    let empty = write(
+        "empty.sdf",
+        "material m { color = [1, 0, 0]; }\nrender (sphere(1) & sphere(1).translate([5, 0, 0])).paint(m);",
+    );
     let cases: Vec<(Vec<&str>, i32, &str)> = vec![
         (vec![&plain], 1, "no material"),
         (vec![&plane], 2, "--bounds"),
@@ -352,6 +364,23 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             2,
             "--max-chart",
         ),
+        (vec![&sphere, "--max-chart", "4"], 2, "add --layout packed"),
+        (
+            vec![&sphere, "--size", "32768"],
+            2,
+            "a power of two from 16 to 16384",
+        ),
+        (vec![&sphere, "--edge", "1e-30"], 2, "2.000e30 cells"),
+        (
+            vec![&sphere, "--grid", "4", "--chart-quads", "4"],
+            2,
+            "it needs at least 2",
+        ),
+        // Where f32 coordinates cannot hold the surface: the shape refused, not baked
+        // into a mesh of collapsed triangles (exit 0 before).
+        (vec![&far], 1, "units from the origin, where f32 positions"),
+        (vec![&huge], 1, "a bake holds coordinates up to 1e9"),
+        (vec![&empty], 1, "the shape is empty"),
     ];
     for (args, status, message) in cases {
         let mut all = vec!["bake"];
@@ -406,6 +435,66 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("cannot write") && !out.exists(), "{err}");
+    // Outputs checked before the bake: a name ending in a separator, a file name longer
+    // than file systems take, a .gltf name for binary glTF.
+    let long = dir.path().join(format!("{}.glb", "a".repeat(300)));
+    for (o, message) in [
+        (format!("{out_s}/"), "names a folder"),
+        (long.to_str().unwrap().to_string(), "at most 255"),
+        (
+            dir.path().join("x.gltf").to_str().unwrap().to_string(),
+            "name the output .glb",
+        ),
+    ] {
+        let (code, _, err) = sdfc(&["bake", &sphere, "--grid", "6", "--size", "64", "-o", &o]);
+        assert_eq!(code, 2, "{o}: {err}");
+        assert!(err.contains(message), "{o}: {err}");
+    }
+    // Nor may an output replace a texture the scene reads (it replaced it before).
+    let texture = dir.path().join("red.png");
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 0, 0, 255]))
+        .save(&texture)
+        .unwrap();
+    let textured = write(
+        "textured.sdf",
+        "let red = image(\"red.png\");\nmaterial m { color = red.sample([0.5, 0.5]).rgb; }\nrender sphere(1).paint(m);",
+    );
+    let before = std::fs::read(&texture).unwrap();
+    let (code, _, err) = sdfc(&[
+        "bake",
+        &textured,
+        "--grid",
+        "6",
+        "--size",
+        "64",
+        "-o",
+        texture.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("the same file as the input texture"), "{err}");
+    assert_eq!(std::fs::read(&texture).unwrap(), before);
+    // `bench --json` may not replace the scene; bench's bake flags need --bake.
+    let scene_before = std::fs::read(&sphere).unwrap();
+    let (code, _, err) = sdfc(&[
+        "bench",
+        &sphere,
+        "--bake",
+        "--atlas-size",
+        "64",
+        "--json",
+        &sphere,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("the same file as the input scene"), "{err}");
+    assert_eq!(std::fs::read(&sphere).unwrap(), scene_before);
+    for args in [
+        vec!["bench", sphere.as_str(), "--atlas-size", "64"],
+        vec!["bench", "--bake", "--seed-sweep"],
+    ] {
+        let (code, _, err) = sdfc(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains("--bake"), "{args:?}: {err}");
+    }
     // Bounds that miss a bounded shape are a usage error.
     let (code, _, err) = sdfc(&["bake", &sphere, "--bounds", "5,5,5", "6,6,6", "-o", &out_s]);
     assert_eq!(code, 2, "{err}");
@@ -418,7 +507,67 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
     names.sort();
     assert_eq!(
         names,
-        ["folder.glb", "plain.sdf", "plane.sdf", "sphere.sdf"]
+        [
+            "empty.sdf",
+            "far.sdf",
+            "folder.glb",
+            "huge.sdf",
+            "plain.sdf",
+            "plane.sdf",
+            "red.png",
+            "sphere.sdf",
+            "textured.sdf"
+        ]
+    );
+}
+
+/// A part thinner than every cell of the plain grid (a 0.01-thick plate on cells of
+/// 0.25): the plain mesh finds no surface, and `--refine auto` meshes it finer where
+/// the surface samples lie, as where a plain mesh misses part of it (it exited 1, "no
+/// surface", while `--refine 8` baked it).
+#[test]
+fn auto_refinement_finds_a_part_the_plain_grid_misses_entirely() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("thin.sdf");
+    std::fs::write(
+        &scene,
+        "material m { color = [0.5, 0.5, 0.5]; }\nrender box([2, 0.01, 2]).paint(m);",
+    )
+    .unwrap();
+    let out = dir.path().join("thin.glb");
+    let args = [
+        "bake",
+        scene.to_str().unwrap(),
+        "--grid",
+        "16",
+        "--size",
+        "256",
+        "--walk",
+        "loop",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let (code, _, err) = sdfc(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("missed 100.0 % of the surface"), "{err}");
+    assert!(err.contains("surface held:   100.0 %"), "{err}");
+    if let Some(report) = gltf_validate(&out) {
+        assert_eq!(
+            (report.errors, report.warnings),
+            (0, 0),
+            "{:?}",
+            report.messages
+        );
+    }
+    // Never refined, it finds nothing, and says what would.
+    let (code, _, err) = sdfc(&[&args[..], &["--refine", "1"]].concat());
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("no surface inside the bounds") && err.contains("--refine 8"),
+        "{err}"
     );
 }
 

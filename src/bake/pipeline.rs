@@ -116,6 +116,9 @@ pub enum BakeError {
     Empty(f64),
     /// A bad option (size, grid, bounds).
     Option(String),
+    /// The shape cannot be baked as it is (empty, or where f32 coordinates cannot
+    /// hold its surface).
+    Scene(String),
     /// The charts do not fit, or the atlas is over the adapter's limits.
     Resource(String),
     Gpu(GpuError),
@@ -128,13 +131,14 @@ impl std::fmt::Display for BakeError {
                 "the shape has no material to bake: paint it first, as in `render shape.paint(MATERIAL);`",
             ),
             BakeError::Unbounded => f.write_str(
-                "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds=-2,-2,-2 2,2,2",
+                "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds -2,-2,-2 2,2,2",
             ),
             BakeError::Empty(cell) => write!(
                 f,
-                "found no surface inside the bounds on a grid of {cell:.3}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge finds it)"
+                "found no surface inside the bounds on a grid of {}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge, or --refine 8, finds it)",
+                length(*cell)
             ),
-            BakeError::Option(m) | BakeError::Resource(m) => f.write_str(m),
+            BakeError::Option(m) | BakeError::Resource(m) | BakeError::Scene(m) => f.write_str(m),
             BakeError::Gpu(e) => write!(f, "{e}"),
         }
     }
@@ -429,7 +433,7 @@ fn plan(
     }
     if !options.size.is_power_of_two() || !(16..=MAX_SIZE).contains(&options.size) {
         return Err(BakeError::Option(format!(
-            "--size {} is not a power of two between 16 and {MAX_SIZE}",
+            "--size {}: the atlas width must be a power of two from 16 to {MAX_SIZE}",
             options.size
         )));
     }
@@ -447,25 +451,33 @@ fn plan(
         None => return Err(BakeError::Unbounded),
     };
     if !bounds.is_finite() || (bounds.max - bounds.min).min_element() < 0.0 {
-        return Err(BakeError::Option(String::from(
-            "--bounds do not overlap the shape's own bounds: there is nothing of it to bake there",
-        )));
+        return Err(match options.bounds {
+            Some(_) => BakeError::Option(String::from(
+                "--bounds do not overlap the shape's own bounds: there is nothing of it to bake there",
+            )),
+            None => BakeError::Scene(String::from(
+                "the shape is empty: its bounds hold no point (an intersection of parts that do not meet?), so there is nothing to bake",
+            )),
+        });
     }
     let longest = (bounds.max - bounds.min).max_element();
     let cells = match options.resolution {
-        Resolution::Cells(n) => n,
-        Resolution::Edge(e) if e > 0.0 && e.is_finite() => (longest / e).ceil() as usize,
+        Resolution::Cells(n) => n as f64,
+        Resolution::Edge(e) if e > 0.0 && e.is_finite() => (longest / e).ceil(),
         Resolution::Edge(e) => {
             return Err(BakeError::Option(format!(
                 "--edge {e} is not a positive length"
             )))
         }
     };
-    if !(2..=MAX_GRID).contains(&cells) {
+    if !(2.0..=MAX_GRID as f64).contains(&cells) {
         return Err(BakeError::Option(format!(
-            "the grid would have {cells} cells along its longest side; the range is 2 to {MAX_GRID} (change --grid or --edge)"
+            "the grid would have {} cells along its longest side; the range is 2 to {MAX_GRID} (change --grid or --edge)",
+            if cells < 1e9 { format!("{cells}") } else { format!("{cells:.3e}") }
         )));
     }
+    let cells = cells as usize;
+    check_precision(bounds, longest / cells as f64)?;
     if let Refine::Times(r) = options.refine {
         if !(1..=refine::MAX_REFINE).contains(&r) {
             return Err(BakeError::Option(format!(
@@ -480,8 +492,62 @@ fn plan(
             "--chart-quads {m} is not between 1 and {MAX_CHART_QUADS}"
         )));
     }
+    if cells.div_ceil(m) < 2 {
+        return Err(BakeError::Option(format!(
+            "--chart-quads {m} leaves the grid of {cells} cells {} chart along its longest side; it needs at least 2 (a finer --grid or --edge, or fewer --chart-quads)",
+            cells.div_ceil(m)
+        )));
+    }
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
     Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m, bounds))
+}
+
+/// The largest coordinate a bake holds, in scene units: past it the GPU's f32
+/// arithmetic (squares of distances, the projection's Newton steps) loses the surface
+/// (a sphere of radius 1e11 baked with every normal the same).
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// The fewest steps of f32 (glTF's positions and the GPU's) a mesh cell must span
+/// where the shape lies: a unit sphere 1e6 units from the origin has about two
+/// (positions 0.06 apart), and its mesh came out with collapsed triangles.
+pub const MIN_F32_STEPS_A_CELL: f64 = 64.0;
+
+/// A length for a message: three decimals where they show it, else three significant
+/// digits.
+fn length(x: f64) -> String {
+    if (1e-3..1e6).contains(&x.abs()) {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+/// Refuses a region that f32 coordinates cannot hold: farther from the origin than
+/// [`MAX_COORDINATE`], or so far for its cells of side `cell` that a cell spans fewer
+/// than [`MIN_F32_STEPS_A_CELL`] steps of f32 there.
+fn check_precision(bounds: crate::ir::Aabb, cell: f64) -> Result<(), BakeError> {
+    let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+    if reach > MAX_COORDINATE {
+        return Err(BakeError::Scene(format!(
+            "the region to bake reaches {} units from the origin; a bake holds coordinates up to {MAX_COORDINATE:e} (the GPU's f32 arithmetic loses the surface past that): scale the shape down, or give --bounds nearer the origin",
+            length(reach)
+        )));
+    }
+    // The spacing of f32 values at `reach` (its unit in the last place).
+    let step = if reach > 0.0 {
+        2f64.powi((reach as f32).log2().floor() as i32 - 23)
+    } else {
+        0.0
+    };
+    if cell < MIN_F32_STEPS_A_CELL * step {
+        return Err(BakeError::Scene(format!(
+            "the shape lies {} units from the origin, where f32 positions (a glTF file's and the GPU's) are {} apart: too coarse for mesh cells of {} (a cell needs at least {MIN_F32_STEPS_A_CELL} of those steps): move the shape nearer the origin (translate it), or bake a coarser --grid",
+            length(reach),
+            length(step),
+            length(cell)
+        )));
+    }
+    Ok(())
 }
 
 /// Runs the whole bake of `shape` (with the environment of its heights: a shape of a
@@ -517,6 +583,12 @@ pub fn bake<'s>(
         Refine::Times(r) => r,
     };
     let (mut quads, _) = contour(shape, &grid, scale, times, &[], &mut report, progress)?;
+    // With `--refine auto`, a plain mesh that found no surface (a part thinner than a
+    // cell everywhere) is refined where the surface samples lie, as one that missed
+    // some of it.
+    if quads.quads.is_empty() && options.refine != Refine::Auto {
+        return Err(BakeError::Empty(grid.cell));
+    }
     lap(&mut report, "mesh");
     let missed;
     (report.coverage, missed) = super::coverage::coverage_and_missed(shape, &quads, bounds);
@@ -542,6 +614,7 @@ pub fn bake<'s>(
         if options.style == Style::Flat {
             report.plain_chart_size = plain
                 .as_ref()
+                .filter(|p| !p.quads.is_empty())
                 .and_then(|p| FlatLayout::fit_with(p.quads.len(), options.size, options.gutter))
                 .map(|l| l.chart_size);
         }
@@ -549,8 +622,18 @@ pub fn bake<'s>(
         refined_held = Some(held);
     }
 
+    if quads.quads.is_empty() {
+        return Err(BakeError::Empty(grid.cell));
+    }
+
     // 2. Charts and layout.
     let (patches, table, atlas) = match (lay_out_charts(&mut quads, &grid, m, options), plain) {
+        // The refined mesh's charts do not fit, and the plain mesh has none.
+        (Err(BakeError::Resource(why)), Some(plain)) if plain.quads.is_empty() => {
+            return Err(BakeError::Resource(format!(
+                "{why} (the plain grid found no surface, and the mesh refined where the surface lies does not fit)"
+            )));
+        }
         // The refined mesh's charts do not fit where the plain mesh's may: bake that,
         // with the coverage line's warning, as before refinement.
         (Err(BakeError::Resource(why)), Some(plain)) => {
@@ -679,8 +762,8 @@ fn refine_auto(
 }
 
 /// Stage 1: the mesh of `shape` by dual contouring over `grid`, cells with finer
-/// detail `refine` times finer, and how many fine cells still hold two sheets; an
-/// error when it has no quads.
+/// detail `refine` times finer, and how many fine cells still hold two sheets (the
+/// mesh may have no quads: the caller decides).
 fn contour(
     shape: crate::ir::Field,
     grid: &Grid,
@@ -694,12 +777,8 @@ fn contour(
     let refining = Refining::Select(missed);
     let made = contour_refining(shape, grid, 1e-5 * scale, refine, refining);
     (report.refine, report.refined, report.refine_wanted) = (refine, made.refined, made.wanted);
-    let quads = made.mesh;
     progress.finish();
-    if quads.quads.is_empty() {
-        return Err(BakeError::Empty(grid.cell));
-    }
-    Ok((quads, made.fine_two_sheets))
+    Ok((made.mesh, made.fine_two_sheets))
 }
 
 /// Stage 2: the charts (one a cell, or grown, which turns the quads to their charts'

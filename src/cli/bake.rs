@@ -82,7 +82,7 @@ impl Progress for Bars {
 
 fn status(e: &BakeError) -> u8 {
     match e {
-        BakeError::NoMaterial | BakeError::Empty(_) => exit::SCENE,
+        BakeError::NoMaterial | BakeError::Empty(_) | BakeError::Scene(_) => exit::SCENE,
         BakeError::Unbounded | BakeError::Option(_) => exit::USAGE,
         BakeError::Resource(_) => exit::RESOURCE,
         BakeError::Gpu(g) => exit::gpu(g),
@@ -110,6 +110,16 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         }
         _ => return Err("--bounds takes two points: MIN MAX, each x,y,z".into()),
     };
+    if args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"))
+    {
+        return Err(format!(
+            "-o {}: sdfc bake writes binary glTF with its images inside (.glb); a .gltf file is JSON: name the output .glb",
+            args.output.display()
+        ));
+    }
     let style = match args.layout {
         super::Layout::Flat => pipeline::Style::Flat,
         super::Layout::Packed => pipeline::Style::Packed,
@@ -122,10 +132,16 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
             return Err("--ktx2 writes the flat layout's chart grid at every level (the stacked style); the packed layout's charts differ in size, so bake with --layout flat for it".into());
         }
     }
-    if !(1..=pipeline::MAX_MAX_CHART).contains(&args.max_chart) {
+    let max_chart = match (args.max_chart, style) {
+        (Some(_), pipeline::Style::Flat) => {
+            return Err("--max-chart bounds the packed layout's grown charts; the flat layout's charts are one cell each (add --layout packed)".into());
+        }
+        (Some(m), _) => m,
+        (None, _) => pipeline::DEFAULT_MAX_CHART,
+    };
+    if !(1..=pipeline::MAX_MAX_CHART).contains(&max_chart) {
         return Err(format!(
-            "--max-chart {} is not between 1 and {}",
-            args.max_chart,
+            "--max-chart {max_chart} is not between 1 and {}",
             pipeline::MAX_MAX_CHART
         ));
     }
@@ -136,7 +152,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         chart_quads: args.chart_quads,
         gutter: args.gutter,
         style,
-        max_chart: args.max_chart,
+        max_chart,
         refine: args.refine,
         texels: args.texels,
     })
@@ -159,30 +175,6 @@ fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// Whether `path` can be written: not a folder, in a folder that exists and takes a
-/// new file (tried with a temporary file there, removed at once).
-fn writable(path: &std::path::Path) -> Result<(), String> {
-    if path.is_dir() {
-        return Err("it is a folder".into());
-    }
-    let parent = match path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        Some(p) => p,
-        None => std::path::Path::new("."),
-    };
-    if !parent.is_dir() {
-        return Err("its folder does not exist".into());
-    }
-    // Device files (/dev/stdout) and FIFOs are written through, not replaced.
-    if path.starts_with("/dev") || path.starts_with("/proc") {
-        return Ok(());
-    }
-    tempfile::Builder::new()
-        .prefix(".sdfc-bake-check")
-        .tempfile_in(parent)
-        .map(drop)
-        .map_err(|e| format!("its folder does not take new files ({e})"))
 }
 
 fn encode(
@@ -261,7 +253,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         return ExitCode::from(exit::USAGE);
     }
     for path in &outputs {
-        if let Err(e) = writable(path) {
+        if let Err(e) = sdfc::fsutil::check_writable(path) {
             eprintln!("error: cannot write {}: {e}", path.display());
             return ExitCode::from(exit::USAGE);
         }
@@ -289,6 +281,21 @@ pub fn run(args: BakeArgs) -> ExitCode {
     let Some(scene) = &analysis.scene else {
         return ExitCode::from(exit::SCENE);
     };
+    // Nor may an output replace a texture the scene reads.
+    let base = super::base_dir(&args.scene);
+    let textures: Vec<PathBuf> = analysis
+        .program
+        .textures
+        .iter()
+        .map(|t| t.resolved.clone().unwrap_or_else(|| base.join(&t.path)))
+        .collect();
+    let inputs: Vec<(&str, &std::path::Path)> = std::iter::once(("scene", args.scene.as_path()))
+        .chain(textures.iter().map(|t| ("texture", t.as_path())))
+        .collect();
+    if let Err(e) = sdfc::fsutil::distinct_outputs(&flagged, &inputs) {
+        eprintln!("error: {e}");
+        return ExitCode::from(exit::USAGE);
+    }
     let shape = match sdfc::driver::pick_shape(scene, args.shape.as_deref()) {
         Ok(s) => s,
         Err(e) => {
@@ -303,7 +310,6 @@ pub fn run(args: BakeArgs) -> ExitCode {
     let bars = Bars {
         bar: Mutex::new(None),
     };
-    let base = super::base_dir(&args.scene);
     let baked = match pipeline::bake(
         &gpu,
         &compiled.module,
@@ -452,8 +458,16 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         );
     }
     if c.missed > 0.0 {
+        // What can help, from what this bake did.
+        let remedy = if r.refine_dropped.is_some() {
+            "a larger --size lets the refined mesh's charts fit (or --layout packed, or a finer --grid or --edge)"
+        } else if r.refine < sdfc::bake::mesh::refine::MAX_REFINE {
+            "a finer --grid or --edge, or --refine 8, holds more of it"
+        } else {
+            "a finer --grid or --edge holds more of it"
+        };
         eprintln!(
-            "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; a finer --grid or --edge, or --refine 8, holds more of it",
+            "warning: the mesh misses {:.1} % of the surface (by area, samples farther than half a cell from it, the farthest {farthest}): parts thinner than a cell fall between the grid's corners; {remedy}",
             100.0 * c.missed,
         );
     }
@@ -511,6 +525,8 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
+            // The bake's messages name `sdfc bake`'s flags.
+            eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size given as --atlas-size; for its other options (--grid, --bounds, --refine, ...) run `sdfc bake`, whose report prints the same stage times");
             return ExitCode::from(status(&e));
         }
     };

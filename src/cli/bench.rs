@@ -24,7 +24,7 @@ fn median(mut v: Vec<Duration>) -> Duration {
 }
 
 pub fn run(args: BenchArgs) -> ExitCode {
-    if let Err(code) = check_plot(&args) {
+    if let Err(code) = check_plot(&args).and_then(|()| check_outputs(&args)) {
         return code;
     }
     if args.scale {
@@ -41,6 +41,33 @@ pub fn run(args: BenchArgs) -> ExitCode {
     match frame_bench(&args, &scene) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
+    }
+}
+
+/// The outputs (`--json`, `--plot`) checked before minutes of measuring: each can be
+/// written, neither names the other nor the scene.
+fn check_outputs(args: &BenchArgs) -> Result<(), ExitCode> {
+    let outputs: Vec<(&str, &std::path::Path)> = [("--json", &args.json), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
+        .collect();
+    let inputs: Vec<(&str, &std::path::Path)> =
+        args.scene.iter().map(|s| ("scene", s.as_path())).collect();
+    let refused = sdfc::fsutil::distinct_outputs(&outputs, &inputs)
+        .err()
+        .or_else(|| {
+            outputs.iter().find_map(|(_, p)| {
+                sdfc::fsutil::check_writable(p)
+                    .err()
+                    .map(|e| format!("cannot write {}: {e}", p.display()))
+            })
+        });
+    match refused {
+        Some(e) => {
+            eprintln!("error: {e}");
+            Err(ExitCode::from(super::exit::USAGE))
+        }
+        None => Ok(()),
     }
 }
 

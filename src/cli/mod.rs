@@ -287,16 +287,21 @@ pub struct BenchArgs {
     pub lsp_latency: bool,
     /// Bake the scene's atlas (2048 wide, full mip chain, the default grid, the loop
     /// walk) and report the time of each stage instead of frame times.
-    #[arg(long, requires = "scene", conflicts_with = "lsp_latency")]
+    #[arg(long, requires = "scene", conflicts_with_all = ["lsp_latency", "seed_sweep", "scale"])]
     pub bake: bool,
     /// The atlas side for --bake.
-    #[arg(long, default_value = "2048")]
+    #[arg(long, default_value = "2048", requires = "bake")]
     pub atlas_size: u32,
     /// The atlas layout for --bake.
-    #[arg(long = "bake-layout", value_enum, default_value = "flat")]
+    #[arg(
+        long = "bake-layout",
+        value_enum,
+        default_value = "flat",
+        requires = "bake"
+    )]
     pub bake_layout: Layout,
     /// How --bake chooses its level-0 texels (as `sdfc bake --texels`).
-    #[arg(long = "bake-texels", value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels)]
+    #[arg(long = "bake-texels", value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels, requires = "bake")]
     pub bake_texels: sdfc::bake::pipeline::Texels,
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
@@ -476,9 +481,10 @@ pub struct BakeArgs {
     /// The atlas layout.
     #[arg(long, value_enum, default_value = "flat")]
     pub layout: Layout,
-    /// Packed layout: the longest side of a grown chart, in chart-grid quads.
-    #[arg(long, value_name = "CELLS", default_value = "16")]
-    pub max_chart: usize,
+    /// Packed layout: the longest side of a grown chart, in chart-grid quads [default:
+    /// 16].
+    #[arg(long, value_name = "CELLS")]
+    pub max_chart: Option<usize>,
     /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds).
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true)]
     pub bounds: Vec<[f64; 3]>,

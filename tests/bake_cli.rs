@@ -580,12 +580,14 @@ fn the_bake_memory_model_is_its_formula() {
     assert_eq!((CHANNELS, LEVEL_SAMPLE_BYTES), (11, 44));
     let formula = |f: &Footprint| -> (u64, &str) {
         let s = f.samples;
+        // The scene's textures are held while the pass shades and fits.
+        let t = f.texture_bytes;
         let phases = [
-            (80 * s + 272 * s.min(1 << 20), "shade"),
+            (80 * s + 272 * s.min(1 << 20) + t, "shade"),
             (120 * s, "handover"),
             (81 * s + 48 * f.texels, "encode"),
             (
-                56 * s + 124 * f.fit_batch + 272 * f.fit_batch.min(1 << 20),
+                56 * s + 124 * f.fit_batch + 272 * f.fit_batch.min(1 << 20) + t,
                 "fit",
             ),
         ];
@@ -602,6 +604,7 @@ fn the_bake_memory_model_is_its_formula() {
         samples,
         texels,
         fit_batch: 0,
+        texture_bytes: 0,
     };
     let cases = [
         // The one-sphere scene at --size 1024, 4096 and 16384 (flat, grid 48).
@@ -625,6 +628,15 @@ fn the_bake_memory_model_is_its_formula() {
                 ..Footprint::default()
             },
             "mesh",
+        ),
+        // Three 8192² textures (the red team's scene at --size 128): 2.5 GiB while the
+        // pass shades, which the model left out (the bake peaked at 2.9 GB, accepted).
+        (
+            Footprint {
+                texture_bytes: sdfc::bake::export::gltf::texture_bytes(8192, 8192, 3),
+                ..sphere(10_000, 128 * 128)
+            },
+            "shade",
         ),
     ];
     for (f, phase) in cases {
@@ -772,6 +784,37 @@ fn bakes_over_the_memory_limit_are_refused_before_any_work() {
         assert!(!err.contains("shade (GPU)"), "{err}");
         assert!(!out.exists());
     }
+    // The scene's textures count: three 8192² images are about 2.5 GiB while the pass
+    // loads them (a small bake of such a scene peaked at 2.9 GB, accepted).
+    let big = dir.path().join("big.png");
+    image::GrayImage::from_pixel(8192, 8192, image::Luma([128]))
+        .save(&big)
+        .unwrap();
+    let mut scene = String::new();
+    for k in 0..3 {
+        let copy = dir.path().join(format!("big{k}.png"));
+        std::fs::copy(&big, &copy).unwrap();
+        scene += &format!("let t{k} = image(\"big{k}.png\");\n");
+    }
+    scene += "material m { color = t0.sample([0.5, 0.5]).rgb * t1.sample([0.2, 0.2]).rgb + t2.sample([0.1, 0.7]).rgb; }\nrender sphere(1).paint(m);\n";
+    let path = dir.path().join("textured.sdf");
+    std::fs::write(&path, scene).unwrap();
+    let (code, _, err) = sdfc(&[
+        "bake",
+        path.to_str().unwrap(),
+        "--size",
+        "128",
+        "--grid",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 5, "{err}");
+    assert!(
+        err.contains("MiB of the scene's textures") && err.contains("or smaller textures"),
+        "{err}"
+    );
+    assert!(!err.contains("shade (GPU)") && !out.exists(), "{err}");
 }
 
 /// `sdfc bench --bake`: one bake, its report and the slowest stage, and its `--json`

@@ -277,6 +277,10 @@ pub struct Footprint {
     pub texels: u64,
     /// The sub-texel samples `--texels fit` holds at once (0 without it).
     pub fit_batch: u64,
+    /// The scene's textures while the bake's pass loads them (decoded, on the GPU with
+    /// their mips, staged: [`crate::bake::export::gltf::texture_bytes`] of each, from the
+    /// image files' headers).
+    pub texture_bytes: u64,
 }
 
 impl Footprint {
@@ -387,6 +391,8 @@ pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
     let fit = FIT_HELD_SAMPLE_BYTES * s
         + FIT_BATCH_SAMPLE_BYTES * f.fit_batch
         + DISPATCH_POINT_BYTES * f.fit_batch.min(MAX_POINTS_PER_DISPATCH as u64);
+    // The textures are held while the pass shades (and fits).
+    let (shade, fit) = (shade + f.texture_bytes, fit + f.texture_bytes);
     let after =
         CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode).max(fit);
     BASE_BYTES + mesh.max(after)
@@ -400,6 +406,10 @@ pub fn check_memory(f: &Footprint) -> Result<u64, BakeError> {
         return Ok(estimate);
     }
     let mib = |b: u64| b.div_ceil(1 << 20);
+    let textures = match f.texture_bytes {
+        0 => String::new(),
+        b => format!(", with {} MiB of the scene's textures", mib(b)),
+    };
     let (what, fix) = if f.samples == 0 {
         (
             format!("its mesh grid of {} corners", f.grid_corners),
@@ -415,10 +425,28 @@ pub fn check_memory(f: &Footprint) -> Result<u64, BakeError> {
         )
     };
     Err(BakeError::Resource(format!(
-        "the bake would need about {} MiB of memory at its peak (estimated from {what}), over the limit of {} MiB for a bake: use {fix}",
+        "the bake would need about {} MiB of memory at its peak (estimated from {what}{textures}), over the limit of {} MiB for a bake: use {fix}{}",
         mib(estimate),
-        mib(MAX_BAKE_BYTES)
+        mib(MAX_BAKE_BYTES),
+        if f.texture_bytes > 0 {
+            " (or smaller textures)"
+        } else {
+            ""
+        }
     )))
+}
+
+/// The scene's textures' part of the footprint ([`Footprint::texture_bytes`]), from
+/// their files' headers; a file that cannot be read counts nothing (loading it reports
+/// why).
+pub fn textures_footprint(module: &Module, base_dir: &Path) -> u64 {
+    module
+        .manifest
+        .textures
+        .iter()
+        .filter_map(|t| image::image_dimensions(base_dir.join(&t.path)).ok())
+        .map(|(w, h)| crate::bake::export::gltf::texture_bytes(w, h, 1))
+        .fold(0u64, u64::saturating_add)
 }
 
 /// Checks the options and `shape` before any work: the mesh grid, the chart quads and
@@ -572,7 +600,11 @@ pub fn bake<'s>(
         clock = Instant::now();
     };
     let (grid, m, bounds) = plan(gpu, &shape, options)?;
-    check_memory(&Footprint::grid(&grid))?;
+    let texture_bytes = textures_footprint(module, base_dir);
+    check_memory(&Footprint {
+        texture_bytes,
+        ..Footprint::grid(&grid)
+    })?;
     let scale = crate::uv::atlas::scale(&shape);
     report.grid = grid.dims;
     report.chart_quads = m;
@@ -627,7 +659,10 @@ pub fn bake<'s>(
     }
 
     // 2. Charts and layout.
-    let (patches, table, atlas) = match (lay_out_charts(&mut quads, &grid, m, options), plain) {
+    let (patches, table, atlas) = match (
+        lay_out_charts(&mut quads, &grid, m, options, texture_bytes),
+        plain,
+    ) {
         // The refined mesh's charts do not fit, and the plain mesh has none.
         (Err(BakeError::Resource(why)), Some(plain)) if plain.quads.is_empty() => {
             return Err(BakeError::Resource(format!(
@@ -643,7 +678,7 @@ pub fn bake<'s>(
             report.coverage = report.plain_coverage.take().unwrap_or_default();
             (report.refine, report.refined) = (1, 0);
             refined_held = None;
-            lay_out_charts(&mut quads, &grid, m, options)?
+            lay_out_charts(&mut quads, &grid, m, options, texture_bytes)?
         }
         (laid, _) => laid?,
     };
@@ -789,6 +824,7 @@ fn lay_out_charts(
     grid: &Grid,
     m: usize,
     options: &Options,
+    texture_bytes: u64,
 ) -> Result<(Patches, ChartTable, ChartLayout), BakeError> {
     let patches = match options.style {
         Style::Flat => Patches::singles(quads.quads.len()),
@@ -811,14 +847,17 @@ fn lay_out_charts(
             if options.gutter > 0 { " or a narrower --gutter" } else { "" }
         ))
     })?;
-    check_memory(&Footprint::of(
-        grid,
-        &table,
-        quads.vertices.len(),
-        &atlas,
-        m,
-        options.texels,
-    ))?;
+    check_memory(&Footprint {
+        texture_bytes,
+        ..Footprint::of(
+            grid,
+            &table,
+            quads.vertices.len(),
+            &atlas,
+            m,
+            options.texels,
+        )
+    })?;
     Ok((patches, table, atlas))
 }
 

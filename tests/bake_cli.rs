@@ -881,3 +881,63 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
         "{v}"
     );
 }
+
+/// A material the images cannot hold is reported, not written silently: undefined
+/// values (here 1 / 0 on the whole surface) and emission over 1 (clipped by a glTF
+/// emissive texture). A plain material gets neither warning.
+#[test]
+fn undefined_and_clipped_materials_are_reported() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bake = |name: &str, material: &str| {
+        let scene = dir.path().join(format!("{name}.sdf"));
+        std::fs::write(
+            &scene,
+            format!("material m {{ {material} }}\nrender sphere(1).paint(m);"),
+        )
+        .unwrap();
+        let out = dir.path().join(format!("{name}.glb"));
+        let (code, _, err) = sdfc(&[
+            "bake",
+            scene.to_str().unwrap(),
+            "--grid",
+            "8",
+            "--size",
+            "128",
+            "--walk",
+            "loop",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        err
+    };
+    let err = bake(
+        "undefined",
+        "color = [0.5, 0.5, 0.5] + [1, 0, 0] * (1 / (position.x * 0)); emission = [2, 0.5, 0.1];",
+    );
+    let samples = |what: &str| -> (usize, usize) {
+        let line = err
+            .lines()
+            .find(|l| l.contains(what))
+            .unwrap_or_else(|| panic!("{what}: {err}"));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let at = words.iter().position(|w| *w == "at").unwrap();
+        (
+            words[at + 1].parse().unwrap(),
+            words[at + 4].parse().unwrap(),
+        )
+    };
+    // Every sample: 1 / ±0 is infinite everywhere, the emission is 2 everywhere.
+    let (n, of) = samples("the material is undefined");
+    assert!(n == of && n > 0, "{err}");
+    let (n, of) = samples("the emission is over 1");
+    assert!(n == of && n > 0, "{err}");
+    let err = bake("plain", "color = [0.5, 0.5, 0.5]; emission = [1, 0.5, 0];");
+    assert!(
+        !err.contains("undefined") && !err.contains("emission is over"),
+        "{err}"
+    );
+}

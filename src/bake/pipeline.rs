@@ -191,6 +191,12 @@ pub struct Report {
     pub samples: usize,
     /// The sub-texel samples shaded for [`Texels::Fit`] (0 with `Points`).
     pub fit_samples: usize,
+    /// Level-0 samples where the material is undefined (a channel not finite): the
+    /// images hold 0 there.
+    pub undefined: usize,
+    /// Level-0 samples whose emission is over 1, which the glTF's emissive texture
+    /// (0 to 1) clips.
+    pub emission_over_one: usize,
     pub stages: Vec<(&'static str, Duration)>,
 }
 
@@ -530,6 +536,10 @@ fn plan(
     Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m, bounds))
 }
 
+/// The emission's channels in a level-0 sample ([`CHANNELS`]: colour, roughness,
+/// metallic, emission, normal).
+const EMISSION: std::ops::Range<usize> = 5..8;
+
 /// The largest coordinate a bake holds, in scene units: past it the GPU's f32
 /// arithmetic (squares of distances, the projection's Newton steps) loses the surface
 /// (a sphere of radius 1e11 baked with every normal the same).
@@ -716,6 +726,17 @@ pub fn bake<'s>(
         &mut lap,
     )?;
     report.max_residual /= scale;
+    let all = || {
+        level0
+            .corners
+            .iter()
+            .chain(&level0.edges)
+            .chain(&level0.interiors)
+    };
+    report.undefined = all().filter(|t| t.iter().any(|v| !v.is_finite())).count();
+    report.emission_over_one = all()
+        .filter(|t| t[EMISSION].iter().any(|&v| v > 1.0))
+        .count();
 
     // 5. Mips.
     progress.stage("mips", 1);

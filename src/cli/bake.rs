@@ -441,6 +441,18 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
             r.fit_samples
         );
     }
+    if r.undefined > 0 {
+        eprintln!(
+            "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
+            r.undefined, r.samples
+        );
+    }
+    if r.emission_over_one > 0 {
+        eprintln!(
+            "warning: the emission is over 1 at {} of the {} level-0 samples; a glTF emissive texture holds 0 to 1, so the file clips it there",
+            r.emission_over_one, r.samples
+        );
+    }
     let c = &r.coverage;
     // (Samples are not looked at past two cells.)
     let farthest = if c.farthest >= 2.0 {

@@ -18,6 +18,7 @@ pub mod export;
 pub mod fit;
 pub mod gpu;
 pub mod images;
+pub mod memory;
 /// The mesher lives with the CPU geometry (dual contouring, surface samples).
 pub use crate::reference::mesh;
 pub mod mips;

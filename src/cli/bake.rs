@@ -429,7 +429,9 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     );
     eprintln!(
         "density spread: {:.3} (coefficient of variation of texels per unit length; {} sliver charts left out)",
-        r.density_spread, r.slivers
+        // (Adding 0 turns a -0 into 0.)
+        r.density_spread + 0.0,
+        r.slivers
     );
     eprintln!(
         "projection:     largest |f| at a texel point {:.2e} of the scale ({} samples)",
@@ -552,7 +554,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         .map(|(n, d)| (*n, d.as_secs_f64()))
         .unwrap_or(("none", 0.0));
     println!(
-        "bake: {total:.3} s for a {}×{} atlas with {} levels; the slowest stage, {name}, is {:.0} % of it ({:.1} µs per texel sample)",
+        "bake: {total:.3} s for a {}×{} atlas with {} levels; the slowest stage, {name}, is {:.0} % of it ({:.1} µs a level-0 sample in that stage)",
         baked.atlas.width(),
         baked.atlas.height(),
         baked.atlas.levels(),

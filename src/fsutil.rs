@@ -329,8 +329,9 @@ pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> 
     Ok(())
 }
 
-/// The longest file name most file systems take (Linux's NAME_MAX), in bytes.
-pub const MAX_NAME_BYTES: usize = 255;
+/// The longest output file name, in bytes: Linux's NAME_MAX (255) less what the
+/// temporary file an output is written through adds to it (`.NAME.sdfc-PID-XXXXXX.tmp`).
+pub const MAX_NAME_BYTES: usize = 255 - 40;
 
 /// Whether `path` can be written, checked before the work that produces it: not a
 /// folder (nor a name ending in a separator), a name the file system takes, in a folder
@@ -338,31 +339,39 @@ pub const MAX_NAME_BYTES: usize = 255;
 /// once). Streams under `/dev` and `/proc` are written through and pass.
 pub fn check_writable(path: &Path) -> Result<(), String> {
     let text = path.as_os_str().to_string_lossy();
-    if path.is_dir() || text.ends_with(std::path::MAIN_SEPARATOR) || text.ends_with('/') {
+    let folder_like = text.ends_with(std::path::MAIN_SEPARATOR)
+        || text.ends_with('/')
+        || [".", ".."]
+            .iter()
+            .any(|d| text == *d || text.ends_with(&format!("/{d}")));
+    if path.is_dir() || folder_like {
         return Err("it names a folder, not a file".into());
     }
     if is_system(path) {
         return Ok(());
     }
-    match path.file_name() {
+    // Written through its links, as `write_output` writes it.
+    let target = follow_links(path).map_err(|e| e.to_string())?;
+    if is_system(&target) {
+        return Ok(());
+    }
+    match target.file_name() {
         Some(name) if name.len() > MAX_NAME_BYTES => {
             return Err(format!(
-                "its file name is {} bytes long; file systems take at most {MAX_NAME_BYTES}",
+                "its file name is {} bytes long; outputs are written through a temporary file with a longer name, so sdfc takes at most {MAX_NAME_BYTES}",
                 name.len()
             ));
         }
         None => return Err("it names no file".into()),
         Some(_) => {}
     }
-    let parent = match path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        Some(p) => p,
-        None => Path::new("."),
-    };
+    let parent = folder_of(&target);
     if !parent.is_dir() {
         return Err("its folder does not exist".into());
     }
     tempfile::Builder::new()
-        .prefix(".sdfc-write-check")
+        .prefix(&format!("{}{}-", temp_prefix(&target), std::process::id()))
+        .suffix(".tmp")
         .tempfile_in(parent)
         .map(drop)
         .map_err(|e| format!("its folder does not take new files ({e})"))

@@ -122,7 +122,7 @@ pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
 /// after:  800 B × cells + 168 B × exported vertices
 ///         + max(80 B × S + 272 B × min(S, 2^20)     shading, one dispatch in flight,
 ///               + X,                                the scene's textures X bytes,
-///               120 B × S,                          shaded results → level 0
+///               120 B × S + X,                      shaded results → level 0
 ///               56 B × S + 124 B × F                --texels fit, F at once,
 ///               + 272 B × min(F, 2^20) + X,
 ///               81 B × S + 48 B × T)                encoding the outputs
@@ -141,8 +141,13 @@ pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
     let fit = FIT_HELD_SAMPLE_BYTES * s
         + FIT_BATCH_SAMPLE_BYTES * f.fit_batch
         + DISPATCH_POINT_BYTES * f.fit_batch.min(MAX_POINTS_PER_DISPATCH as u64);
-    // The textures are held while the pass shades (and fits).
-    let (shade, fit) = (shade + f.texture_bytes, fit + f.texture_bytes);
+    // The textures are held while the pass lives: it shades, its results become
+    // level 0, it fits.
+    let (shade, handover, fit) = (
+        shade + f.texture_bytes,
+        handover + f.texture_bytes,
+        fit + f.texture_bytes,
+    );
     let after =
         CELL_BYTES * f.cells + VERTEX_BYTES * f.vertices + shade.max(handover).max(encode).max(fit);
     BASE_BYTES + mesh.max(after)

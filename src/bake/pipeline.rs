@@ -308,13 +308,14 @@ fn plan(
         None if own.is_finite() => own,
         None => return Err(BakeError::Unbounded),
     };
-    if !bounds.is_finite() || (bounds.max - bounds.min).min_element() < 0.0 {
+    let extent = bounds.max - bounds.min;
+    if !bounds.is_finite() || extent.min_element() < 0.0 || extent.max_element() <= 0.0 {
         return Err(match options.bounds {
             Some(_) => BakeError::Option(String::from(
                 "--bounds do not overlap the shape's own bounds: there is nothing of it to bake there",
             )),
             None => BakeError::Scene(String::from(
-                "the shape is empty: its bounds hold no point (an intersection of parts that do not meet?), so there is nothing to bake",
+                "the shape is empty: its bounds hold no volume (an intersection of parts that do not meet, or a size of 0?), so there is nothing to bake",
             )),
         });
     }
@@ -335,11 +336,6 @@ fn plan(
         )));
     }
     let cells = cells as usize;
-    // The region is the user's where --bounds set it: then an option to change.
-    check_precision(bounds, longest / cells as f64).map_err(|e| match (e, options.bounds) {
-        (BakeError::Scene(m), Some(_)) => BakeError::Option(m),
-        (e, _) => e,
-    })?;
     if let Refine::Times(r) = options.refine {
         if !(1..=refine::MAX_REFINE).contains(&r) {
             return Err(BakeError::Option(format!(
@@ -356,12 +352,24 @@ fn plan(
     }
     if cells.div_ceil(m) < 2 {
         return Err(BakeError::Option(format!(
-            "--chart-quads {m} leaves the grid of {cells} cells {} chart along its longest side; it needs at least 2 (a finer --grid or --edge, or fewer --chart-quads)",
+            "--chart-quads {m} on a grid of {cells} cells leaves a chart grid of {} along its longest side; it needs at least 2 (a finer --grid or --edge, or fewer --chart-quads)",
             cells.div_ceil(m)
         )));
     }
+    // The mesh's cells: the chart grid's split m × m, and finer where refined (`auto`
+    // stops short of a factor that f32 cannot hold: `refine_auto`).
+    let finest = match options.refine {
+        Refine::Times(r) => r,
+        Refine::Auto => 1,
+    };
+    let cell = longest / (cells.div_ceil(m) * m * finest) as f64;
+    // The region is the user's where --bounds set it: then an option to change.
+    check_precision(bounds, cell).map_err(|e| match (e, options.bounds) {
+        (BakeError::Scene(m), Some(_)) => BakeError::Option(m),
+        (e, _) => e,
+    })?;
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
-    Ok((Grid::over(bounds, cells.div_ceil(m).max(1)), m, bounds))
+    Ok((Grid::over(bounds, cells.div_ceil(m)), m, bounds))
 }
 
 /// The emission's channels in a level-0 sample ([`CHANNELS`]: colour, roughness,
@@ -374,8 +382,9 @@ const EMISSION: std::ops::Range<usize> = 5..8;
 pub const MAX_COORDINATE: f64 = 1e9;
 
 /// The fewest steps of f32 (glTF's positions and the GPU's) a mesh cell must span
-/// where the shape lies: a unit sphere 1e6 units from the origin has about two
-/// (positions 0.06 apart), and its mesh came out with collapsed triangles.
+/// where the shape lies: a unit sphere 1e6 units from the origin at `--grid 16` has
+/// two (positions 0.0625 apart, cells of 0.125), and its mesh came out with collapsed
+/// triangles; at the default grid a unit sphere bakes up to 8,192 units out.
 pub const MIN_F32_STEPS_A_CELL: f64 = 64.0;
 
 /// A length for a message: three decimals where they show it, else three significant
@@ -399,12 +408,10 @@ fn check_precision(bounds: crate::ir::Aabb, cell: f64) -> Result<(), BakeError> 
             length(reach)
         )));
     }
-    // The spacing of f32 values at `reach` (its unit in the last place).
-    let step = if reach > 0.0 {
-        2f64.powi((reach as f32).log2().floor() as i32 - 23)
-    } else {
-        0.0
-    };
+    // The spacing of f32 values at `reach` (to the next one up; at least the smallest
+    // subnormal, at 0).
+    let r = reach as f32;
+    let step = (f32::from_bits(r.to_bits() + 1) - r) as f64;
     if cell < MIN_F32_STEPS_A_CELL * step {
         return Err(BakeError::Scene(format!(
             "the shape lies {} units from the origin, where f32 positions (a glTF file's and the GPU's) are {} apart: too coarse for mesh cells of {} (a cell needs at least {MIN_F32_STEPS_A_CELL} of those steps): move the shape nearer the origin (translate it), or bake a coarser --grid",
@@ -463,11 +470,13 @@ pub fn bake<'s>(
     let missed;
     (report.coverage, missed) = super::coverage::coverage_and_missed(shape, &quads, bounds);
     lap(&mut report, "coverage");
-    // The plain mesh, kept while a refined one is tried, and what the search measured
-    // of the refined mesh's coverage (measured once its charts are known to fit).
-    let mut plain = None;
-    let mut refined_held = None;
-    if options.refine == Refine::Auto && report.coverage.missed > 0.0 {
+    // The plain mesh, kept while a refined one is tried; what the search measured of the
+    // refined mesh's coverage (measured once its charts fit); whether f32 holds the mesh
+    // refined r times (`check_precision`).
+    let (mut plain, mut refined_held) = (None, None);
+    let holds = |r: usize| check_precision(bounds, grid.cell / (m * r) as f64).is_ok();
+    if options.refine == Refine::Auto && report.coverage.missed > 0.0 && holds(refine::FIRST_REFINE)
+    {
         report.plain_coverage = Some(report.coverage);
         let (refined, held) = refine_auto(
             shape,
@@ -476,18 +485,13 @@ pub fn bake<'s>(
             bounds,
             &missed,
             options,
+            &holds,
             &mut report,
             progress,
         )?;
-        plain = Some(std::mem::replace(&mut quads, refined));
-        // What a flat atlas would have given the plain mesh's charts, for the report.
-        if options.style == Style::Flat {
-            report.plain_chart_size = plain
-                .as_ref()
-                .filter(|p| !p.quads.is_empty())
-                .and_then(|p| FlatLayout::fit_with(p.quads.len(), options.size, options.gutter))
-                .map(|l| l.chart_size);
-        }
+        let kept = std::mem::replace(&mut quads, refined);
+        report.plain_chart_size = flat_chart_size(&kept, options);
+        plain = Some(kept);
         lap(&mut report, "mesh, refined");
         refined_held = Some(held);
     }
@@ -576,8 +580,9 @@ pub fn bake<'s>(
 
 /// `--refine auto`'s search, once the plain mesh missed the samples `missed`: refined
 /// at [`refine::FIRST_REFINE`], then twice as fine each time while fine cells still
-/// hold two sheets or surface is still missed, where every cell that asks can be
-/// refined that far (the cells asking do not depend on the factor). In a flat atlas, a
+/// hold two sheets or surface is still missed, where f32 `holds` the finer cells and
+/// every cell that asks can be refined that far (the cells asking do not depend on the
+/// factor). In a flat atlas, a
 /// mesh whose charts do not fit ends the search: the last one that fits is returned (a
 /// finer one has more charts still), or this one where none does (the caller then
 /// bakes the plain mesh). With the mesh, its coverage where the search measured it.
@@ -589,6 +594,7 @@ fn refine_auto(
     bounds: Aabb,
     missed: &[DVec3],
     options: &Options,
+    holds: &dyn Fn(usize) -> bool,
     report: &mut Report,
     progress: &dyn Progress,
 ) -> Result<(QuadMesh, Option<super::coverage::Coverage>), BakeError> {
@@ -610,7 +616,10 @@ fn refine_auto(
             });
         }
         let finer = 2 * r;
-        if finer > refine::MAX_REFINE || report.refine_wanted > refine::max_refined(finer) {
+        if finer > refine::MAX_REFINE
+            || report.refine_wanted > refine::max_refined(finer)
+            || !holds(finer)
+        {
             return Ok((refined, None));
         }
         if left == 0 {
@@ -642,7 +651,7 @@ fn lay_out_refined(
         // The refined mesh's charts do not fit, and the plain mesh has none.
         (Err(BakeError::Resource(why)), Some(plain)) if plain.quads.is_empty() => {
             Err(BakeError::Resource(format!(
-                "{why} (the plain grid found no surface, and the mesh refined where the surface lies does not fit)"
+                "{why} (the plain grid found no surface, and the mesh refined where the surface lies was refused)"
             )))
         }
         // The refined mesh's charts do not fit where the plain mesh's may: bake that,
@@ -657,6 +666,15 @@ fn lay_out_refined(
         }
         (laid, _) => Ok((laid?, true)),
     }
+}
+
+/// What a flat atlas would give the charts of `mesh` (the plain mesh, for the report
+/// of a refined bake): `None` in a packed atlas, or for a mesh without quads.
+fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
+    if options.style != Style::Flat || mesh.quads.is_empty() {
+        return None;
+    }
+    FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).map(|l| l.chart_size)
 }
 
 /// Level-0 samples where the material is undefined (a channel not finite), and where

@@ -445,7 +445,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     }
     if r.undefined > 0 {
         eprintln!(
-            "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
+            "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0, an infinity as its channel's limit): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
             r.undefined, r.samples
         );
     }
@@ -474,7 +474,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     if c.missed > 0.0 {
         // What can help, from what this bake did.
         let remedy = if r.refine_dropped.is_some() {
-            "a larger --size lets the refined mesh's charts fit (or --layout packed, or a finer --grid or --edge)"
+            "the refined mesh that holds it was refused (the `refined:` line says why)"
         } else if r.refine < sdfc::bake::mesh::refine::MAX_REFINE {
             "a finer --grid or --edge, or --refine 8, holds more of it"
         } else {
@@ -540,7 +540,15 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
         Err(e) => {
             eprintln!("error: {e}");
             // The bake's messages name `sdfc bake`'s flags.
-            eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size given as --atlas-size; for its other options (--grid, --bounds, --refine, ...) run `sdfc bake`, whose report prints the same stage times");
+            if matches!(
+                e,
+                BakeError::Option(_)
+                    | BakeError::Resource(_)
+                    | BakeError::Empty(_)
+                    | BakeError::Unbounded
+            ) {
+                eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size given as --atlas-size; for its other options (--grid, --bounds, --refine, ...) run `sdfc bake`, whose report prints the same stage times");
+            }
             return ExitCode::from(status(&e));
         }
     };

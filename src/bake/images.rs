@@ -3,7 +3,7 @@
 use super::charts::{bilinear, side_texel, ChartTable, Samples};
 pub use super::mesh::split_along_02;
 use super::mesh::QuadMesh;
-use super::mips::{Texel, CHANNELS};
+use super::mips::{Texel, CHANNELS, EMISSION};
 use super::{ChartLayout, FlatLayout, MeshData, Patches, Textures};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
@@ -205,8 +205,9 @@ pub fn atlas_images(
                     let (x, y) = (x0 + i as u32, y0 + j as u32);
                     color.put_pixel(x, y, Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]));
                     mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
-                    emits |= t[5] > 0.0 || t[6] > 0.0 || t[7] > 0.0;
-                    emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
+                    let e = &t[EMISSION];
+                    emits |= e.iter().any(|&v| v > 0.0);
+                    emission.put_pixel(x, y, Rgba([srgb8(e[0]), srgb8(e[1]), srgb8(e[2]), 255]));
                     let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
                     let frame = render_frame(exported, m, c, u, v);
                     normal.put_pixel(x, y, tangent_space_texel(frame, t));
@@ -258,7 +259,8 @@ pub fn atlas_images(
                     let (x, y) = ((x0 as i64 + i) as u32, (y0 as i64 + j) as u32);
                     color.put_pixel(x, y, Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]));
                     mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
-                    emission.put_pixel(x, y, Rgba([srgb8(t[5]), srgb8(t[6]), srgb8(t[7]), 255]));
+                    let e = &t[EMISSION];
+                    emission.put_pixel(x, y, Rgba([srgb8(e[0]), srgb8(e[1]), srgb8(e[2]), 255]));
                     // The neighbour's normal in this chart's frame at the nearest border point.
                     let (u, v) = (
                         i.clamp(0, n - 1) as f64 / (n - 1) as f64,

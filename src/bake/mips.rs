@@ -21,6 +21,9 @@ use rayon::prelude::*;
 /// emission (3), object-space normal (3).
 pub const CHANNELS: usize = 11;
 
+/// The emission's channels within a sample's [`CHANNELS`].
+pub const EMISSION: std::ops::Range<usize> = 5..8;
+
 /// A sample's channels.
 pub type Texel<const K: usize> = [f32; K];
 

@@ -12,7 +12,7 @@ pub use super::memory::{
     MAX_BAKE_BYTES, SHADE_SAMPLE_BYTES, VERTEX_BYTES,
 };
 use super::mesh::{contour_refining, refine, Grid, QuadMesh, Refining, MAX_GRID};
-use super::mips::{self, Texel};
+use super::mips::{self, Texel, EMISSION};
 use super::patches::{self, Patches};
 use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
@@ -371,10 +371,6 @@ fn plan(
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
     Ok((Grid::over(bounds, cells.div_ceil(m)), m, bounds))
 }
-
-/// The emission's channels in a level-0 sample ([`CHANNELS`]: colour, roughness,
-/// metallic, emission, normal).
-const EMISSION: std::ops::Range<usize> = 5..8;
 
 /// The largest coordinate a bake holds, in scene units: past it the GPU's f32
 /// arithmetic (squares of distances, the projection's Newton steps) loses the surface

@@ -317,6 +317,13 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             1,
             "no surface inside the bounds",
         ),
+        // A plane 0.05 short of the bounds: the grid's margin reaches it, the mesh
+        // keeps nothing of it.
+        (
+            vec![&plane, "--bounds", "-1,0.05,-1", "1,3,1"],
+            1,
+            "no surface inside the bounds",
+        ),
         (
             vec![&plane, "--bounds", "1,1,1", "-1,-1,-1"],
             2,
@@ -911,11 +918,13 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
     );
 }
 
-/// A material the images cannot hold is reported, not written silently: undefined
-/// values (here 1 / 0 on the whole surface) and emission over 1 (clipped by a glTF
-/// emissive texture). A plain material gets neither warning.
+/// A material the images cannot hold as such is reported, not written silently:
+/// undefined values (here 1 / 0 on the whole surface) are warned about, and emission
+/// over 1 (a glTF emissive texture holds 0 to 1) is carried by
+/// `KHR_materials_emissive_strength`: the texture holds it divided by the strength,
+/// and the file stays valid. A plain material gets neither line nor extension.
 #[test]
-fn undefined_and_clipped_materials_are_reported() {
+fn undefined_and_hdr_materials_are_reported_and_hdr_emission_is_carried() {
     if !has_gpu() {
         return;
     }
@@ -941,9 +950,9 @@ fn undefined_and_clipped_materials_are_reported() {
             out.to_str().unwrap(),
         ]);
         assert_eq!(code, 0, "{err}");
-        err
+        (err, out)
     };
-    let err = bake(
+    let (err, hdr) = bake(
         "undefined",
         "color = [0.5, 0.5, 0.5] + [1, 0, 0] * (1 / (position.x * 0)); emission = [2, 0.5, 0.1];",
     );
@@ -962,11 +971,38 @@ fn undefined_and_clipped_materials_are_reported() {
     // Every sample: 1 / ±0 is infinite everywhere, the emission is 2 everywhere.
     let (n, of) = samples("the material is undefined");
     assert!(n == of && n > 0, "{err}");
-    let (n, of) = samples("the emission is over 1");
+    let (n, of) = samples("emission:       over 1");
     assert!(n == of && n > 0, "{err}");
-    let err = bake("plain", "color = [0.5, 0.5, 0.5]; emission = [1, 0.5, 0];");
+    assert!(err.contains("up to 2:"), "{err}");
+    // The strength is the largest emission, 2; the texture holds [2, 0.5, 0.1] / 2 in
+    // sRGB: 255, 137 (0.25) and 63 (0.05), where clipping would give 255, 188, 89.
+    let read = |glb: &std::path::Path| {
+        let bytes = std::fs::read(glb).unwrap();
+        let (_, textures, _) = sdfc::bake::export::read_glb(&bytes).expect("reads back");
+        (bytes, textures)
+    };
+    let (bytes, textures) = read(&hdr);
+    assert_eq!(textures.emissive_strength, 2.0);
+    let emissive = textures.emissive.expect("an emissive texture");
+    let texel = emissive.get_pixel(0, 0).0;
+    assert_eq!(texel, [255, 137, 63, 255]);
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(text.contains("\"extensionsUsed\":[\"KHR_materials_emissive_strength\"]"));
+    assert!(!text.contains("extensionsRequired"));
+    if let Some(report) = gltf_validate(&hdr) {
+        assert_eq!(
+            (report.errors, report.warnings),
+            (0, 0),
+            "the glTF-Validator reports {:?}",
+            report.messages
+        );
+    }
+    let (err, plain) = bake("plain", "color = [0.5, 0.5, 0.5]; emission = [1, 0.5, 0];");
     assert!(
-        !err.contains("undefined") && !err.contains("emission is over"),
+        !err.contains("undefined") && !err.contains("emission:"),
         "{err}"
     );
+    let (bytes, textures) = read(&plain);
+    assert_eq!(textures.emissive_strength, 1.0);
+    assert!(!String::from_utf8_lossy(&bytes).contains("emissive_strength"));
 }

@@ -72,6 +72,7 @@ fn textures(layout: &FlatLayout, emissive: bool) -> Textures {
         metallic_roughness: image(&|x, y| [0, (x ^ y) as u8 * 3, (x + y) as u8, (x * 3) as u8]),
         normal: image(&|x, y| [128 + (x % 7) as u8, 128 - (y % 5) as u8, 250, 255]),
         emissive: emissive.then(|| image(&|x, _| [(x * 2) as u8, 0, 0, 255])),
+        emissive_strength: 1.0,
     }
 }
 

@@ -431,3 +431,75 @@ fn coverage_finds_what_the_mesh_misses() {
         "{fine:?}"
     );
 }
+
+/// `--bounds` cut out of a surface (`QuadMesh::retain_centred_within`): the quads kept
+/// are those centred in the box, every vertex left is used and in its place, the cut
+/// ends within a cell of the box, the surface inside is all held (the box's edge is
+/// not "missed"), and a surface just outside the box leaves nothing.
+#[test]
+fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
+    use sdfc::bake::coverage::coverage;
+    use sdfc::bake::mesh::{dual_contour, Grid};
+    use sdfc::ir::Aabb;
+    common::with_example("sphere.sdf", |field, shape| {
+        let own = shape.root_node().bounds;
+        let cut = Aabb {
+            min: DVec3::new(0.3, own.min.y, own.min.z),
+            max: own.max,
+        };
+        let grid = Grid::over(cut, 24);
+        let whole = dual_contour(field, &grid, 1e-5);
+        let mut mesh = whole.clone();
+        mesh.retain_centred_within(cut);
+        assert!(!mesh.quads.is_empty() && mesh.quads.len() < whole.quads.len());
+        let mut used = vec![false; mesh.vertices.len()];
+        for q in &mesh.quads {
+            let c = q.iter().map(|&i| mesh.vertices[i as usize]).sum::<DVec3>() / 4.0;
+            assert!(c.x >= cut.min.x, "{c}");
+            for &i in q {
+                used[i as usize] = true;
+            }
+        }
+        assert!(used.iter().all(|&u| u), "unused vertices were kept");
+        // Renumbered, not moved: every vertex (with its normal) is one of the whole
+        // mesh's, and the quads kept are the whole mesh's centred in the box.
+        for (v, n) in mesh.vertices.iter().zip(&mesh.normals) {
+            let k = whole
+                .vertices
+                .iter()
+                .position(|w| w == v)
+                .expect("a vertex");
+            assert_eq!(whole.normals[k], *n);
+        }
+        let centred = whole
+            .quads
+            .iter()
+            .filter(|q| {
+                q.iter().map(|&i| whole.vertices[i as usize].x).sum::<f64>() / 4.0 >= cut.min.x
+            })
+            .count();
+        assert_eq!(mesh.quads.len(), centred);
+        let lowest = mesh.vertices.iter().map(|v| v.x).fold(f64::MAX, f64::min);
+        assert!(
+            lowest > cut.min.x - grid.cell && lowest < cut.min.x + grid.cell,
+            "the cut ends at x = {lowest}, the box at {} (cells of {})",
+            cut.min.x,
+            grid.cell
+        );
+        let held = coverage(field, &mesh, cut);
+        assert!(held.samples > 100, "{held:?}");
+        assert_eq!(held.missed, 0.0, "{held:?}");
+        // A box starting a twentieth of a cell past the sphere's surface (x = 1).
+        let outside = Aabb {
+            min: DVec3::new(1.0 + 0.05 * grid.cell, own.min.y, own.min.z),
+            max: own.max + DVec3::ONE,
+        };
+        let mut mesh = dual_contour(field, &Grid::over(outside, 24), 1e-5);
+        assert!(
+            !mesh.quads.is_empty(),
+            "the grid's margin reaches the sphere"
+        );
+        mesh.retain_centred_within(outside);
+        assert!(mesh.quads.is_empty() && mesh.vertices.is_empty());
+    });
+}

@@ -218,6 +218,7 @@ fn library_quad(packed: bool) -> Vec<u8> {
         metallic_roughness: image.clone(),
         normal: image.clone(),
         emissive: (!packed).then_some(image),
+        emissive_strength: 1.0,
     };
     glb(&mesh, &textures, &layout, "quad", "quad").unwrap()
 }
@@ -2008,6 +2009,7 @@ fn chart_search(_: &Base, rng: &mut Rng, big: bool) -> Made {
         metallic_roughness: image.clone(),
         normal: image,
         emissive: None,
+        emissive_strength: 1.0,
     };
     let bytes = glb(
         &mesh,
@@ -2050,6 +2052,7 @@ fn overdraw(_: &Base, rng: &mut Rng, big: bool) -> Made {
         metallic_roughness: image.clone(),
         normal: image,
         emissive: None,
+        emissive_strength: 1.0,
     };
     let bytes = glb(
         &mesh,

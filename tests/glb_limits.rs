@@ -61,6 +61,7 @@ fn quad_glb() -> Vec<u8> {
         metallic_roughness: image.clone(),
         normal: image,
         emissive: None,
+        emissive_strength: 1.0,
     };
     glb(&mesh, &textures, &ChartLayout::from(layout), "quad", "quad").unwrap()
 }
@@ -316,6 +317,7 @@ fn the_writer_refuses_a_json_chunk_over_the_readers_limit() {
         metallic_roughness: image.clone(),
         normal: image,
         emissive: None,
+        emissive_strength: 1.0,
     };
     let mut mesh = MeshData::default();
     for p in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {

@@ -86,6 +86,7 @@ fn strip(charts: usize, size: u32, w: f32) -> (MeshData, Textures, FlatLayout) {
         metallic_roughness: flat([0, 128, 0, 255]),
         normal: flat([128, 128, 255, 255]),
         emissive: None,
+        emissive_strength: 1.0,
     };
     (mesh, textures, layout)
 }
@@ -207,9 +208,12 @@ fn the_mesh_module_validates_for_several_layouts() {
         let standard = sdfc::codegen::mesh::mesh_wgsl_with(
             &layout.clone().into(),
             sdfc::gpu::MeshFilter::Standard,
+            2.5,
         )
         .unwrap();
         assert!(standard.contains("const STANDARD: bool = true;"));
+        assert!(standard.contains("const EMISSIVE_STRENGTH: f32 = 2.5;"));
+        assert!(wgsl.contains("const EMISSIVE_STRENGTH: f32 = 1.0;"));
         if let Err(e) = sdfc::codegen::validate(&standard) {
             panic!("{layout:?}, standard filter:\n{e}");
         }

@@ -51,6 +51,10 @@ pub struct Textures {
     pub normal: image::RgbaImage,
     /// Emission, sRGB-encoded; `None` when the material emits nothing.
     pub emissive: Option<image::RgbaImage>,
+    /// What the emissive image's (decoded, linear) values are multiplied by: 1, or
+    /// where the emission is over 1 somewhere its largest value, the image then holding
+    /// the emission divided by it (glTF's `KHR_materials_emissive_strength`).
+    pub emissive_strength: f32,
 }
 
 impl Textures {

@@ -194,6 +194,12 @@ pub fn atlas_images(
     let mut normal = RgbaImage::from_pixel(w, h, Rgba([128, 128, 255, 255]));
     let mut emission = blank();
     let mut emits = false;
+    // Emission over 1 is carried by the strength: the image holds emission ÷ it.
+    let strength = emissive_strength(levels);
+    let emitted = |e: &[f32]| {
+        let s = strength;
+        Rgba([srgb8(e[0] / s), srgb8(e[1] / s), srgb8(e[2] / s), 255])
+    };
     for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;
         for c in 0..table.len() {
@@ -207,7 +213,7 @@ pub fn atlas_images(
                     mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
                     let e = &t[EMISSION];
                     emits |= e.iter().any(|&v| v > 0.0);
-                    emission.put_pixel(x, y, Rgba([srgb8(e[0]), srgb8(e[1]), srgb8(e[2]), 255]));
+                    emission.put_pixel(x, y, emitted(e));
                     let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
                     let frame = render_frame(exported, m, c, u, v);
                     normal.put_pixel(x, y, tangent_space_texel(frame, t));
@@ -260,7 +266,7 @@ pub fn atlas_images(
                     color.put_pixel(x, y, Rgba([srgb8(t[0]), srgb8(t[1]), srgb8(t[2]), 255]));
                     mr.put_pixel(x, y, Rgba([0, unorm8(t[3]), unorm8(t[4]), 255]));
                     let e = &t[EMISSION];
-                    emission.put_pixel(x, y, Rgba([srgb8(e[0]), srgb8(e[1]), srgb8(e[2]), 255]));
+                    emission.put_pixel(x, y, emitted(e));
                     // The neighbour's normal in this chart's frame at the nearest border point.
                     let (u, v) = (
                         i.clamp(0, n - 1) as f64 / (n - 1) as f64,
@@ -277,7 +283,19 @@ pub fn atlas_images(
         metallic_roughness: mr,
         normal,
         emissive: emits.then_some(emission),
+        emissive_strength: strength,
     }
+}
+
+/// The emissive texture's strength for `levels` (glTF's `emissiveStrength`): the
+/// largest finite emission of any channel at any level, or 1 where that is at most 1.
+pub fn emissive_strength(levels: &[Samples<Texel<CHANNELS>>]) -> f32 {
+    levels
+        .iter()
+        .flat_map(|l| l.corners.iter().chain(&l.edges).chain(&l.interiors))
+        .flat_map(|t| t[EMISSION].iter().copied())
+        .filter(|v| v.is_finite())
+        .fold(1.0f32, f32::max)
 }
 
 /// One chart's level-`l` grid as a stacked-style image (§3.2): the chart grid of that

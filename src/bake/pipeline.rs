@@ -200,8 +200,11 @@ pub struct Report {
     /// images hold 0 there.
     pub undefined: usize,
     /// Level-0 samples whose emission is over 1, which the glTF's emissive texture
-    /// (0 to 1) clips.
+    /// (0 to 1) holds divided by [`Report::emissive_strength`].
     pub emission_over_one: usize,
+    /// The largest emission, where it is over 1 (else 1): the glTF's
+    /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]).
+    pub emissive_strength: f32,
     pub stages: Vec<(&'static str, Duration)>,
 }
 
@@ -456,6 +459,7 @@ pub fn bake<'s>(
         Refine::Times(r) => r,
     };
     let (mut quads, _) = contour(shape, &grid, scale, times, &[], &mut report, progress)?;
+    clip(&mut quads, options, bounds);
     // With `--refine auto`, a plain mesh that found no surface (a part thinner than a
     // cell everywhere) is refined where the surface samples lie, as one that missed
     // some of it.
@@ -555,6 +559,7 @@ pub fn bake<'s>(
     progress.stage("images", 1);
     let mesh = images::mesh_data(&quads, &table, &atlas, &patches, &grid_points);
     let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
+    report.emissive_strength = textures.emissive_strength;
     progress.finish();
     lap(&mut report, "images");
 
@@ -601,7 +606,8 @@ fn refine_auto(
     let mut r = refine::FIRST_REFINE;
     let mut fitted: Option<(QuadMesh, Report)> = None;
     loop {
-        let (refined, left) = contour(shape, grid, scale, r, missed, report, progress)?;
+        let (mut refined, left) = contour(shape, grid, scale, r, missed, report, progress)?;
+        clip(&mut refined, options, bounds);
         if !fits(&refined) {
             return Ok(match fitted.take() {
                 Some((earlier, its)) => {
@@ -689,6 +695,14 @@ fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
             .filter(|t| t[EMISSION].iter().any(|&v| v > 1.0))
             .count(),
     )
+}
+
+/// With `--bounds`, the part of the mesh within them ([`QuadMesh::retain_centred_within`]):
+/// the grid's margin of a cell would otherwise mesh a surface just outside them.
+fn clip(mesh: &mut QuadMesh, options: &Options, bounds: Aabb) {
+    if options.bounds.is_some() {
+        mesh.retain_centred_within(bounds);
+    }
 }
 
 /// Stage 1: the mesh of `shape` by dual contouring over `grid`, cells with finer

@@ -89,6 +89,23 @@ fn status(e: &BakeError) -> u8 {
     }
 }
 
+/// The region `flag` gives (none, or MIN MAX with MIN below MAX on every axis).
+fn bounds(flag: &str, points: &[[f64; 3]]) -> Result<Option<Aabb>, String> {
+    match points {
+        [] => Ok(None),
+        [lo, hi] => {
+            let (min, max) = (glam::DVec3::from(*lo), glam::DVec3::from(*hi));
+            if !min.cmplt(max).all() {
+                return Err(format!(
+                    "{flag}: the minimum {lo:?} must be below the maximum {hi:?} on every axis"
+                ));
+            }
+            Ok(Some(Aabb { min, max }))
+        }
+        _ => Err(format!("{flag} takes two points: MIN MAX, each x,y,z")),
+    }
+}
+
 /// The options of `args`, checked before any work.
 pub fn options(args: &BakeArgs) -> Result<Options, String> {
     let resolution = match (args.grid, args.edge) {
@@ -97,19 +114,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         (None, None) => Resolution::Cells(pipeline::DEFAULT_GRID),
         (Some(_), Some(_)) => return Err("give --grid or --edge, not both".into()),
     };
-    let bounds = match args.bounds.as_slice() {
-        [] => None,
-        [lo, hi] => {
-            let (min, max) = (glam::DVec3::from(*lo), glam::DVec3::from(*hi));
-            if !min.cmplt(max).all() {
-                return Err(format!(
-                    "--bounds: the minimum {lo:?} must be below the maximum {hi:?} on every axis"
-                ));
-            }
-            Some(Aabb { min, max })
-        }
-        _ => return Err("--bounds takes two points: MIN MAX, each x,y,z".into()),
-    };
+    let bounds = bounds("--bounds", &args.bounds)?;
     if args
         .output
         .extension()
@@ -451,8 +456,8 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
     }
     if r.emission_over_one > 0 {
         eprintln!(
-            "warning: the emission is over 1 at {} of the {} level-0 samples; a glTF emissive texture holds 0 to 1, so the file clips it there",
-            r.emission_over_one, r.samples
+            "emission:       over 1 at {} of the {} level-0 samples, up to {}: the emissive texture holds it divided by that, and the glTF's KHR_materials_emissive_strength multiplies it back (a viewer without that extension shows the emission that much dimmer)",
+            r.emission_over_one, r.samples, r.emissive_strength
         );
     }
     let c = &r.coverage;
@@ -496,7 +501,15 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
 /// bake` uses by default (the loop: lavapipe takes minutes to compile the robot's
 /// unrolled walk, and the bake's cost is the shading, not the walk's form).
 pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
+    let bounds = match bounds("--bake-bounds", &args.bake_bounds) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    };
     let options = Options {
+        bounds,
         size: args.atlas_size,
         style: match args.bake_layout {
             super::Layout::Flat => pipeline::Style::Flat,
@@ -547,7 +560,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
                     | BakeError::Empty(_)
                     | BakeError::Unbounded
             ) {
-                eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size given as --atlas-size; for its other options (--grid, --bounds, --refine, ...) run `sdfc bake`, whose report prints the same stage times");
+                eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size, --layout, --texels and --bounds given as --atlas-size, --bake-layout, --bake-texels and --bake-bounds; for its other options (--grid, --refine, ...) run `sdfc bake`, whose report prints the same stage times");
             }
             return ExitCode::from(status(&e));
         }

@@ -303,6 +303,10 @@ pub struct BenchArgs {
     /// How --bake chooses its level-0 texels (as `sdfc bake --texels`).
     #[arg(long = "bake-texels", value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels, requires = "bake")]
     pub bake_texels: sdfc::bake::pipeline::Texels,
+    /// The region --bake bakes, MIN MAX, each x,y,z (as `sdfc bake --bounds`; needed for
+    /// shapes without finite bounds).
+    #[arg(long = "bake-bounds", num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true, requires = "bake")]
+    pub bake_bounds: Vec<[f64; 3]>,
     /// Edits measured by --lsp-latency.
     #[arg(long, default_value = "50")]
     pub edits: u32,
@@ -485,7 +489,8 @@ pub struct BakeArgs {
     /// 16].
     #[arg(long, value_name = "CELLS")]
     pub max_chart: Option<usize>,
-    /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds).
+    /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds):
+    /// the mesh keeps the quads whose centres lie within it.
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true)]
     pub bounds: Vec<[f64; 3]>,
     /// Also write the colour atlas's full mip chain as an uncompressed KTX2 file (each

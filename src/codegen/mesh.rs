@@ -22,13 +22,16 @@ choice_enum! {
 
 /// The WGSL of the mesh module for `layout` with the atlas lookup (not yet validated).
 pub fn mesh_wgsl(atlas: &ChartLayout) -> Result<String, template::Mismatch> {
-    mesh_wgsl_with(atlas, MeshFilter::Atlas)
+    mesh_wgsl_with(atlas, MeshFilter::Atlas, 1.0)
 }
 
-/// The WGSL of the mesh module for `layout`, reading it with `filter`.
+/// The WGSL of the mesh module for `layout`, reading it with `filter`, the emissive
+/// texture's values multiplied by `emissive_strength`
+/// ([`crate::asset::Textures::emissive_strength`]).
 pub fn mesh_wgsl_with(
     atlas: &ChartLayout,
     filter: MeshFilter,
+    emissive_strength: f32,
 ) -> Result<String, template::Mismatch> {
     let f = |x: u32| lit(x as f64);
     // A packed atlas fills the flat layout's constants with a one-cell grid (unused).
@@ -64,6 +67,7 @@ pub fn mesh_wgsl_with(
         ("levels", layout.levels().to_string()),
         ("packed", packed.to_string()),
         ("standard", (filter == MeshFilter::Standard).to_string()),
+        ("emissive_strength", lit(emissive_strength as f64)),
         ("level_origins", origins.join(", ")),
     ];
     let body = template::fill(template::MESH, &values)?;
@@ -92,13 +96,15 @@ impl std::fmt::Display for MeshIce {
     }
 }
 
-/// The mesh module for `layout`, validated by naga. The layout must be well formed
+/// The mesh module for `layout`, validated by naga (`filter` and `emissive_strength` as
+/// for [`mesh_wgsl_with`]). The layout must be well formed
 /// (`crate::gpu::MeshRenderer::new` checks it): at least one level.
 pub fn mesh_module(
     layout: &ChartLayout,
     filter: MeshFilter,
+    emissive_strength: f32,
 ) -> Result<(String, Validated), MeshIce> {
-    let wgsl = mesh_wgsl_with(layout, filter).map_err(|e| MeshIce {
+    let wgsl = mesh_wgsl_with(layout, filter, emissive_strength).map_err(|e| MeshIce {
         message: e.to_string(),
         wgsl: String::new(),
     })?;

@@ -313,7 +313,8 @@ impl MeshRenderer {
             ChartLayout::Flat(_) => Vec::new(),
             ChartLayout::Packed(packed) => packed_charts(mesh, packed).map_err(MeshError::Input)?,
         };
-        let (wgsl, _) = mesh_module(layout, filter).map_err(MeshError::Internal)?;
+        let (wgsl, _) =
+            mesh_module(layout, filter, textures.emissive_strength).map_err(MeshError::Internal)?;
         let formats = super::render_pipeline::formats(gpu);
         let d = &gpu.device;
         let vertices: Vec<Vertex> = (0..mesh.positions.len())

@@ -18,7 +18,9 @@
 //! - one mesh with one TRIANGLES primitive, one node, one scene (the default);
 //! - one material: baseColorTexture (sRGB), metallicRoughnessTexture (G roughness, B
 //!   metallic), normalTexture, and when the material emits, emissiveTexture with
-//!   emissiveFactor [1, 1, 1];
+//!   emissiveFactor [1, 1, 1], and where the emission is over 1,
+//!   `KHR_materials_emissive_strength` with the largest value (the texture then holds
+//!   the emission divided by it; [`EMISSIVE_STRENGTH`]);
 //! - one sampler for every texture: LINEAR magnification and minification, no mipmap
 //!   filter (the atlas has its own levels, selected by sdfc's renderer, see
 //!   [`ChartLayout`]), CLAMP_TO_EDGE in both directions;
@@ -56,6 +58,7 @@
 
 use gltf_json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf_json::buffer::{Target, View};
+use gltf_json::extensions::material::{EmissiveStrength, EmissiveStrengthFactor};
 use gltf_json::extras::RawValue;
 use gltf_json::material::{EmissiveFactor, NormalTexture, PbrMetallicRoughness};
 use gltf_json::mesh::{Mode, Primitive, Semantic};
@@ -71,6 +74,11 @@ use crate::bake::{ChartLayout, MeshData, Textures};
 mod read;
 
 pub use read::read_glb;
+
+/// The glTF extension that carries emission over 1 (the emissive texture then holds
+/// the emission divided by its `emissiveStrength`): listed in `extensionsUsed` (not
+/// required: a reader without it shows the emission dimmer) where it is written.
+pub const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
 
 /// The key of the atlas layout in the root's `extras`.
 pub const LAYOUT_KEY: &str = "sdfc_atlas";
@@ -219,6 +227,16 @@ pub fn glb(
             levels.push(index.value());
         }
     }
+    // Emission over 1: the texture holds emission ÷ the strength.
+    let strength = (emissive.is_some() && textures.emissive_strength != 1.0).then(|| {
+        doc.root.extensions_used.push(EMISSIVE_STRENGTH.to_owned());
+        gltf_json::extensions::material::Material {
+            emissive_strength: Some(EmissiveStrength {
+                emissive_strength: EmissiveStrengthFactor(textures.emissive_strength),
+            }),
+            ..Default::default()
+        }
+    });
     let material = doc.root.push(Material {
         name: Some(material.to_owned()),
         pbr_metallic_roughness: PbrMetallicRoughness {
@@ -239,6 +257,7 @@ pub fn glb(
             [0.0; 3]
         }),
         emissive_texture: emissive.map(info),
+        extensions: strength,
         ..Default::default()
     });
 

@@ -115,7 +115,8 @@ pub fn check_atlas(atlas: &ChartLayout) -> Result<(), String> {
     }
 }
 
-/// Checks that every texture is the atlas's size.
+/// Checks that every texture is the atlas's size, and that the emissive strength is a
+/// finite number, 0 or more.
 pub fn check_textures(textures: &Textures, layout: &ChartLayout) -> Result<(), String> {
     let images = [
         ("base colour", Some(&textures.base_color)),
@@ -135,6 +136,12 @@ pub fn check_textures(textures: &Textures, layout: &ChartLayout) -> Result<(), S
                 ));
             }
         }
+    }
+    let strength = textures.emissive_strength;
+    if !(strength.is_finite() && strength >= 0.0) {
+        return Err(format!(
+            "the emissive strength is {strength}; it must be a finite number, 0 or more"
+        ));
     }
     Ok(())
 }

@@ -46,6 +46,38 @@ impl QuadMesh {
         }
         out
     }
+
+    /// Keeps the quads whose centre (the mean of their corners) lies within `bounds`,
+    /// and the vertices they use (renumbered in their order). A region cut out of a
+    /// larger surface then ends within about half a cell of the region's faces, and a
+    /// surface that lies outside it, which the grid's margin of a cell reaches, is
+    /// dropped.
+    pub fn retain_centred_within(&mut self, bounds: Aabb) {
+        self.quads.retain(|q| {
+            let c = q.iter().map(|&i| self.vertices[i as usize]).sum::<DVec3>() / 4.0;
+            c.cmpge(bounds.min).all() && c.cmple(bounds.max).all()
+        });
+        let mut new = vec![u32::MAX; self.vertices.len()];
+        let mut kept = 0u32;
+        for q in &mut self.quads {
+            for i in q.iter_mut() {
+                if new[*i as usize] == u32::MAX {
+                    new[*i as usize] = kept;
+                    kept += 1;
+                }
+                *i = new[*i as usize];
+            }
+        }
+        let mut vertices = vec![DVec3::ZERO; kept as usize];
+        let mut normals = vec![DVec3::ZERO; kept as usize];
+        for (old, &n) in new.iter().enumerate() {
+            if n != u32::MAX {
+                vertices[n as usize] = self.vertices[old];
+                normals[n as usize] = self.normals[old];
+            }
+        }
+        (self.vertices, self.normals) = (vertices, normals);
+    }
 }
 
 /// The grid: `dims` cells along each axis from `origin`, cubic cells of `cell`.

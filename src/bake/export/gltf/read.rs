@@ -104,6 +104,11 @@ pub fn read_glb(bytes: &[u8]) -> Result<(MeshData, Textures, ChartLayout), ReadE
             Some(t) => Some(texture(Some(t.index), "emissive")?),
             None => None,
         },
+        emissive_strength: material
+            .extensions
+            .as_ref()
+            .and_then(|e| e.emissive_strength.as_ref())
+            .map_or(1.0, |s| s.emissive_strength.0),
     };
     if top < height && !whole {
         let levels = levels.unwrap_or_default();

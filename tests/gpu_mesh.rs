@@ -475,6 +475,64 @@ fn the_mesh_and_the_implicit_scene_agree_in_the_albedo_and_colour_views() {
     }
 }
 
+/// Emission over 1 (`Textures::emissive_strength`, glTF's
+/// KHR_materials_emissive_strength): the mesh's colour view, with the emissive texture
+/// holding the emission divided by the strength, matches the implicit scene's within
+/// the 8-bit texture's rounding (×1.8); the texture clipped at 1 instead does not
+/// (12 bytes off on lavapipe, after the tone curve).
+#[test]
+fn emission_over_1_is_carried_by_the_strength() {
+    let Some(gpu) = gpu_for_tests() else { return };
+    let emission = [0.6f32, 1.8, 0.3];
+    let src = format!(
+        "let ground = plane(normal: [0, 0, 1], offset: 0);\nmaterial m {{ color = [position.x, 1 - position.y, 0.25]; roughness = 0.50196078; metallic = 0; emission = {emission:?}; }}\nrender ground.paint(m);"
+    );
+    let a = sdfc::driver::check_all(&src, None);
+    assert!(!a.has_errors(), "{:?}", a.diagnostics);
+    let module = a.compiled.as_ref().expect("a module").module.clone();
+    let side = 64;
+    let v = view(1, distance_for(80.0, side), side);
+    let scene = sdfc::gpu::render(
+        &gpu,
+        &module,
+        &v,
+        ViewMode::Color,
+        std::path::Path::new("."),
+    )
+    .unwrap();
+    let worst = |strength: f32| {
+        let (mesh, mut textures, layout) = strip(1, 256, 1.0);
+        let e = emission.map(|c| sdfc::asset::srgb8(c / strength));
+        textures.emissive = Some(image::RgbaImage::from_pixel(
+            layout.width,
+            layout.height,
+            image::Rgba([e[0], e[1], e[2], 255]),
+        ));
+        textures.emissive_strength = strength;
+        let r = MeshRenderer::new(&gpu, &mesh, &textures, &layout.into()).unwrap();
+        let frame = r.render(&gpu, &v, ViewMode::Color).unwrap();
+        let mut worst = 0;
+        for y in 0..side {
+            for x in 0..side {
+                if hit(&v, 1, x, y, 1.0 / 80.0).is_some() {
+                    let i = (y * side + x) as usize * 4;
+                    for k in 0..3 {
+                        worst = worst.max(frame.color[i + k].abs_diff(scene.color[i + k]));
+                    }
+                }
+            }
+        }
+        worst
+    };
+    let (carried, clipped) = (worst(1.8), worst(1.0));
+    eprintln!("colour off by {carried} bytes with the strength, {clipped} clipped");
+    assert!(carried <= 3, "off by {carried} bytes");
+    assert!(
+        clipped >= 8,
+        "clipping made a difference of {clipped} bytes only"
+    );
+}
+
 /// The standard filter's mip chain (`generic_mips`), against a box filter worked by
 /// hand: sizes halve (rounded down, at least 1) down to 1 × 1; a texel is the mean of
 /// the 2 × 2 below it, in linear light for sRGB colour (black and white average to

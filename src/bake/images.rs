@@ -479,30 +479,51 @@ pub fn mesh_data(
 /// Shares the vertices whose every attribute is bitwise the same (position, normal,
 /// tangent and texture coordinates): inside a chart the cells' vertices on their common
 /// sides become one, so a chart is one connected piece; across a chart border the
-/// texture coordinates differ and the vertices stay split, as glTF needs.
-pub fn weld(mesh: MeshData) -> MeshData {
+/// texture coordinates differ and the vertices stay split, as glTF needs. `mesh` is
+/// [`mesh_data`]'s: cell after cell, `n × n` vertices each (`n` = `--chart-quads` + 1),
+/// whose inner vertices belong to their cell alone, so only the `4 (n − 1)` on each
+/// cell's sides are looked up (a fifth of the vertices at n = 17, where a table of every
+/// vertex would double the export's memory).
+pub fn weld(mesh: &MeshData, n: usize) -> MeshData {
     let mut out = MeshData::default();
+    let count = mesh.positions.len();
+    let per_cell = n * n;
+    let on_side = |k: usize| {
+        let (i, j) = ((k % per_cell) % n, (k % per_cell) / n);
+        n < 3
+            || per_cell == 0
+            || count % per_cell != 0
+            || i == 0
+            || j == 0
+            || i == n - 1
+            || j == n - 1
+    };
     let mut index: std::collections::HashMap<[u32; 12], u32> = std::collections::HashMap::new();
-    let mut remap = Vec::with_capacity(mesh.positions.len());
-    for k in 0..mesh.positions.len() {
-        let (p, n, t, uv) = (
+    let mut remap = Vec::with_capacity(count);
+    for k in 0..count {
+        let (p, nrm, t, uv) = (
             mesh.positions[k],
             mesh.normals[k],
             mesh.tangents[k],
             mesh.texcoords[k],
         );
-        let key = [
-            p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], t[3], uv[0], uv[1],
-        ]
-        .map(f32::to_bits);
         let next = out.positions.len() as u32;
-        let at = *index.entry(key).or_insert_with(|| {
+        let mut push = || {
             out.positions.push(p);
-            out.normals.push(n);
+            out.normals.push(nrm);
             out.tangents.push(t);
             out.texcoords.push(uv);
             next
-        });
+        };
+        let at = if on_side(k) {
+            let key = [
+                p[0], p[1], p[2], nrm[0], nrm[1], nrm[2], t[0], t[1], t[2], t[3], uv[0], uv[1],
+            ]
+            .map(f32::to_bits);
+            *index.entry(key).or_insert_with(push)
+        } else {
+            push()
+        };
         remap.push(at);
     }
     out.indices = mesh.indices.iter().map(|&i| remap[i as usize]).collect();

@@ -109,9 +109,18 @@ pub const ENCODE_TEXEL_BYTES: u64 = 16 + 2 * 12 + 8;
 /// (`Patches`, about 60), its entry in a packed layout and that entry's JSON copies
 /// (about 200) and the per-cell work of the images and statistics (about 250).
 pub const CELL_BYTES: u64 = 800;
-/// An exported vertex: position, normal, tangent and texture coordinate (48), twice
-/// more in the .glb's buffer and file, and its share of the indices.
-pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
+/// An exported vertex, at the .glb's encoding: its point in the bake's vertex grid
+/// (f64: 24); the exported mesh's position, normal, tangent and texture coordinate
+/// (48) and its share of the indices (at most 24: two triangles a quad, about a quad a
+/// vertex); the welded copy the file holds (as much), and the file's buffer (as much,
+/// made into the file in place); and 16 more, measured: the allocator's slack, the
+/// weld's table of the cells' side vertices. Measured where vertices are most of a
+/// bake (`--grid 512 --chart-quads 16`, 289 vertices a cell, `--size 512`): the
+/// one-sphere scene (1.38 M vertices) peaked at 436 MiB against about 480 estimated,
+/// shell_arrows.sdf (4.97 M) at 1,320 MiB against about 1,360. Before the export
+/// stopped copying the mesh and the buffer they peaked at 584 and 1,794 MiB, against
+/// about 366 and 1,000 estimated at 168 bytes a vertex.
+pub const VERTEX_BYTES: u64 = 24 + 3 * (48 + 24) + 16;
 
 /// The estimated peak memory of a bake and of writing its outputs, in bytes: the
 /// largest of its phases, over [`BASE_BYTES`]. With S the level-0 samples (about the
@@ -119,7 +128,7 @@ pub const VERTEX_BYTES: u64 = 3 * 48 + 24;
 ///
 /// ```text
 /// mesh:   16 B × grid corners                       (then freed)
-/// after:  800 B × cells + 168 B × exported vertices
+/// after:  800 B × cells + 256 B × exported vertices
 ///         + max(80 B × S + 272 B × min(S, 2^20)     shading, one dispatch in flight,
 ///               + X,                                the scene's textures X bytes,
 ///               120 B × S + X,                      shaded results → level 0

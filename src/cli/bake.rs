@@ -192,7 +192,7 @@ fn encode(
         // The file shares the vertices inside each chart (the bake's own mesh is chart
         // by chart, as its images read it).
         export::glb(
-            &sdfc::bake::images::weld(baked.mesh.clone()),
+            &sdfc::bake::images::weld(&baked.mesh, baked.vertex_grid.n),
             &baked.textures,
             &baked.atlas,
             name,

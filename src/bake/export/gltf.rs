@@ -187,8 +187,9 @@ pub fn glb(
     let normal = doc.attribute(&mesh.normals, Type::Vec3, None);
     let tangent = doc.attribute(&mesh.tangents, Type::Vec4, None);
     let texcoord = doc.attribute(&mesh.texcoords, Type::Vec2, None);
-    let indices: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-    let view = doc.view(&indices, Some(Target::ElementArrayBuffer));
+    let view = doc.view_with(Some(Target::ElementArrayBuffer), |bin| {
+        bin.extend(mesh.indices.iter().flat_map(|i| i.to_le_bytes()))
+    });
     let indices = doc.accessor(
         view,
         mesh.indices.len(),
@@ -348,13 +349,23 @@ struct Builder {
 impl Builder {
     /// Appends `bytes` to the buffer, 4-byte aligned, as a new buffer view.
     fn view(&mut self, bytes: &[u8], target: Option<Target>) -> Index<View> {
+        self.view_with(target, |bin| bin.extend_from_slice(bytes))
+    }
+
+    /// A new buffer view, 4-byte aligned, of the bytes `write` appends to the buffer.
+    fn view_with(
+        &mut self,
+        target: Option<Target>,
+        write: impl FnOnce(&mut Vec<u8>),
+    ) -> Index<View> {
         self.pad();
-        let offset = self.bin.len() as u64;
-        self.bin.extend_from_slice(bytes);
+        let offset = self.bin.len();
+        write(&mut self.bin);
+        let length = self.bin.len() - offset;
         self.root.push(View {
             buffer: Index::new(0),
-            byte_length: USize64(bytes.len() as u64),
-            byte_offset: Some(USize64(offset)),
+            byte_length: USize64(length as u64),
+            byte_offset: Some(USize64(offset as u64)),
             byte_stride: None,
             name: None,
             target: target.map(Checked::Valid),
@@ -370,12 +381,10 @@ impl Builder {
         type_: Type,
         min_max: Option<(Value, Value)>,
     ) -> Index<Accessor> {
-        let bytes: Vec<u8> = values
-            .iter()
-            .flatten()
-            .flat_map(|x| x.to_le_bytes())
-            .collect();
-        let view = self.view(&bytes, Some(Target::ArrayBuffer));
+        // Straight into the buffer (no copy of the attribute's bytes on the way).
+        let view = self.view_with(Some(Target::ArrayBuffer), |bin| {
+            bin.extend(values.iter().flatten().flat_map(|x| x.to_le_bytes()))
+        });
         self.accessor(view, values.len(), ComponentType::F32, type_, min_max)
     }
 
@@ -461,16 +470,19 @@ impl Builder {
                 .map(u32::to_le_bytes)
                 .map_err(|_| too_big())
         };
-        let mut out = Vec::with_capacity(length);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&word(length)?);
-        out.extend_from_slice(&word(json.len())?);
-        out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
-        out.extend_from_slice(&json);
-        out.extend_from_slice(&word(self.bin.len())?);
-        out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
-        out.extend_from_slice(&self.bin);
+        let mut head = Vec::with_capacity(length - self.bin.len());
+        head.extend_from_slice(MAGIC);
+        head.extend_from_slice(&2u32.to_le_bytes());
+        head.extend_from_slice(&word(length)?);
+        head.extend_from_slice(&word(json.len())?);
+        head.extend_from_slice(&CHUNK_JSON.to_le_bytes());
+        head.extend_from_slice(&json);
+        head.extend_from_slice(&word(self.bin.len())?);
+        head.extend_from_slice(&CHUNK_BIN.to_le_bytes());
+        // The buffer becomes the file in place (its bytes moved up), not copied: a
+        // second copy of a large mesh's buffer was the export's peak.
+        let mut out = self.bin;
+        out.splice(0..0, head);
         Ok(out)
     }
 }

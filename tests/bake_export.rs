@@ -108,6 +108,137 @@ fn glb_round_trip() {
     }
 }
 
+/// Emission over 1 travels as `KHR_materials_emissive_strength`: the strength reads
+/// back as written, the extension is listed as used (not required) only where the
+/// strength is not 1 and there is an emissive image, and a strength that is not a
+/// finite number, 0 or more, is refused.
+#[test]
+fn the_emissive_strength_round_trips_as_its_extension() {
+    let (mesh, layout) = quad_and_cube();
+    let atlas = ChartLayout::from(layout.clone());
+    let write = |emissive: bool, strength: f32| {
+        let mut t = textures(&layout, emissive);
+        t.emissive_strength = strength;
+        glb(&mesh, &t, &atlas, "q", "material")
+    };
+    let bytes = write(true, 2.5).unwrap();
+    let (_, back, _) = read_glb(&bytes).unwrap();
+    assert_eq!(back.emissive_strength, 2.5);
+    let (doc, _) = split(&bytes);
+    assert_eq!(
+        doc["extensionsUsed"],
+        json!(["KHR_materials_emissive_strength"])
+    );
+    assert!(doc.get("extensionsRequired").is_none(), "{doc}");
+    assert_eq!(
+        doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"],
+        json!(2.5)
+    );
+    for (emissive, strength) in [(true, 1.0), (false, 2.5)] {
+        let bytes = write(emissive, strength).unwrap();
+        let (doc, _) = split(&bytes);
+        assert!(doc.get("extensionsUsed").is_none(), "{doc}");
+        assert!(doc["materials"][0].get("extensions").is_none(), "{doc}");
+        let (_, back, _) = read_glb(&bytes).unwrap();
+        assert_eq!(back.emissive_strength, 1.0);
+    }
+    for bad in [f32::NAN, f32::INFINITY, -1.0] {
+        let e = write(true, bad).unwrap_err();
+        assert!(e.contains("emissive strength"), "{e}");
+    }
+    // A file whose strength is negative is refused by the reader too.
+    let (mut doc, bin) = split(&write(true, 2.5).unwrap());
+    doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] =
+        json!(-3.0);
+    let e = read_glb(&join_text(doc.to_string().into_bytes(), &bin)).unwrap_err();
+    assert!(e.to_string().contains("emissive strength"), "{e}");
+}
+
+/// `weld` (the exported mesh's vertices shared inside charts) gives what welding every
+/// vertex by its bits gives, for cells of n × n vertices whose inner vertices it does
+/// not look up (n ≥ 3), whose sides are shared inside a chart and split across charts;
+/// and it takes any vertex count and any n, 0 included, without a panic.
+#[test]
+fn weld_shares_the_side_vertices_as_welding_every_vertex_does() {
+    use sdfc::bake::images::weld;
+    // Welding every vertex by its bits, in first-seen order.
+    let every = |m: &MeshData| {
+        let mut out = MeshData::default();
+        let mut seen = std::collections::HashMap::new();
+        let remap: Vec<u32> = (0..m.positions.len())
+            .map(|k| {
+                let key: Vec<u32> = m.positions[k]
+                    .iter()
+                    .chain(&m.normals[k])
+                    .chain(&m.tangents[k])
+                    .chain(&m.texcoords[k])
+                    .map(|x| x.to_bits())
+                    .collect();
+                *seen.entry(key).or_insert_with(|| {
+                    out.positions.push(m.positions[k]);
+                    out.normals.push(m.normals[k]);
+                    out.tangents.push(m.tangents[k]);
+                    out.texcoords.push(m.texcoords[k]);
+                    out.positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        out.indices = m.indices.iter().map(|&i| remap[i as usize]).collect();
+        out
+    };
+    for n in [1usize, 2, 3, 4, 17] {
+        // Chart 0: 2 × 2 cells of a plane, its texture coordinates continuous across
+        // them; chart 1: one cell over the same points, with texture coordinates of
+        // its own (split from chart 0 along every side).
+        let mut mesh = MeshData::default();
+        let q = (n.max(2) - 1) as f32;
+        for (chart, cx, cy) in [(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 1, 1), (1, 0, 0)] {
+            let base = mesh.positions.len() as u32;
+            for j in 0..n {
+                for i in 0..n {
+                    let (x, y) = (
+                        (cx as f32 * q + i as f32) / q,
+                        (cy as f32 * q + j as f32) / q,
+                    );
+                    mesh.positions.push([x, y, 0.0]);
+                    mesh.normals.push([0.0, 0.0, 1.0]);
+                    mesh.tangents.push([1.0, 0.0, 0.0, 1.0]);
+                    mesh.texcoords
+                        .push([x * 0.25 + chart as f32 * 0.5, y * 0.25]);
+                }
+            }
+            for j in 0..n.saturating_sub(1) {
+                for i in 0..n - 1 {
+                    let k = (j * n + i) as u32 + base;
+                    let n = n as u32;
+                    mesh.indices
+                        .extend([k, k + 1, k + n + 1, k, k + n + 1, k + n]);
+                }
+            }
+        }
+        let welded = weld(&mesh, n);
+        assert_eq!(welded, every(&mesh), "n = {n}");
+        if n >= 2 {
+            // Chart 0 is one grid of (2n − 1)² vertices, chart 1 keeps its n².
+            assert_eq!(
+                welded.positions.len(),
+                (2 * n - 1).pow(2) + n * n,
+                "n = {n}"
+            );
+        }
+        // A count that is not whole cells, and n = 0: every vertex looked up.
+        let mut cut = mesh.clone();
+        cut.positions.pop();
+        cut.normals.pop();
+        cut.tangents.pop();
+        cut.texcoords.pop();
+        cut.indices.retain(|&i| (i as usize) < cut.positions.len());
+        cut.indices.truncate(cut.indices.len() / 3 * 3);
+        assert_eq!(weld(&cut, n), every(&cut), "n = {n}, cut");
+        assert_eq!(weld(&mesh, 0), every(&mesh), "n = 0");
+    }
+}
+
 #[test]
 fn glb_document_structure() {
     let (mesh, layout) = quad_and_cube();

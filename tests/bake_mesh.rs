@@ -489,6 +489,20 @@ fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
         let held = coverage(field, &mesh, cut);
         assert!(held.samples > 100, "{held:?}");
         assert_eq!(held.missed, 0.0, "{held:?}");
+        // Boxes that cut the sphere across several faces at once, at every angle to
+        // the surface: what lies inside is all held there too.
+        for (lo, hi) in [
+            (DVec3::new(-0.37, -0.21, 0.13), own.max),
+            (own.min, DVec3::new(0.41, 0.29, -0.17)),
+            (DVec3::new(-0.6, -2.0, -0.55), DVec3::new(0.63, 0.07, 2.0)),
+        ] {
+            let cut = Aabb { min: lo, max: hi };
+            let mut mesh = dual_contour(field, &Grid::over(cut, 24), 1e-5);
+            mesh.retain_centred_within(cut);
+            let held = coverage(field, &mesh, cut);
+            assert!(held.samples > 100, "{cut:?}: {held:?}");
+            assert_eq!(held.missed, 0.0, "{cut:?}: {held:?}");
+        }
         // A box starting a twentieth of a cell past the sphere's surface (x = 1).
         let outside = Aabb {
             min: DVec3::new(1.0 + 0.05 * grid.cell, own.min.y, own.min.z),

@@ -398,7 +398,18 @@ fn refuses_on(gpu: &Gpu) {
     short.tangents.pop();
     let mut small = textures.clone();
     small.normal = image::RgbaImage::new(32, 32);
-    for (m, t) in [(&short, &textures), (&mesh, &small)] {
+    // An emissive strength the shader cannot hold is the caller's input, not an
+    // internal error (it would have reached the WGSL as a literal NaN).
+    let mut undefined = textures.clone();
+    undefined.emissive_strength = f32::NAN;
+    let mut negative = textures.clone();
+    negative.emissive_strength = -1.0;
+    for (m, t) in [
+        (&short, &textures),
+        (&mesh, &small),
+        (&mesh, &undefined),
+        (&mesh, &negative),
+    ] {
         match MeshRenderer::new(gpu, m, t, &layout.clone().into()) {
             Err(MeshError::Input(_)) => {}
             Err(e) => panic!("{e}"),

@@ -58,6 +58,19 @@ pub struct Textures {
 }
 
 impl Textures {
+    /// Refuses an emissive strength that is not a finite number, 0 or more (glTF's
+    /// `emissiveStrength`).
+    pub fn check_emissive_strength(&self) -> Result<(), String> {
+        let strength = self.emissive_strength;
+        if strength.is_finite() && strength >= 0.0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "the emissive strength is {strength}; it must be a finite number, 0 or more"
+            ))
+        }
+    }
+
     /// The images with their names (`base_color`, `metallic_roughness`, `normal`,
     /// `emissive` when there is one), in that order.
     pub fn named(&self) -> Vec<(&image::RgbaImage, &'static str)> {

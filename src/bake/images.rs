@@ -195,7 +195,7 @@ pub fn atlas_images(
     let mut emission = blank();
     let mut emits = false;
     // Emission over 1 is carried by the strength: the image holds emission ÷ it.
-    let strength = emissive_strength(levels);
+    let strength = emissive_strength(&levels[..atlas.levels().min(levels.len())]);
     let emitted = |e: &[f32]| {
         let s = strength;
         Rgba([srgb8(e[0] / s), srgb8(e[1] / s), srgb8(e[2] / s), 255])
@@ -488,16 +488,16 @@ pub fn weld(mesh: &MeshData, n: usize) -> MeshData {
     let mut out = MeshData::default();
     let count = mesh.positions.len();
     let per_cell = n * n;
+    // Every vertex is looked up unless the mesh is whole cells of n × n with inner ones.
+    let cells = n >= 3 && count % per_cell == 0;
     let on_side = |k: usize| {
         let (i, j) = ((k % per_cell) % n, (k % per_cell) / n);
-        n < 3
-            || per_cell == 0
-            || count % per_cell != 0
-            || i == 0
-            || j == 0
-            || i == n - 1
-            || j == n - 1
+        i == 0 || j == 0 || i == n - 1 || j == n - 1
     };
+    out.positions.reserve(count);
+    out.normals.reserve(count);
+    out.tangents.reserve(count);
+    out.texcoords.reserve(count);
     let mut index: std::collections::HashMap<[u32; 12], u32> = std::collections::HashMap::new();
     let mut remap = Vec::with_capacity(count);
     for k in 0..count {
@@ -515,7 +515,7 @@ pub fn weld(mesh: &MeshData, n: usize) -> MeshData {
             out.texcoords.push(uv);
             next
         };
-        let at = if on_side(k) {
+        let at = if !cells || on_side(k) {
             let key = [
                 p[0], p[1], p[2], nrm[0], nrm[1], nrm[2], t[0], t[1], t[2], t[3], uv[0], uv[1],
             ]

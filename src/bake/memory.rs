@@ -119,7 +119,9 @@ pub const CELL_BYTES: u64 = 800;
 /// one-sphere scene (1.38 M vertices) peaked at 436 MiB against about 480 estimated,
 /// shell_arrows.sdf (4.97 M) at 1,320 MiB against about 1,360. Before the export
 /// stopped copying the mesh and the buffer they peaked at 584 and 1,794 MiB, against
-/// about 366 and 1,000 estimated at 168 bytes a vertex.
+/// about 366 and 1,000 estimated at 168 bytes a vertex. (At `--chart-quads` 1 or 2
+/// every vertex goes through the weld's table, some 60–120 bytes each while it is
+/// built, before the buffer exists; there cells and samples are most of a bake.)
 pub const VERTEX_BYTES: u64 = 24 + 3 * (48 + 24) + 16;
 
 /// The estimated peak memory of a bake and of writing its outputs, in bytes: the

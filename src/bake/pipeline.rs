@@ -203,11 +203,13 @@ pub struct Report {
     /// Level-0 samples where the material is undefined (a channel not finite): the
     /// images hold 0 there.
     pub undefined: usize,
-    /// Level-0 samples whose emission is over 1, which the glTF's emissive texture
-    /// (0 to 1) holds divided by [`Report::emissive_strength`].
+    /// Level-0 samples whose emission is finite and over 1, which the glTF's emissive
+    /// texture (0 to 1) holds divided by [`Report::emissive_strength`] (an infinite one
+    /// counts in [`Report::undefined`]).
     pub emission_over_one: usize,
-    /// The largest emission, where it is over 1 (else 1): the glTF's
-    /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]).
+    /// The largest finite emission, where it is over 1 (else 1): the glTF's
+    /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]; 0 in a
+    /// report whose images were not made).
     pub emissive_strength: f32,
     pub stages: Vec<(&'static str, Duration)>,
 }
@@ -544,7 +546,8 @@ fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
 }
 
 /// Level-0 samples where the material is undefined (a channel not finite), and where
-/// its emission is over 1 ([`Report::undefined`], [`Report::emission_over_one`]).
+/// its emission is finite and over 1 ([`Report::undefined`],
+/// [`Report::emission_over_one`]).
 fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
     let all = || {
         level0
@@ -556,7 +559,7 @@ fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
     (
         all().filter(|t| t.iter().any(|v| !v.is_finite())).count(),
         all()
-            .filter(|t| t[EMISSION].iter().any(|&v| v > 1.0))
+            .filter(|t| t[EMISSION].iter().any(|&v| v.is_finite() && v > 1.0))
             .count(),
     )
 }

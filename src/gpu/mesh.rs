@@ -276,7 +276,7 @@ fn check_input(mesh: &MeshData, textures: &Textures, atlas: &ChartLayout) -> Res
             }
         }
     }
-    Ok(())
+    textures.check_emissive_strength()
 }
 
 impl MeshRenderer {

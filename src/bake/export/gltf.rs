@@ -482,6 +482,7 @@ impl Builder {
         // The buffer becomes the file in place (its bytes moved up), not copied: a
         // second copy of a large mesh's buffer was the export's peak.
         let mut out = self.bin;
+        out.reserve_exact(head.len());
         out.splice(0..0, head);
         Ok(out)
     }

@@ -137,11 +137,5 @@ pub fn check_textures(textures: &Textures, layout: &ChartLayout) -> Result<(), S
             }
         }
     }
-    let strength = textures.emissive_strength;
-    if !(strength.is_finite() && strength >= 0.0) {
-        return Err(format!(
-            "the emissive strength is {strength}; it must be a finite number, 0 or more"
-        ));
-    }
-    Ok(())
+    textures.check_emissive_strength()
 }

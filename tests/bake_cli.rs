@@ -826,6 +826,36 @@ fn bakes_over_the_memory_limit_are_refused_before_any_work() {
         assert!(!err.contains("shade (GPU)"), "{err}");
         assert!(!out.exists());
     }
+    // A bake under the limit runs, and its report prints the estimate: the formula
+    // test's one-sphere scene at --size 1024 (`the_bake_memory_model_is_its_formula`).
+    let (code, _, err) = sdfc(&[
+        "bake",
+        "examples/sphere.sdf",
+        "--size",
+        "1024",
+        "--walk",
+        "loop",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let expected = sdfc::bake::pipeline::estimated_peak_bytes(&sdfc::bake::pipeline::Footprint {
+        grid_corners: 51 * 51 * 51,
+        cells: 10746,
+        vertices: 4 * 10746,
+        samples: 526_556,
+        texels: 1024 * 1008,
+        fit_batch: 0,
+        texture_bytes: 0,
+    });
+    assert_eq!(expected >> 20, 323);
+    assert!(
+        err.contains(
+            "memory:         about 323 MiB at the peak, estimated (the limit is 2048 MiB)"
+        ),
+        "{err}"
+    );
+    std::fs::remove_file(&out).unwrap();
     // The scene's textures count: three 8192² images are about 2.5 GiB while the pass
     // loads them (a small bake of such a scene peaked at 2.9 GB, accepted).
     let big = dir.path().join("big.png");
@@ -897,6 +927,40 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
     assert!(stages.contains(&"mesh, refined"), "{stages:?}");
     assert!(!stages.contains(&"fit (GPU)"), "{stages:?}");
     assert_eq!(v["fit_samples"], 0, "{v}");
+    // The memory model's estimate for this bake: in the JSON, and on the report's line.
+    let peak = v["estimated_peak_bytes"].as_u64().unwrap();
+    assert!((128 << 20..2 << 30).contains(&peak), "{v}");
+    assert!(
+        err.contains(&format!(
+            "memory:         about {} MiB at the peak",
+            peak >> 20
+        )),
+        "{err}"
+    );
+    // An unbounded scene bakes within --bake-bounds, and without them says which flag.
+    let plane = dir.path().join("plane.sdf");
+    std::fs::write(
+        &plane,
+        "material m { color = [1, 0, 0]; }\nrender plane([0, 1, 0], 0).paint(m);",
+    )
+    .unwrap();
+    let bench_plane = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "--bake",
+            plane.to_str().unwrap(),
+            "--atlas-size",
+            "128",
+        ];
+        args.extend_from_slice(extra);
+        sdfc(&args)
+    };
+    let (code, _, err) = bench_plane(&[]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--bake-bounds"), "{err}");
+    let (code, _, err) = bench_plane(&["--bake-bounds", "-1,-1,-1", "1,1,1"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("surface held:"), "{err}");
 
     // With fitted texels: the fit's stage and its samples.
     let (code, _, err) = sdfc(&[

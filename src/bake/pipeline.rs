@@ -211,6 +211,9 @@ pub struct Report {
     /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]; 0 in a
     /// report whose images were not made).
     pub emissive_strength: f32,
+    /// The memory model's estimate of the bake's peak, in bytes, for the mesh and atlas
+    /// baked ([`super::memory::estimated_peak_bytes`]; at most [`MAX_BAKE_BYTES`]).
+    pub estimated_peak: u64,
     pub stages: Vec<(&'static str, Duration)>,
 }
 
@@ -380,6 +383,16 @@ pub fn bake<'s>(
         refined_held = None;
     }
     report.vertices = quads.vertices.len();
+    let f = footprint(
+        &grid,
+        &table,
+        report.vertices,
+        &atlas,
+        m,
+        options,
+        texture_bytes,
+    );
+    report.estimated_peak = super::memory::estimated_peak_bytes(&f);
     report.cells = table.len();
     report.charts = patches.len();
     report.chart_size = atlas.cell_size();
@@ -623,18 +636,34 @@ fn lay_out_charts(
             if options.gutter > 0 { " or a narrower --gutter" } else { "" }
         ))
     })?;
-    check_memory(&Footprint {
+    let vertices = quads.vertices.len();
+    check_memory(&footprint(
+        grid,
+        &table,
+        vertices,
+        &atlas,
+        m,
+        options,
         texture_bytes,
-        ..Footprint::of(
-            grid,
-            &table,
-            quads.vertices.len(),
-            &atlas,
-            m,
-            options.texels,
-        )
-    })?;
+    ))?;
     Ok((patches, table, atlas))
+}
+
+/// The whole bake's footprint once its atlas is laid out ([`Footprint::of`] with the
+/// scene's textures).
+fn footprint(
+    grid: &Grid,
+    table: &ChartTable,
+    vertices: usize,
+    atlas: &ChartLayout,
+    m: usize,
+    options: &Options,
+    texture_bytes: u64,
+) -> Footprint {
+    Footprint {
+        texture_bytes,
+        ..Footprint::of(grid, table, vertices, atlas, m, options.texels)
+    }
 }
 
 /// Stages 3 and 4: level 0's texel points (each shared one once), shaded on the GPU:

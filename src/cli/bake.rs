@@ -433,6 +433,11 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         r.utilisation * 100.0
     );
     eprintln!(
+        "memory:         about {} MiB at the peak, estimated (the limit is {} MiB)",
+        r.estimated_peak >> 20,
+        sdfc::bake::pipeline::MAX_BAKE_BYTES >> 20
+    );
+    eprintln!(
         "density spread: {:.3} (coefficient of variation of texels per unit length; {} sliver charts left out)",
         // (Adding 0 turns a -0 into 0.)
         r.density_spread + 0.0,
@@ -591,6 +596,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             "levels": baked.atlas.levels(),
             "samples": r.samples,
             "fit_samples": r.fit_samples,
+            "estimated_peak_bytes": r.estimated_peak,
             "charts": r.charts,
             "refined_cells": r.refined,
             "refine": r.refine,

@@ -323,6 +323,13 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             1,
             "no surface inside the bounds",
         ),
+        // A box thinner than a chart cell where it cuts the shape: the mesh would keep
+        // a broken strip of the plane.
+        (
+            vec![&plane, "--bounds", "-1,-1,0", "1,1,0.01"],
+            2,
+            "thick along z where they cut the shape",
+        ),
         // A plane 0.05 short of the bounds: the grid's margin reaches it, the mesh
         // keeps nothing of it.
         (
@@ -404,6 +411,23 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
         assert!(err.contains(message), "{all:?}: {err}");
         assert!(!out.exists(), "{all:?} left {}", out.display());
     }
+    // No surface after --refine 8: the message does not suggest it again.
+    let (code, _, err) = sdfc(&[
+        "bake",
+        &plane,
+        "--bounds",
+        "-1,0.05,-1",
+        "1,3,1",
+        "--refine",
+        "8",
+        "-o",
+        &out_s,
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("no surface inside the bounds") && !err.contains("--refine 8"),
+        "{err}"
+    );
     // Unwritable outputs: a missing folder, a folder in place of the file.
     let missing = dir.path().join("no/such/folder/out.glb");
     let (code, _, err) = sdfc(&[
@@ -627,7 +651,11 @@ fn the_bake_memory_model_is_its_formula() {
         let phases = [
             (80 * s + 272 * s.min(1 << 20) + t, "shade"),
             (120 * s + t, "handover"),
-            (81 * s + 48 * f.texels, "encode"),
+            // --charts' JSON: 800 bytes a cell while the outputs are encoded.
+            (
+                81 * s + 48 * f.texels + if f.charts_file { 800 * f.cells } else { 0 },
+                "encode",
+            ),
             (
                 56 * s + 124 * f.fit_batch + 272 * f.fit_batch.min(1 << 20) + t,
                 "fit",
@@ -647,6 +675,7 @@ fn the_bake_memory_model_is_its_formula() {
         texels,
         fit_batch: 0,
         texture_bytes: 0,
+        charts_file: false,
     };
     let cases = [
         // The one-sphere scene at --size 1024, 4096 and 16384 (flat, grid 48).
@@ -655,6 +684,17 @@ fn the_bake_memory_model_is_its_formula() {
         (sphere(173_322_236, 16384 * 16128), "encode"),
         // Many samples in a small image (no such layout exists; the phase does).
         (sphere(50_000_000, 1000), "handover"),
+        // The red team's sphere at --grid 256 --size 2048 with --charts (308,574 charts
+        // of 4² texels; the JSON's 227 MB had been left out of the model).
+        (
+            Footprint {
+                cells: 308_574,
+                vertices: 4 * 308_574,
+                charts_file: true,
+                ..sphere(5_000_000, 2048 * 2048)
+            },
+            "encode",
+        ),
         // A small bake fitting its texels (--texels fit at --size 256: all its charts
         // in one batch, three sub-texel samples a texel, outweigh its 30,000 samples).
         (
@@ -847,6 +887,7 @@ fn bakes_over_the_memory_limit_are_refused_before_any_work() {
         texels: 1024 * 1008,
         fit_batch: 0,
         texture_bytes: 0,
+        charts_file: false,
     });
     assert_eq!(expected >> 20, 323);
     assert!(
@@ -961,6 +1002,17 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
     let (code, _, err) = bench_plane(&["--bake-bounds", "-1,-1,-1", "1,1,1"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("surface held:"), "{err}");
+    // Without --bake, where clap's `requires` does not hold (a flag --bake conflicts
+    // with), it is refused all the same.
+    let (code, _, err) = sdfc(&[
+        "bench",
+        "--seed-sweep",
+        "--bake-bounds",
+        "-1,-1,-1",
+        "1,1,1",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("it needs --bake"), "{err}");
 
     // With fitted texels: the fit's stage and its samples.
     let (code, _, err) = sdfc(&[
@@ -1067,6 +1119,16 @@ fn undefined_and_hdr_materials_are_reported_and_hdr_emission_is_carried() {
             report.messages
         );
     }
+    assert!(!err.contains("rounds to 0"), "{err}");
+    // One very bright point dims the rest to 0 in the 8-bit texture: said.
+    let (err, _) = bake(
+        "spike",
+        "color = [0.5, 0.5, 0.5]; emission = [1 / (position.x * position.x * position.x * position.x + 1e-12), 0, 0];",
+    );
+    assert!(
+        err.contains("the emission rounds to 0 in the 8-bit emissive texture at"),
+        "{err}"
+    );
     let (err, plain) = bake("plain", "color = [0.5, 0.5, 0.5]; emission = [1, 0.5, 0];");
     assert!(
         !err.contains("undefined") && !err.contains("emission:"),

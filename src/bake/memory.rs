@@ -30,6 +30,9 @@ pub struct Footprint {
     /// their mips, staged: [`crate::bake::export::gltf::texture_bytes`] of each, from the
     /// image files' headers).
     pub texture_bytes: u64,
+    /// Whether `--charts`' JSON is written (encoded beside the other outputs:
+    /// [`CHARTS_FILE_CELL_BYTES`] a cell).
+    pub charts_file: bool,
 }
 
 impl Footprint {
@@ -109,6 +112,10 @@ pub const ENCODE_TEXEL_BYTES: u64 = 16 + 2 * 12 + 8;
 /// (`Patches`, about 60), its entry in a packed layout and that entry's JSON copies
 /// (about 200) and the per-cell work of the images and statistics (about 250).
 pub const CELL_BYTES: u64 = 800;
+/// A cell in `--charts`' JSON while the outputs are encoded: its entry (pretty-printed,
+/// about 740 bytes: the sphere at `--grid 256`, 308,574 charts, wrote 227 MB and
+/// peaked 140 MiB higher than without it) and the table it is printed from.
+pub const CHARTS_FILE_CELL_BYTES: u64 = 800;
 /// An exported vertex, at the .glb's encoding: its point in the bake's vertex grid
 /// (f64: 24); the exported mesh's position, normal, tangent and texture coordinate
 /// (48) and its share of the indices (at most 24: two triangles a quad, about a quad a
@@ -136,7 +143,8 @@ pub const VERTEX_BYTES: u64 = 24 + 3 * (48 + 24) + 16;
 ///               120 B × S + X,                      shaded results → level 0
 ///               56 B × S + 124 B × F                --texels fit, F at once,
 ///               + 272 B × min(F, 2^20) + X,
-///               81 B × S + 48 B × T)                encoding the outputs
+///               81 B × S + 48 B × T                 encoding the outputs
+///               (+ 800 B × cells with --charts))
 /// ```
 ///
 /// Derived from the buffers each stage holds at once (the constants above), and
@@ -148,7 +156,13 @@ pub fn estimated_peak_bytes(f: &Footprint) -> u64 {
     let mesh = GRID_CORNER_BYTES * f.grid_corners;
     let shade = SHADE_SAMPLE_BYTES * s + DISPATCH_POINT_BYTES * dispatch;
     let handover = HANDOVER_SAMPLE_BYTES * s;
-    let encode = ENCODE_SAMPLE_BYTES * s + ENCODE_TEXEL_BYTES * f.texels;
+    let encode = ENCODE_SAMPLE_BYTES * s
+        + ENCODE_TEXEL_BYTES * f.texels
+        + if f.charts_file {
+            CHARTS_FILE_CELL_BYTES * f.cells
+        } else {
+            0
+        };
     let fit = FIT_HELD_SAMPLE_BYTES * s
         + FIT_BATCH_SAMPLE_BYTES * f.fit_batch
         + DISPATCH_POINT_BYTES * f.fit_batch.min(MAX_POINTS_PER_DISPATCH as u64);

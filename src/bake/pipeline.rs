@@ -83,6 +83,9 @@ pub struct Options {
     pub refine: Refine,
     /// Level-0 texels point-sampled, or fitted for a bilinear reader ([`fit`]).
     pub texels: Texels,
+    /// Whether the caller writes the chart table as JSON (`--charts`): the memory
+    /// model counts it.
+    pub charts_file: bool,
 }
 
 /// Refinement of the mesh where a cell may hold detail finer than itself.
@@ -110,6 +113,7 @@ impl Default for Options {
             max_chart: DEFAULT_MAX_CHART,
             refine: Refine::Auto,
             texels: Texels::Points,
+            charts_file: false,
         }
     }
 }
@@ -121,8 +125,9 @@ pub enum BakeError {
     NoMaterial,
     /// The shape has no finite bounds and no `--bounds` was given.
     Unbounded,
-    /// No surface inside the bounds, as sampled on a grid of this cell size.
-    Empty(f64),
+    /// No surface inside the bounds, as sampled on a grid of this cell size; whether
+    /// the mesh was refined as finely as a bake refines.
+    Empty(f64, bool),
     /// A bad option (size, grid, bounds).
     Option(String),
     /// The shape cannot be baked as it is (empty, or where f32 coordinates cannot
@@ -142,10 +147,11 @@ impl std::fmt::Display for BakeError {
             BakeError::Unbounded => f.write_str(
                 "the shape has no finite bounds (a plane or an infinite repeat): give the region to bake with --bounds MIN MAX, for example --bounds -2,-2,-2 2,2,2",
             ),
-            BakeError::Empty(cell) => write!(
+            BakeError::Empty(cell, refined) => write!(
                 f,
-                "found no surface inside the bounds on a grid of {}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge, or --refine 8, finds it)",
-                length(*cell)
+                "found no surface inside the bounds on a grid of {}-unit cells: nothing to bake (a part thinner than a cell can fall between the samples: a finer --grid or --edge{} finds it)",
+                length(*cell),
+                if *refined { "" } else { ", or --refine 8," }
             ),
             BakeError::Option(m) | BakeError::Resource(m) | BakeError::Scene(m) => f.write_str(m),
             BakeError::Gpu(e) => write!(f, "{e}"),
@@ -211,6 +217,12 @@ pub struct Report {
     /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]; 0 in a
     /// report whose images were not made).
     pub emissive_strength: f32,
+    /// Level-0 samples that emit (a channel finite and over 0).
+    pub emitting: usize,
+    /// Of those, the samples whose emission rounds to 0 in the 8-bit emissive texture
+    /// once divided by [`Report::emissive_strength`] (a few very bright samples dim the
+    /// rest).
+    pub emission_lost: usize,
     /// The memory model's estimate of the bake's peak, in bytes, for the mesh and atlas
     /// baked ([`super::memory::estimated_peak_bytes`]; at most [`MAX_BAKE_BYTES`]).
     pub estimated_peak: u64,
@@ -328,12 +340,12 @@ pub fn bake<'s>(
         Refine::Times(r) => r,
     };
     let (mut quads, _) = contour(shape, &grid, scale, times, &[], &mut report, progress)?;
-    clip(&mut quads, options, bounds);
+    clip(&mut quads, options);
     // With `--refine auto`, a plain mesh that found no surface (a part thinner than a
     // cell everywhere) is refined where the surface samples lie, as one that missed
     // some of it.
     if quads.quads.is_empty() && options.refine != Refine::Auto {
-        return Err(BakeError::Empty(grid.cell));
+        return Err(BakeError::Empty(grid.cell, refined_most(options)));
     }
     lap(&mut report, "mesh");
     let missed;
@@ -366,11 +378,11 @@ pub fn bake<'s>(
     }
 
     if quads.quads.is_empty() {
-        return Err(BakeError::Empty(grid.cell));
+        return Err(BakeError::Empty(grid.cell, refined_most(options)));
     }
 
     // 2. Charts and layout.
-    let ((patches, table, atlas), kept) = lay_out_refined(
+    let ((patches, table, atlas, estimate), kept) = lay_out_refined(
         &mut quads,
         plain,
         &grid,
@@ -382,17 +394,8 @@ pub fn bake<'s>(
     if !kept {
         refined_held = None;
     }
+    report.estimated_peak = estimate;
     report.vertices = quads.vertices.len();
-    let f = footprint(
-        &grid,
-        &table,
-        report.vertices,
-        &atlas,
-        m,
-        options,
-        texture_bytes,
-    );
-    report.estimated_peak = super::memory::estimated_peak_bytes(&f);
     report.cells = table.len();
     report.charts = patches.len();
     report.chart_size = atlas.cell_size();
@@ -433,12 +436,12 @@ pub fn bake<'s>(
     let levels = mips::chain(&table, level0);
     progress.finish();
     lap(&mut report, "mips");
-
     // 6. Images and the mesh.
     progress.stage("images", 1);
     let mesh = images::mesh_data(&quads, &table, &atlas, &patches, &grid_points);
     let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
     report.emissive_strength = textures.emissive_strength;
+    (report.emitting, report.emission_lost) = emission_lost(&levels[0], report.emissive_strength);
     progress.finish();
     lap(&mut report, "images");
 
@@ -486,7 +489,7 @@ fn refine_auto(
     let mut fitted: Option<(QuadMesh, Report)> = None;
     loop {
         let (mut refined, left) = contour(shape, grid, scale, r, missed, report, progress)?;
-        clip(&mut refined, options, bounds);
+        clip(&mut refined, options);
         if !fits(&refined) {
             return Ok(match fitted.take() {
                 Some((earlier, its)) => {
@@ -527,7 +530,7 @@ fn lay_out_refined(
     options: &Options,
     texture_bytes: u64,
     report: &mut Report,
-) -> Result<((Patches, ChartTable, ChartLayout), bool), BakeError> {
+) -> Result<(Laid, bool), BakeError> {
     match (lay_out_charts(quads, grid, m, options, texture_bytes), plain) {
         // The refined mesh's charts do not fit, and the plain mesh has none.
         (Err(BakeError::Resource(why)), Some(plain)) if plain.quads.is_empty() => {
@@ -577,11 +580,43 @@ fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
     )
 }
 
+/// Whether the mesh was refined as finely as a bake refines (`--refine 8`): then the
+/// message for no surface does not suggest it.
+fn refined_most(options: &Options) -> bool {
+    options.refine == Refine::Times(refine::MAX_REFINE)
+}
+
+/// Level-0 samples that emit, and those of them whose every emitting channel rounds to
+/// 0 in the 8-bit texture once divided by `strength` ([`Report::emission_lost`]).
+fn emission_lost(level0: &Samples<Texel<CHANNELS>>, strength: f32) -> (usize, usize) {
+    let emits = |v: f32| v.is_finite() && v > 0.0;
+    let (mut emitting, mut lost) = (0, 0);
+    let all = level0
+        .corners
+        .iter()
+        .chain(&level0.edges)
+        .chain(&level0.interiors);
+    for t in all {
+        let e = &t[EMISSION];
+        if e.iter().any(|&v| emits(v)) {
+            emitting += 1;
+            if e.iter()
+                .all(|&v| !emits(v) || images::srgb8(v / strength) == 0)
+            {
+                lost += 1;
+            }
+        }
+    }
+    (emitting, lost)
+}
+
 /// With `--bounds`, the part of the mesh within them ([`QuadMesh::retain_centred_within`]):
-/// the grid's margin of a cell would otherwise mesh a surface just outside them.
-fn clip(mesh: &mut QuadMesh, options: &Options, bounds: Aabb) {
-    if options.bounds.is_some() {
-        mesh.retain_centred_within(bounds);
+/// the grid's margin of a cell would otherwise mesh a surface just outside them. The
+/// box is the user's: where it reaches past the shape's own bounds (which hold the
+/// whole surface) it cuts nothing.
+fn clip(mesh: &mut QuadMesh, options: &Options) {
+    if let Some(b) = options.bounds {
+        mesh.retain_centred_within(b);
     }
 }
 
@@ -614,7 +649,7 @@ fn lay_out_charts(
     m: usize,
     options: &Options,
     texture_bytes: u64,
-) -> Result<(Patches, ChartTable, ChartLayout), BakeError> {
+) -> Result<Laid, BakeError> {
     let patches = match options.style {
         Style::Flat => Patches::singles(quads.quads.len()),
         Style::Packed => patches::grow(quads, options.max_chart),
@@ -637,17 +672,14 @@ fn lay_out_charts(
         ))
     })?;
     let vertices = quads.vertices.len();
-    check_memory(&footprint(
-        grid,
-        &table,
-        vertices,
-        &atlas,
-        m,
-        options,
-        texture_bytes,
-    ))?;
-    Ok((patches, table, atlas))
+    let f = footprint(grid, &table, vertices, &atlas, m, options, texture_bytes);
+    let estimate = check_memory(&f)?;
+    Ok((patches, table, atlas, estimate))
 }
+
+/// A laid-out atlas: the charts, the chart table, the layout, and the memory model's
+/// estimate of the bake's peak with them.
+type Laid = (Patches, ChartTable, ChartLayout, u64);
 
 /// The whole bake's footprint once its atlas is laid out ([`Footprint::of`] with the
 /// scene's textures).
@@ -662,6 +694,7 @@ fn footprint(
 ) -> Footprint {
     Footprint {
         texture_bytes,
+        charts_file: options.charts_file,
         ..Footprint::of(grid, table, vertices, atlas, m, options.texels)
     }
 }

@@ -14,7 +14,7 @@ use std::sync::Mutex;
 /// Parses `x,y,z`.
 pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = s.split(',').collect();
-    let bad = || format!("expected x,y,z (three numbers), found {s:?}");
+    let bad = || format!("expected x,y,z (three finite numbers), found {s:?}");
     if parts.len() != 3 {
         return Err(bad());
     }
@@ -82,7 +82,7 @@ impl Progress for Bars {
 
 fn status(e: &BakeError) -> u8 {
     match e {
-        BakeError::NoMaterial | BakeError::Empty(_) | BakeError::Scene(_) => exit::SCENE,
+        BakeError::NoMaterial | BakeError::Empty(..) | BakeError::Scene(_) => exit::SCENE,
         BakeError::Unbounded | BakeError::Option(_) => exit::USAGE,
         BakeError::Resource(_) => exit::RESOURCE,
         BakeError::Gpu(g) => exit::gpu(g),
@@ -160,6 +160,7 @@ pub fn options(args: &BakeArgs) -> Result<Options, String> {
         max_chart,
         refine: args.refine,
         texels: args.texels,
+        charts_file: args.charts.is_some(),
     })
 }
 
@@ -353,6 +354,35 @@ pub fn run(args: BakeArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// The report's lines on what the images could not hold as the material has it:
+/// undefined values, emission over 1 (carried by the strength), emission lost to it.
+fn print_material(r: &sdfc::bake::pipeline::Report) {
+    if r.undefined > 0 {
+        eprintln!(
+            "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0, an infinity as its channel's limit): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
+            r.undefined, r.samples
+        );
+    }
+    let strength = r.emissive_strength;
+    let strength = if strength < 1e6 {
+        format!("{strength}")
+    } else {
+        format!("{strength:.3e}")
+    };
+    if r.emission_over_one > 0 {
+        eprintln!(
+            "emission:       over 1 at {} of the {} level-0 samples, up to {strength}: the emissive texture holds it divided by that, and the glTF's KHR_materials_emissive_strength multiplies it back (a viewer without that extension shows the emission that much dimmer)",
+            r.emission_over_one, r.samples
+        );
+    }
+    if r.emission_lost > 0 {
+        eprintln!(
+            "warning: divided by its largest value ({strength}), the emission rounds to 0 in the 8-bit emissive texture at {} of the {} level-0 samples that emit: a few very bright samples dim the rest (look for a division by a value near 0 in the emission)",
+            r.emission_lost, r.emitting
+        );
+    }
+}
+
 /// The quality report: charts, utilisation, texel-density spread, time per stage.
 pub fn print_report(baked: &Baked, gpu: &Gpu) {
     let r = &baked.report;
@@ -453,18 +483,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
             r.fit_samples
         );
     }
-    if r.undefined > 0 {
-        eprintln!(
-            "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0, an infinity as its channel's limit): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
-            r.undefined, r.samples
-        );
-    }
-    if r.emission_over_one > 0 {
-        eprintln!(
-            "emission:       over 1 at {} of the {} level-0 samples, up to {}: the emissive texture holds it divided by that, and the glTF's KHR_materials_emissive_strength multiplies it back (a viewer without that extension shows the emission that much dimmer)",
-            r.emission_over_one, r.samples, r.emissive_strength
-        );
-    }
+    print_material(r);
     let c = &r.coverage;
     // (Samples are not looked at past two cells.)
     let farthest = if c.farthest >= 2.0 {
@@ -562,7 +581,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
                 e,
                 BakeError::Option(_)
                     | BakeError::Resource(_)
-                    | BakeError::Empty(_)
+                    | BakeError::Empty(..)
                     | BakeError::Unbounded
             ) {
                 eprintln!("note: bench --bake bakes with sdfc bake's defaults, its --size, --layout, --texels and --bounds given as --atlas-size, --bake-layout, --bake-texels and --bake-bounds; for its other options (--grid, --refine, ...) run `sdfc bake`, whose report prints the same stage times");

@@ -27,6 +27,11 @@ pub fn run(args: BenchArgs) -> ExitCode {
     if let Err(code) = check_plot(&args).and_then(|()| check_outputs(&args)) {
         return code;
     }
+    // (clap's `requires` does not hold where --bake conflicts with a flag given.)
+    if !args.bake && !args.bake_bounds.is_empty() {
+        eprintln!("error: --bake-bounds is the region --bake bakes: it needs --bake");
+        return ExitCode::from(super::exit::USAGE);
+    }
     if args.scale {
         return super::scale::run(&args);
     }

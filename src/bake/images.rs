@@ -197,8 +197,8 @@ pub fn atlas_images(
     // Emission over 1 is carried by the strength: the image holds emission ÷ it.
     let strength = emissive_strength(&levels[..atlas.levels().min(levels.len())]);
     let emitted = |e: &[f32]| {
-        let s = strength;
-        Rgba([srgb8(e[0] / s), srgb8(e[1] / s), srgb8(e[2] / s), 255])
+        let [r, g, b] = [e[0], e[1], e[2]].map(|v| srgb8(v / strength));
+        Rgba([r, g, b, 255])
     };
     for (l, level) in levels.iter().enumerate().take(atlas.levels()) {
         let n = level.n;

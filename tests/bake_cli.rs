@@ -37,13 +37,17 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         // adapter the unrolled one takes minutes to compile where the shader cache is
         // cold (robot.sdf: 172 s against 2 s).
         let mut args = vec!["bake", example.to_str().unwrap(), "--walk", "loop"];
+        // The bounds given, where the mesh is cut.
+        let mut cut: Option<([f32; 3], [f32; 3])> = None;
         if ["blend", "primitives"].contains(&stem.as_str()) {
             args.extend(["--bounds", "-3,-1,-3", "3,2,3"]);
+            cut = Some(([-3.0, -1.0, -3.0], [3.0, 2.0, 3.0]));
         }
         // The plates are 0.2 thick and 16 wide: an 8-cell grid falls through them, so
         // bake a corner of each at a finer grid.
         let plate = stem.starts_with("plate");
         if plate {
+            cut = Some(([-0.5; 3], [0.5; 3]));
             args.extend([
                 "--bounds",
                 "-0.5,-0.5,-0.5",
@@ -93,6 +97,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         // region above the floor, as a user would.
         if code == 2 && err.contains("no finite bounds") {
             args.extend(["--bounds", "-3,-1,-3", "3,3,3"]);
+            cut = Some(([-3.0, -1.0, -3.0], [3.0; 3]));
             (code, _, err) = sdfc(&args);
         }
         assert_eq!(code, 0, "{stem}: {err}");
@@ -133,17 +138,20 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         let bytes = std::fs::read(&glb).unwrap();
         let (mesh, textures, layout) = sdfc::bake::export::read_glb(&bytes).expect("reads back");
         assert!(mesh.indices.len() >= 3 * 2 * 8, "{stem}");
-        // The glTF material is named after the scene's materials, the mesh after the scene.
-        let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-        let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
-        assert_eq!(doc["meshes"][0]["name"], stem.as_str());
-        let wanted = match stem.as_str() {
-            "robot" => "plating",
-            "capsule" => "painted",
-            _ => "",
-        };
-        if !wanted.is_empty() {
-            assert_eq!(doc["materials"][0]["name"], wanted, "{stem}");
+        // With --bounds the mesh is cut at their faces: inside them, and the plate's
+        // corner reaches the four that cross it (x and z = ±0.5) exactly.
+        if let Some((min, max)) = cut {
+            for a in 0..3 {
+                let coords = mesh.positions.iter().map(|p| p[a]);
+                let (lo, hi) = coords.fold((f32::MAX, f32::MIN), |(l, h), c| (l.min(c), h.max(c)));
+                assert!(
+                    lo >= min[a] && hi <= max[a],
+                    "{stem}: axis {a} spans {lo} to {hi}"
+                );
+                if plate && a != 1 {
+                    assert_eq!((lo, hi), (min[a], max[a]), "{stem}: axis {a}");
+                }
+            }
         }
         let file: ChartsFile = serde_json::from_slice(&std::fs::read(&charts).unwrap()).unwrap();
         assert_eq!(file.layout, layout, "{stem}");
@@ -155,11 +163,15 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
                 .map(|c| (c.cells[0] * c.cells[1]) as usize)
                 .sum(),
         };
-        assert_eq!(
-            cells * chart_quads * chart_quads * 6,
-            mesh.indices.len(),
-            "{stem}: two triangles per quad"
-        );
+        // Uncut, two triangles a quad and one piece a chart (a cut chart may lose all
+        // its triangles or fall apart).
+        if cut.is_none() {
+            assert_eq!(
+                cells * chart_quads * chart_quads * 6,
+                mesh.indices.len(),
+                "{stem}: two triangles per quad"
+            );
+        }
         // Welded: each chart is one connected piece of the mesh (by shared vertex
         // index), and the file has fewer vertices than three per triangle's corner.
         let pieces = {
@@ -188,10 +200,12 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             sdfc::bake::ChartLayout::Flat(_) => file.charts.len(),
             sdfc::bake::ChartLayout::Packed(p) => p.charts.len(),
         };
-        assert_eq!(
-            pieces, charts_in_layout,
-            "{stem}: one connected piece per chart"
-        );
+        if cut.is_none() {
+            assert_eq!(
+                pieces, charts_in_layout,
+                "{stem}: one connected piece per chart"
+            );
+        }
         eprintln!(
             "{stem}: {} vertices for {} triangles in {pieces} pieces (4 a cell unwelded: {})",
             mesh.positions.len(),
@@ -322,13 +336,6 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             vec![&plane, "--bounds", "-1,2,-1", "1,3,1"],
             1,
             "no surface inside the bounds",
-        ),
-        // A box thinner than a chart cell where it cuts the shape: the mesh would keep
-        // a broken strip of the plane.
-        (
-            vec![&plane, "--bounds", "-1,-1,0", "1,1,0.01"],
-            2,
-            "thick along z where they cut the shape",
         ),
         // A plane 0.05 short of the bounds: the grid's margin reaches it, the mesh
         // keeps nothing of it.
@@ -493,6 +500,68 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
             "plane.sdf",
             "sphere.sdf",
         ]
+    );
+}
+
+/// `--bounds` cut the exported mesh at their faces (bake/clip.rs), whatever their size:
+/// a box thinner than a mesh cell across a plane bakes the strip it holds (it was
+/// refused, when the mesh kept whole quads), exactly: its ends on the box's faces, its
+/// area the strip's.
+#[test]
+fn bounds_thinner_than_a_cell_bake_the_strip_they_hold() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let plane = dir.path().join("plane.sdf");
+    std::fs::write(
+        &plane,
+        "material m { color = [1, 0, 0]; }\nrender plane([0, 1, 0], 0).paint(m);",
+    )
+    .unwrap();
+    let glb = dir.path().join("strip.glb");
+    let (code, _, err) = sdfc(&[
+        "bake",
+        plane.to_str().unwrap(),
+        "--bounds",
+        "-1,-1,0",
+        "1,1,0.01",
+        "--size",
+        "256",
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning: the mesh misses"), "{err}");
+    if let Some(report) = gltf_validate(&glb) {
+        assert_eq!(
+            (report.errors, report.warnings),
+            (0, 0),
+            "{:?}",
+            report.messages
+        );
+    }
+    let (mesh, _, _) = sdfc::bake::export::read_glb(&std::fs::read(&glb).unwrap()).unwrap();
+    let span = |a: usize| {
+        let c = mesh.positions.iter().map(|p| p[a]);
+        c.fold((f32::MAX, f32::MIN), |(l, h), c| (l.min(c), h.max(c)))
+    };
+    assert_eq!(span(0), (-1.0, 1.0));
+    let (lo, hi) = span(1);
+    assert!(
+        lo.abs() < 1e-9 && hi.abs() < 1e-9,
+        "off the plane: {lo} to {hi}"
+    );
+    assert_eq!(span(2), (0.0, 0.01));
+    let p = |i: u32| glam::DVec3::from_array(mesh.positions[i as usize].map(f64::from));
+    let area: f64 = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length())
+        .sum();
+    assert!(
+        (area - 0.02).abs() < 1e-6,
+        "the strip's area is {area}, not 0.02"
     );
 }
 
@@ -1129,9 +1198,26 @@ fn undefined_and_hdr_materials_are_reported_and_hdr_emission_is_carried() {
         err.contains("the emission rounds to 0 in the 8-bit emissive texture at"),
         "{err}"
     );
+    // A computed emission below 0 on the half x < 0, and a colour over 1 on the half
+    // z > 0 (a constant out of range is a compile error): clamped, and said.
+    let (err, _) = bake(
+        "clamped",
+        "color = [0.5, 0.5, 0.5] + [1, 0, 0] * max(position.z, 0) * 2; emission = [position.x, 0, 0];",
+    );
+    let line = err
+        .lines()
+        .find(|l| l.contains("the material is out of the images' range at"))
+        .unwrap_or_else(|| panic!("{err}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let at = words.iter().position(|w| *w == "at").unwrap();
+    let (n, of): (usize, usize) = (
+        words[at + 1].parse().unwrap(),
+        words[at + 4].parse().unwrap(),
+    );
+    assert!(n > of / 3 && n < of, "{n} of {of}: {err}");
     let (err, plain) = bake("plain", "color = [0.5, 0.5, 0.5]; emission = [1, 0.5, 0];");
     assert!(
-        !err.contains("undefined") && !err.contains("emission:"),
+        !err.contains("undefined") && !err.contains("emission:") && !err.contains("range"),
         "{err}"
     );
     let (bytes, textures) = read(&plain);

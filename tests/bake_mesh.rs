@@ -432,12 +432,14 @@ fn coverage_finds_what_the_mesh_misses() {
     );
 }
 
-/// `--bounds` cut out of a surface (`QuadMesh::retain_centred_within`): the quads kept
-/// are those centred in the box, every vertex left is used and in its place, the cut
-/// ends within a cell of the box, the surface inside is all held (the box's edge is
-/// not "missed"), and a surface just outside the box leaves nothing.
+/// `--bounds` cut out of a surface (`QuadMesh::retain_reaching`): the quads kept are
+/// those whose corners' box, grown by the margin, meets the bounds; every vertex left is
+/// used and in its place; the surface inside is all held (the box's edge is not
+/// "missed"); and of a surface just outside the box, what the margin keeps has no
+/// triangle reaching into it (`bake::clip::reaches`: the bake then finds nothing).
 #[test]
-fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
+fn a_region_cut_out_of_a_surface_keeps_what_reaches_into_it() {
+    use sdfc::bake::clip::reaches;
     use sdfc::bake::coverage::coverage;
     use sdfc::bake::mesh::{dual_contour, Grid};
     use sdfc::ir::Aabb;
@@ -448,21 +450,21 @@ fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
             max: own.max,
         };
         let grid = Grid::over(cut, 24);
+        let margin = 0.5 * grid.cell;
         let whole = dual_contour(field, &grid, 1e-5);
         let mut mesh = whole.clone();
-        mesh.retain_centred_within(cut);
+        mesh.retain_reaching(cut, margin);
         assert!(!mesh.quads.is_empty() && mesh.quads.len() < whole.quads.len());
         let mut used = vec![false; mesh.vertices.len()];
         for q in &mesh.quads {
-            let c = q.iter().map(|&i| mesh.vertices[i as usize]).sum::<DVec3>() / 4.0;
-            assert!(c.x >= cut.min.x, "{c}");
             for &i in q {
                 used[i as usize] = true;
             }
         }
         assert!(used.iter().all(|&u| u), "unused vertices were kept");
         // Renumbered, not moved: every vertex (with its normal) is one of the whole
-        // mesh's, and the quads kept are the whole mesh's centred in the box.
+        // mesh's, and the quads kept are the whole mesh's within the margin of the box
+        // (the box's other faces lie past the sphere).
         for (v, n) in mesh.vertices.iter().zip(&mesh.normals) {
             let k = whole
                 .vertices
@@ -471,18 +473,22 @@ fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
                 .expect("a vertex");
             assert_eq!(whole.normals[k], *n);
         }
-        let centred = whole
+        let reaching = whole
             .quads
             .iter()
             .filter(|q| {
-                q.iter().map(|&i| whole.vertices[i as usize].x).sum::<f64>() / 4.0 >= cut.min.x
+                q.iter()
+                    .map(|&i| whole.vertices[i as usize].x)
+                    .fold(f64::MIN, f64::max)
+                    + margin
+                    >= cut.min.x
             })
             .count();
-        assert_eq!(mesh.quads.len(), centred);
+        assert_eq!(mesh.quads.len(), reaching);
         let lowest = mesh.vertices.iter().map(|v| v.x).fold(f64::MAX, f64::min);
         assert!(
-            lowest > cut.min.x - grid.cell && lowest < cut.min.x + grid.cell,
-            "the cut ends at x = {lowest}, the box at {} (cells of {})",
+            lowest > cut.min.x - 2.0 * grid.cell && lowest < cut.min.x,
+            "the kept quads end at x = {lowest}, the box at {} (cells of {})",
             cut.min.x,
             grid.cell
         );
@@ -497,8 +503,9 @@ fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
             (DVec3::new(-0.6, -2.0, -0.55), DVec3::new(0.63, 0.07, 2.0)),
         ] {
             let cut = Aabb { min: lo, max: hi };
-            let mut mesh = dual_contour(field, &Grid::over(cut, 24), 1e-5);
-            mesh.retain_centred_within(cut);
+            let grid = Grid::over(cut, 24);
+            let mut mesh = dual_contour(field, &grid, 1e-5);
+            mesh.retain_reaching(cut, 0.5 * grid.cell);
             let held = coverage(field, &mesh, cut);
             assert!(held.samples > 100, "{cut:?}: {held:?}");
             assert_eq!(held.missed, 0.0, "{cut:?}: {held:?}");
@@ -508,12 +515,21 @@ fn a_region_cut_out_of_a_surface_keeps_what_is_centred_in_it() {
             min: DVec3::new(1.0 + 0.05 * grid.cell, own.min.y, own.min.z),
             max: own.max + DVec3::ONE,
         };
-        let mut mesh = dual_contour(field, &Grid::over(outside, 24), 1e-5);
+        let grid = Grid::over(outside, 24);
+        let margin = 0.5 * grid.cell;
+        let mut mesh = dual_contour(field, &grid, 1e-5);
         assert!(
             !mesh.quads.is_empty(),
             "the grid's margin reaches the sphere"
         );
-        mesh.retain_centred_within(outside);
+        mesh.retain_reaching(outside, margin);
+        assert!(!reaches(mesh.triangles(), outside));
+        // Half a cell farther, the margin keeps nothing either.
+        let farther = Aabb {
+            min: outside.min + DVec3::new(0.5 * grid.cell, 0.0, 0.0),
+            max: outside.max,
+        };
+        mesh.retain_reaching(farther, margin);
         assert!(mesh.quads.is_empty() && mesh.vertices.is_empty());
     });
 }

@@ -17,6 +17,8 @@ mod agreement;
 mod bake;
 #[path = "bake_cli.rs"]
 mod bake_cli;
+#[path = "bake_clip.rs"]
+mod bake_clip;
 #[path = "bake_export.rs"]
 mod bake_export;
 #[path = "bake_fidelity.rs"]

@@ -476,6 +476,38 @@ pub fn mesh_data(
     out
 }
 
+/// The exported mesh's triangles as [`mesh_data`] makes them (its positions rounded to
+/// f32, as the file holds them), chart after chart.
+pub fn grid_triangles<'a>(
+    points: &'a Samples<[f64; 3]>,
+    table: &'a ChartTable,
+) -> impl Iterator<Item = [DVec3; 3]> + 'a {
+    let m = points.n - 1;
+    let n = m + 1;
+    (0..table.len()).flat_map(move |c| {
+        let grid = points.grid(table, c);
+        let mut out = Vec::with_capacity(2 * m * m);
+        for q in 0..m * m {
+            let (i, j) = (q % m, q / m);
+            let k = [
+                j * n + i,
+                j * n + i + 1,
+                (j + 1) * n + i + 1,
+                (j + 1) * n + i,
+            ];
+            // Split as mesh_data splits, on the f64 points.
+            let along_02 = split_along_02(k.map(|k| DVec3::from_array(grid[k])));
+            let p = k.map(|k| DVec3::from_array(grid[k]).as_vec3().as_dvec3());
+            out.extend(if along_02 {
+                [[p[0], p[1], p[2]], [p[0], p[2], p[3]]]
+            } else {
+                [[p[0], p[1], p[3]], [p[1], p[2], p[3]]]
+            });
+        }
+        out
+    })
+}
+
 /// Shares the vertices whose every attribute is bitwise the same (position, normal,
 /// tangent and texture coordinates): inside a chart the cells' vertices on their common
 /// sides become one, so a chart is one connected piece; across a chart border the

@@ -13,6 +13,7 @@
 //! ```
 
 pub mod charts;
+pub mod clip;
 pub mod coverage;
 pub mod export;
 pub mod fit;

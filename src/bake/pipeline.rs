@@ -213,6 +213,10 @@ pub struct Report {
     /// texture (0 to 1) holds divided by [`Report::emissive_strength`] (an infinite one
     /// counts in [`Report::undefined`]).
     pub emission_over_one: usize,
+    /// Level-0 samples where a finite colour, roughness or metallic value lies outside
+    /// 0 to 1, or a finite emission below 0, by more than half an 8-bit step: the
+    /// images hold them clamped.
+    pub out_of_range: usize,
     /// The largest finite emission, where it is over 1 (else 1): the glTF's
     /// `KHR_materials_emissive_strength` ([`Textures::emissive_strength`]; 0 in a
     /// report whose images were not made).
@@ -243,9 +247,27 @@ pub struct Baked {
     /// The exported mesh's vertices by chart ([`images::vertex_grid`]): the texels'
     /// points are placed on its triangles.
     pub vertex_grid: Samples<[f64; 3]>,
+    /// The exported mesh chart by chart, as the images read it (each cell's vertices
+    /// its own, the whole of every cell kept): [`Baked::exported_mesh`] is the file's.
     pub mesh: MeshData,
     pub textures: Textures,
     pub report: Report,
+    /// The region baked (`--bounds`), where the exported mesh is cut.
+    pub bounds: Option<Aabb>,
+}
+
+impl Baked {
+    /// The mesh a file holds: the vertices inside each chart shared ([`images::weld`])
+    /// and, with `--bounds`, the triangles cut at the box's faces
+    /// ([`super::clip::to_box`]; the texels need no change, being placed through the
+    /// same linear map).
+    pub fn exported_mesh(&self) -> MeshData {
+        let welded = images::weld(&self.mesh, self.vertex_grid.n);
+        match self.bounds {
+            Some(b) => super::clip::to_box(&welded, b),
+            None => welded,
+        }
+    }
 }
 
 /// Whether any part of the shape is painted.
@@ -414,6 +436,12 @@ pub fn bake<'s>(
     let tolerance = 1e-5 * scale;
     let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
     let grid_points = images::vertex_grid(&quads, &table, m, &project);
+    // The quads kept may only come near the bounds: the cut must keep some of them.
+    if let Some(b) = options.bounds {
+        if !super::clip::reaches(images::grid_triangles(&grid_points, &table), b) {
+            return Err(BakeError::Empty(grid.cell, refined_most(options)));
+        }
+    }
     let n = atlas.cell_size() as usize;
     let (level0, points) = shade(
         gpu,
@@ -429,7 +457,11 @@ pub fn bake<'s>(
         &mut lap,
     )?;
     report.max_residual /= scale;
-    (report.undefined, report.emission_over_one) = material_counts(&level0);
+    (
+        report.undefined,
+        report.emission_over_one,
+        report.out_of_range,
+    ) = material_counts(&level0);
 
     // 5. Mips.
     progress.stage("mips", 1);
@@ -458,6 +490,7 @@ pub fn bake<'s>(
         mesh,
         textures,
         report,
+        bounds: options.bounds,
     })
 }
 
@@ -561,10 +594,10 @@ fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
     FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).map(|l| l.chart_size)
 }
 
-/// Level-0 samples where the material is undefined (a channel not finite), and where
-/// its emission is finite and over 1 ([`Report::undefined`],
-/// [`Report::emission_over_one`]).
-fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
+/// Level-0 samples where the material is undefined (a channel not finite), where its
+/// emission is finite and over 1, and where a finite value is out of what the images
+/// hold ([`Report::undefined`], [`Report::emission_over_one`], [`Report::out_of_range`]).
+fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize, usize) {
     let all = || {
         level0
             .corners
@@ -572,11 +605,20 @@ fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize) {
             .chain(&level0.edges)
             .chain(&level0.interiors)
     };
+    // Half an 8-bit step: a clamp by less changes no texel.
+    let slack = 0.5 / 255.0;
+    let out = |t: &&Texel<CHANNELS>| {
+        let unit = t[..EMISSION.start]
+            .iter()
+            .any(|&v| v.is_finite() && !(-slack..=1.0 + slack).contains(&v));
+        unit || t[EMISSION].iter().any(|&v| v.is_finite() && v < -slack)
+    };
     (
         all().filter(|t| t.iter().any(|v| !v.is_finite())).count(),
         all()
             .filter(|t| t[EMISSION].iter().any(|&v| v.is_finite() && v > 1.0))
             .count(),
+        all().filter(out).count(),
     )
 }
 
@@ -610,13 +652,14 @@ fn emission_lost(level0: &Samples<Texel<CHANNELS>>, strength: f32) -> (usize, us
     (emitting, lost)
 }
 
-/// With `--bounds`, the part of the mesh within them ([`QuadMesh::retain_centred_within`]):
-/// the grid's margin of a cell would otherwise mesh a surface just outside them. The
-/// box is the user's: where it reaches past the shape's own bounds (which hold the
-/// whole surface) it cuts nothing.
+/// With `--bounds`, the part of the mesh that may reach into them
+/// ([`QuadMesh::retain_reaching`], by half a cell: the exported mesh's points bulge past
+/// a quad's corners by much less); [`Baked::exported_mesh`] then cuts the exported mesh
+/// at their faces. The box is the user's: where it reaches past the shape's own bounds
+/// (which hold the whole surface) it cuts nothing.
 fn clip(mesh: &mut QuadMesh, options: &Options) {
     if let Some(b) = options.bounds {
-        mesh.retain_centred_within(b);
+        mesh.retain_reaching(b, 0.5 * mesh.cell);
     }
 }
 

@@ -183,22 +183,19 @@ fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
     Ok(())
 }
 
+/// The files to write, and the file's triangles.
 fn encode(
     args: &BakeArgs,
     baked: &Baked,
     (name, material): (&str, &str),
-) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+) -> Result<(Vec<(PathBuf, Vec<u8>)>, usize), String> {
+    // The file shares the vertices inside each chart (the bake's own mesh is chart by
+    // chart, as its images read it) and ends at --bounds' faces.
+    let mesh = baked.exported_mesh();
+    let triangles = mesh.indices.len() / 3;
     let mut out = vec![(
         args.output.clone(),
-        // The file shares the vertices inside each chart (the bake's own mesh is chart
-        // by chart, as its images read it).
-        export::glb(
-            &sdfc::bake::images::weld(&baked.mesh, baked.vertex_grid.n),
-            &baked.textures,
-            &baked.atlas,
-            name,
-            material,
-        )?,
+        export::glb(&mesh, &baked.textures, &baked.atlas, name, material)?,
     )];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
@@ -226,7 +223,7 @@ fn encode(
         let json = serde_json::to_vec_pretty(&file).map_err(|e| e.to_string())?;
         out.push((path.clone(), json));
     }
-    Ok(out)
+    Ok((out, triangles))
 }
 
 pub fn run(args: BakeArgs) -> ExitCode {
@@ -336,7 +333,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let material = material_name(&analysis.program, shape, &name);
-    let outputs = match encode(&args, &baked, (&name, &material)) {
+    let (outputs, triangles) = match encode(&args, &baked, (&name, &material)) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: cannot encode the bake: {e}");
@@ -347,7 +344,7 @@ pub fn run(args: BakeArgs) -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::from(exit::USAGE);
     }
-    print_report(&baked, &gpu);
+    print_report(&baked, &gpu, baked.bounds.map(|_| triangles));
     for (path, bytes) in &outputs {
         eprintln!("wrote {} ({} bytes)", path.display(), bytes.len());
     }
@@ -355,12 +352,19 @@ pub fn run(args: BakeArgs) -> ExitCode {
 }
 
 /// The report's lines on what the images could not hold as the material has it:
-/// undefined values, emission over 1 (carried by the strength), emission lost to it.
+/// undefined values, values out of range (clamped), emission over 1 (carried by the
+/// strength), emission lost to it.
 fn print_material(r: &sdfc::bake::pipeline::Report) {
     if r.undefined > 0 {
         eprintln!(
             "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0, an infinity as its channel's limit): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
             r.undefined, r.samples
+        );
+    }
+    if r.out_of_range > 0 {
+        eprintln!(
+            "warning: the material is out of the images' range at {} of the {} level-0 samples (colour, roughness and metallic hold 0 to 1, emission 0 or more): the file holds it clamped",
+            r.out_of_range, r.samples
         );
     }
     let strength = r.emissive_strength;
@@ -383,8 +387,9 @@ fn print_material(r: &sdfc::bake::pipeline::Report) {
     }
 }
 
-/// The quality report: charts, utilisation, texel-density spread, time per stage.
-pub fn print_report(baked: &Baked, gpu: &Gpu) {
+/// The quality report: charts, utilisation, texel-density spread, time per stage; with
+/// `cut`, the triangles of the file's mesh cut at `--bounds`.
+pub fn print_report(baked: &Baked, gpu: &Gpu, cut: Option<usize>) {
     let r = &baked.report;
     let l = &baked.atlas;
     eprintln!("adapter:        {}", gpu.describe());
@@ -398,6 +403,9 @@ pub fn print_report(baked: &Baked, gpu: &Gpu) {
         r.chart_quads,
         r.chart_quads
     );
+    if let Some(k) = cut {
+        eprintln!("cut:            at the bounds' faces, {k} triangles in the file");
+    }
     if let Some(why) = &r.refine_dropped {
         eprintln!("refined:        none: the refined mesh's charts do not fit ({why}); baked the plain grid's mesh");
     }
@@ -589,7 +597,7 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             return ExitCode::from(status(&e));
         }
     };
-    print_report(&baked, &gpu);
+    print_report(&baked, &gpu, None);
     let r = &baked.report;
     let total: f64 = r.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
     let (name, slowest) = r

@@ -490,7 +490,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "CELLS")]
     pub max_chart: Option<usize>,
     /// The region to bake, MIN MAX, each x,y,z (needed for shapes without finite bounds):
-    /// the mesh keeps the quads whose centres lie within it.
+    /// the exported mesh is cut at its faces.
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true)]
     pub bounds: Vec<[f64; 3]>,
     /// Also write the colour atlas's full mip chain as an uncompressed KTX2 file (each

@@ -98,37 +98,7 @@ pub(super) fn plan(
     })?;
     // Charts come from the coarser grid; the mesh splits each into m × m quads.
     let grid = Grid::over(bounds, cells.div_ceil(m));
-    if let Some(b) = options.bounds {
-        check_cut(b, own, bounds, grid.cell)?;
-    }
     Ok((grid, m, bounds))
-}
-
-/// The fewest chart-grid cells a side of `--bounds` must span where it cuts the shape
-/// (one: the mesh keeps the quads centred in the box, one a cell, so a thinner box
-/// keeps a broken strip or nothing).
-pub const MIN_CUT_CELLS: f64 = 1.0;
-
-/// Refuses `--bounds` (`user`) thinner than [`MIN_CUT_CELLS`] cells of `cell` along an
-/// axis where they cut the shape's own bounds `own` (the region baked is `region`).
-fn check_cut(
-    user: crate::ir::Aabb,
-    own: crate::ir::Aabb,
-    region: crate::ir::Aabb,
-    cell: f64,
-) -> Result<(), BakeError> {
-    for (axis, name) in ["x", "y", "z"].into_iter().enumerate() {
-        let cuts = user.min[axis] > own.min[axis] || user.max[axis] < own.max[axis];
-        let extent = region.max[axis] - region.min[axis];
-        if cuts && extent < MIN_CUT_CELLS * cell {
-            return Err(BakeError::Option(format!(
-                "--bounds are {} thick along {name} where they cut the shape, thinner than a chart cell of the mesh ({}): the mesh keeps the quads centred in the box, so it would keep a broken strip; give a thicker box, or a finer --grid or --edge",
-                length(extent),
-                length(cell)
-            )));
-        }
-    }
-    Ok(())
 }
 
 /// The largest coordinate a bake holds, in scene units: past it the GPU's f32

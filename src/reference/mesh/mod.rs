@@ -47,15 +47,18 @@ impl QuadMesh {
         out
     }
 
-    /// Keeps the quads whose centre (the mean of their corners) lies within `bounds`,
-    /// and the vertices they use (renumbered in their order). A region cut out of a
-    /// larger surface then ends within about half a cell of the region's faces, and a
-    /// surface that lies outside it, which the grid's margin of a cell reaches, is
-    /// dropped.
-    pub fn retain_centred_within(&mut self, bounds: Aabb) {
+    /// Keeps the quads that may reach into `bounds`: those whose corners' box, grown by
+    /// `margin` (the exported mesh's points, projected onto the surface, may bulge past
+    /// the corners), meets them; and the vertices they use (renumbered in their order).
+    /// The exported mesh is then cut at the bounds' faces (`bake::clip`); a surface just
+    /// outside them, which the grid's margin of a cell reaches, is dropped here or there.
+    pub fn retain_reaching(&mut self, bounds: Aabb, margin: f64) {
         self.quads.retain(|q| {
-            let c = q.iter().map(|&i| self.vertices[i as usize]).sum::<DVec3>() / 4.0;
-            c.cmpge(bounds.min).all() && c.cmple(bounds.max).all()
+            let (lo, hi) = q.iter().map(|&i| self.vertices[i as usize]).fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            );
+            (lo - margin).cmple(bounds.max).all() && (hi + margin).cmpge(bounds.min).all()
         });
         let mut new = vec![u32::MAX; self.vertices.len()];
         let mut kept = 0u32;

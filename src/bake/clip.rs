@@ -1,0 +1,322 @@
+//! The exported mesh cut at the faces of `--bounds`.
+//!
+//! The mesher keeps the quads that reach into the box ([`QuadMesh::retain_reaching`]);
+//! here every triangle of the exported mesh is clipped against the box's six planes
+//! (Sutherland and Hodgman), and a vertex made where an edge crosses a plane takes the
+//! edge's attributes interpolated linearly, as a rasterizer interpolates them. The
+//! texture map on what is kept is the triangle's own, so the texels, placed through the
+//! same linear map, need no change: the cut mesh shows exactly what the whole one showed
+//! inside the box, and ends on its faces.
+//!
+//! A crossing is computed from the edge's ends taken in the order of their positions,
+//! so both triangles of an edge, and both charts of a border (whose vertices are split
+//! for their texture coordinates), make the same point bit for bit: the cut mesh stays
+//! watertight. Within a chart, the two triangles of an edge share the vertex made on it.
+//!
+//! [`QuadMesh::retain_reaching`]: crate::reference::mesh::QuadMesh::retain_reaching
+
+use crate::asset::MeshData;
+use crate::ir::Aabb;
+use glam::DVec3;
+use std::cmp::Ordering;
+use std::collections::HashMap;
+
+/// One of the box's six planes: the coordinate `axis` at `at`, the inside below it
+/// (`upper`) or above it.
+#[derive(Debug, Clone, Copy)]
+struct Plane {
+    axis: usize,
+    at: f64,
+    upper: bool,
+}
+
+impl Plane {
+    fn of(b: Aabb) -> [Plane; 6] {
+        let p = |axis: usize, upper: bool| Plane {
+            axis,
+            at: if upper { b.max[axis] } else { b.min[axis] },
+            upper,
+        };
+        [
+            p(0, false),
+            p(0, true),
+            p(1, false),
+            p(1, true),
+            p(2, false),
+            p(2, true),
+        ]
+    }
+
+    /// How far `p` lies inside (negative outside).
+    fn inside(&self, p: DVec3) -> f64 {
+        if self.upper {
+            self.at - p[self.axis]
+        } else {
+            p[self.axis] - self.at
+        }
+    }
+}
+
+/// Orders two points by their coordinates, x first.
+fn by_position(a: DVec3, b: DVec3) -> Ordering {
+    a.to_array()
+        .partial_cmp(&b.to_array())
+        .unwrap_or(Ordering::Equal)
+}
+
+/// Clips the convex polygon `poly` against `plane` into `out`. Where an edge crosses
+/// it, `cut(first, second, t)` makes the vertex at `t` from `first` to `second`, the
+/// edge's ends in [`by_position`] order; a vertex on the plane counts as inside, and
+/// no crossing is made at a vertex that lies on it.
+fn clip_polygon<V: Copy>(
+    poly: &[V],
+    out: &mut Vec<V>,
+    plane: &Plane,
+    pos: &impl Fn(&V) -> DVec3,
+    cut: &mut impl FnMut(&V, &V, f64) -> V,
+) {
+    out.clear();
+    let Some(&last) = poly.last() else {
+        return;
+    };
+    let mut s = last;
+    let mut ds = plane.inside(pos(&s));
+    for &e in poly {
+        let de = plane.inside(pos(&e));
+        if (ds > 0.0 && de < 0.0) || (ds < 0.0 && de > 0.0) {
+            let (a, da, b, db) = if by_position(pos(&s), pos(&e)) == Ordering::Greater {
+                (e, de, s, ds)
+            } else {
+                (s, ds, e, de)
+            };
+            out.push(cut(&a, &b, da / (da - db)));
+        }
+        if de >= 0.0 {
+            out.push(e);
+        }
+        (s, ds) = (e, de);
+    }
+}
+
+/// The point at `t` from `a` to `b`, on `plane` exactly.
+fn crossing(a: DVec3, b: DVec3, t: f64, plane: &Plane) -> DVec3 {
+    let mut p = a + (b - a) * t;
+    p[plane.axis] = plane.at;
+    p
+}
+
+/// Whether the triangle has a part of non-zero area inside the box (its corners as the
+/// exported mesh holds them, in f32).
+fn triangle_reaches(tri: [DVec3; 3], planes: &[Plane; 6]) -> bool {
+    if planes
+        .iter()
+        .any(|pl| tri.iter().all(|&p| pl.inside(p) < 0.0))
+    {
+        return false;
+    }
+    let (mut poly, mut next) = (tri.to_vec(), Vec::with_capacity(9));
+    for plane in planes {
+        clip_polygon(&poly, &mut next, plane, &|p: &DVec3| *p, &mut |a, b, t| {
+            crossing(*a, *b, t, plane)
+        });
+        std::mem::swap(&mut poly, &mut next);
+    }
+    (2..poly.len()).any(|i| area2(poly[0], poly[i - 1], poly[i]) > 0.0)
+}
+
+/// Twice the area of a triangle whose corners are rounded to f32, as the file holds them.
+fn area2(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let r = |p: DVec3| p.as_vec3().as_dvec3();
+    (r(b) - r(a)).cross(r(c) - r(a)).length()
+}
+
+/// Whether any of `triangles` has a part of non-zero area inside `bounds`: whether
+/// [`to_box`] keeps anything of a mesh of them.
+pub fn reaches(triangles: impl IntoIterator<Item = [DVec3; 3]>, bounds: Aabb) -> bool {
+    let planes = Plane::of(bounds);
+    triangles.into_iter().any(|t| triangle_reaches(t, &planes))
+}
+
+/// A vertex's attributes in f64.
+#[derive(Debug, Clone, Copy)]
+struct Attributes {
+    position: DVec3,
+    normal: DVec3,
+    tangent: [f64; 4],
+    uv: [f64; 2],
+}
+
+impl Attributes {
+    fn of(mesh: &MeshData, k: usize) -> Attributes {
+        let t = mesh.tangents[k].map(f64::from);
+        Attributes {
+            position: DVec3::from_array(mesh.positions[k].map(f64::from)),
+            normal: DVec3::from_array(mesh.normals[k].map(f64::from)),
+            tangent: t,
+            uv: mesh.texcoords[k].map(f64::from),
+        }
+    }
+
+    /// The attributes at `t` from `a` to `b`, the position on `plane`: linear, as a
+    /// rasterizer interpolates them; the normal and the tangent's direction made unit
+    /// again, the tangent's handedness `a`'s (a chart's vertices share it).
+    fn between(a: &Attributes, b: &Attributes, t: f64, plane: &Plane) -> Attributes {
+        let n = a
+            .normal
+            .lerp(b.normal, t)
+            .try_normalize()
+            .unwrap_or(a.normal);
+        let ta = DVec3::new(a.tangent[0], a.tangent[1], a.tangent[2]);
+        let tb = DVec3::new(b.tangent[0], b.tangent[1], b.tangent[2]);
+        let tt = ta.lerp(tb, t).try_normalize().unwrap_or(ta);
+        let lerp = |x: f64, y: f64| x + (y - x) * t;
+        Attributes {
+            position: crossing(a.position, b.position, t, plane),
+            normal: n,
+            tangent: [tt.x, tt.y, tt.z, a.tangent[3]],
+            uv: [lerp(a.uv[0], b.uv[0]), lerp(a.uv[1], b.uv[1])],
+        }
+    }
+}
+
+/// A polygon's vertex while it is clipped: an index of the mesh's vertices, or past
+/// them of the vertices made on crossings; and its position.
+#[derive(Debug, Clone, Copy)]
+struct Corner {
+    id: u32,
+    position: DVec3,
+}
+
+/// The clip's state: the vertices made on crossings (by edge and plane, so that the
+/// triangles of an edge share them), and the output's index of each vertex, given
+/// when a kept triangle first uses it.
+struct Cutter<'m> {
+    mesh: &'m MeshData,
+    made: Vec<Attributes>,
+    made_at: HashMap<(u32, u32, u8), u32>,
+    emitted: Vec<u32>,
+    out: MeshData,
+}
+
+impl Cutter<'_> {
+    fn attributes(&self, id: u32) -> Attributes {
+        let n = self.mesh.positions.len();
+        match (id as usize).checked_sub(n) {
+            Some(k) => self.made[k],
+            None => Attributes::of(self.mesh, id as usize),
+        }
+    }
+
+    fn cut(&mut self, a: &Corner, b: &Corner, t: f64, plane: (u8, &Plane)) -> Corner {
+        let key = (a.id.min(b.id), a.id.max(b.id), plane.0);
+        if let Some(&id) = self.made_at.get(&key) {
+            return Corner {
+                id,
+                position: self.attributes(id).position,
+            };
+        }
+        let at = Attributes::between(&self.attributes(a.id), &self.attributes(b.id), t, plane.1);
+        let id = (self.mesh.positions.len() + self.made.len()) as u32;
+        self.made.push(at);
+        self.emitted.push(u32::MAX);
+        self.made_at.insert(key, id);
+        Corner {
+            id,
+            position: at.position,
+        }
+    }
+
+    /// The output's index of vertex `id`, pushed there at its first use.
+    fn emit(&mut self, id: u32) -> u32 {
+        if self.emitted[id as usize] == u32::MAX {
+            let k = self.out.positions.len() as u32;
+            let n = self.mesh.positions.len();
+            let out = &mut self.out;
+            if (id as usize) < n {
+                let i = id as usize;
+                out.positions.push(self.mesh.positions[i]);
+                out.normals.push(self.mesh.normals[i]);
+                out.tangents.push(self.mesh.tangents[i]);
+                out.texcoords.push(self.mesh.texcoords[i]);
+            } else {
+                let a = self.made[id as usize - n];
+                out.positions.push(a.position.as_vec3().to_array());
+                out.normals.push(a.normal.as_vec3().to_array());
+                out.tangents.push(a.tangent.map(|x| x as f32));
+                out.texcoords.push([a.uv[0] as f32, a.uv[1] as f32]);
+            }
+            self.emitted[id as usize] = k;
+        }
+        self.emitted[id as usize]
+    }
+}
+
+/// `mesh` cut at the faces of `bounds`: the triangles inside them whole, those across
+/// a face clipped to it (fanned from the clipped polygon's first corner, dropping a
+/// triangle of no area), those outside dropped; vertices renumbered in the order the
+/// kept triangles use them, and none left unused (a mesh wholly inside is returned as
+/// it is). The made vertices are held in a
+/// table of the crossed edges only, and the output is at most as large as `mesh` plus
+/// those, so the clip's peak is the glb encoder's, which follows it.
+pub fn to_box(mesh: &MeshData, bounds: Aabb) -> MeshData {
+    let planes = Plane::of(bounds);
+    // Nothing to cut: the mesh as it is, in its own order.
+    if mesh.positions.iter().all(|p| {
+        let p = DVec3::from_array(p.map(f64::from));
+        planes.iter().all(|pl| pl.inside(p) >= 0.0)
+    }) {
+        return mesh.clone();
+    }
+    let mut c = Cutter {
+        mesh,
+        made: Vec::new(),
+        made_at: HashMap::new(),
+        emitted: vec![u32::MAX; mesh.positions.len()],
+        out: MeshData::default(),
+    };
+    let (mut poly, mut next) = (Vec::with_capacity(9), Vec::with_capacity(9));
+    for tri in mesh.indices.chunks_exact(3) {
+        let corners = [0, 1, 2].map(|k| Corner {
+            id: tri[k],
+            position: DVec3::from_array(mesh.positions[tri[k] as usize].map(f64::from)),
+        });
+        if planes
+            .iter()
+            .any(|pl| corners.iter().all(|v| pl.inside(v.position) < 0.0))
+        {
+            continue;
+        }
+        if planes
+            .iter()
+            .all(|pl| corners.iter().all(|v| pl.inside(v.position) >= 0.0))
+        {
+            for v in corners {
+                let k = c.emit(v.id);
+                c.out.indices.push(k);
+            }
+            continue;
+        }
+        poly.clear();
+        poly.extend(corners);
+        for (k, plane) in planes.iter().enumerate() {
+            clip_polygon(
+                &poly,
+                &mut next,
+                plane,
+                &|v: &Corner| v.position,
+                &mut |a, b, t| c.cut(a, b, t, (k as u8, plane)),
+            );
+            std::mem::swap(&mut poly, &mut next);
+        }
+        for i in 2..poly.len() {
+            let (a, b, d) = (poly[0], poly[i - 1], poly[i]);
+            if area2(a.position, b.position, d.position) > 0.0 {
+                for v in [a, b, d] {
+                    let k = c.emit(v.id);
+                    c.out.indices.push(k);
+                }
+            }
+        }
+    }
+    c.out
+}

@@ -1,0 +1,242 @@
+//! The exported mesh cut at `--bounds`' faces (src/bake/clip.rs), on meshes whose every
+//! attribute has a closed form: a tilted plane in two charts, its texture coordinates
+//! linear in the position on each.
+
+use glam::DVec3;
+use sdfc::bake::clip::{reaches, to_box};
+use sdfc::bake::MeshData;
+use sdfc::ir::Aabb;
+use std::collections::HashMap;
+
+/// The plane z = 0.3 x + 0.2 y.
+fn height(x: f64, y: f64) -> f64 {
+    0.3 * x + 0.2 * y
+}
+
+/// Chart `c`'s texture coordinates at (x, y): linear, each chart its own.
+fn uv_of(c: usize, x: f64, y: f64) -> [f64; 2] {
+    [
+        0.1 + 0.5 * c as f64 + 0.2 * (x + 1.0),
+        0.3 + 0.2 * (y + 1.0),
+    ]
+}
+
+/// The plane over [-1, 1]² as a grid of `k × k` quads a chart, two charts (x < 0 and
+/// x > 0) whose vertices on x = 0 are split (their texture coordinates differ), as the
+/// welded bake's; the tangent along +x, the normals tilted by a linear field (made unit)
+/// so that interpolating them is seen.
+fn two_charts(k: usize) -> MeshData {
+    let mut m = MeshData::default();
+    let up = DVec3::new(-0.3, -0.2, 1.0).normalize();
+    let tangent = DVec3::new(1.0, 0.0, 0.3).normalize();
+    for c in 0..2 {
+        let base = m.positions.len() as u32;
+        for j in 0..=k {
+            for i in 0..=k {
+                let x = -1.0 + c as f64 + i as f64 / k as f64;
+                let y = -1.0 + 2.0 * j as f64 / k as f64;
+                m.positions.push([x as f32, y as f32, height(x, y) as f32]);
+                let n = (up + DVec3::new(0.1 * x, 0.05 * y, 0.0)).normalize();
+                m.normals.push(n.as_vec3().to_array());
+                m.tangents
+                    .push([tangent.x as f32, tangent.y as f32, tangent.z as f32, 1.0]);
+                m.texcoords.push(uv_of(c, x, y).map(|u| u as f32));
+            }
+        }
+        let at = |i: usize, j: usize| base + (j * (k + 1) + i) as u32;
+        for j in 0..k {
+            for i in 0..k {
+                let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+                m.indices.extend([q[0], q[1], q[2], q[0], q[2], q[3]]);
+            }
+        }
+    }
+    m
+}
+
+fn p(m: &MeshData, i: u32) -> DVec3 {
+    DVec3::from_array(m.positions[i as usize].map(f64::from))
+}
+
+/// The mesh's connected pieces, by shared vertex index.
+fn pieces(m: &MeshData) -> usize {
+    let mut parent: Vec<usize> = (0..m.positions.len()).collect();
+    fn find(parent: &mut [usize], i: usize) -> usize {
+        let mut r = i;
+        while parent[r] != r {
+            r = parent[r];
+        }
+        parent[i] = r;
+        r
+    }
+    for t in m.indices.chunks_exact(3) {
+        for k in 1..3 {
+            let (a, b) = (
+                find(&mut parent, t[0] as usize),
+                find(&mut parent, t[k] as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let roots: std::collections::HashSet<usize> = (0..m.positions.len())
+        .map(|i| find(&mut parent, i))
+        .collect();
+    roots.len()
+}
+
+#[test]
+fn a_mesh_cut_at_the_box_ends_on_its_faces_with_its_texture_unchanged() {
+    let mesh = two_charts(12);
+    let b = Aabb {
+        min: DVec3::new(-0.63, -2.0, -0.2),
+        max: DVec3::new(0.71, 0.37, 5.0),
+    };
+    let cut = to_box(&mesh, b);
+    assert!(!cut.indices.is_empty() && cut.indices.len() % 3 == 0);
+    let n = cut.positions.len();
+    assert!(cut.indices.iter().all(|&i| (i as usize) < n));
+    let mut used = vec![false; n];
+    cut.indices.iter().for_each(|&i| used[i as usize] = true);
+    assert!(used.iter().all(|&u| u), "unused vertices were kept");
+    // Inside the box (to the f32 rounding of its faces), on the plane.
+    let f32_of = |x: f64| x as f32 as f64;
+    for i in 0..n as u32 {
+        let q = p(&cut, i);
+        for a in 0..3 {
+            assert!(
+                q[a] >= f32_of(b.min[a]) && q[a] <= f32_of(b.max[a]),
+                "{q} lies outside the box"
+            );
+        }
+        assert!(
+            (q.z - height(q.x, q.y)).abs() < 1e-6,
+            "{q} is off the plane"
+        );
+    }
+    // Every vertex's texture coordinate is its chart's linear function of its position:
+    // the cut kept the map the texels were placed through.
+    for i in 0..n {
+        let q = p(&cut, i as u32);
+        let c = usize::from(cut.texcoords[i][0] > 0.5);
+        let want = uv_of(c, q.x, q.y);
+        for a in 0..2 {
+            assert!(
+                (cut.texcoords[i][a] as f64 - want[a]).abs() < 1e-6,
+                "{q}: uv {:?}, chart {c}'s map gives {want:?}",
+                cut.texcoords[i]
+            );
+        }
+        let nrm = DVec3::from_array(cut.normals[i].map(f64::from));
+        assert!((nrm.length() - 1.0).abs() < 1e-6, "{nrm}");
+        let t = cut.tangents[i];
+        let tl = DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64).length();
+        assert!((tl - 1.0).abs() < 1e-6 && t[3] == 1.0, "{t:?}");
+    }
+    // The area: the rectangle [-0.63, 0.71] × [-1, 0.37] less the corner where the plane
+    // dips under z = -0.2 (the triangle (-0.63, -1), (0, -1), (-0.63, -0.055)), on a
+    // plane tilted by √1.13.
+    let flat = 1.34 * 1.37 - 0.5 * 0.63 * 0.945;
+    let want = flat * 1.13f64.sqrt();
+    let mut area = 0.0;
+    let up = DVec3::new(-0.3, -0.2, 1.0);
+    for t in cut.indices.chunks_exact(3) {
+        let cr = (p(&cut, t[1]) - p(&cut, t[0])).cross(p(&cut, t[2]) - p(&cut, t[0]));
+        assert!(cr.length() > 0.0, "a triangle of no area");
+        assert!(cr.dot(up) > 0.0, "a triangle turned over");
+        area += 0.5 * cr.length();
+    }
+    assert!(
+        (area - want).abs() < 1e-5 * want,
+        "area {area}, the region's {want}"
+    );
+    // Watertight: an edge held once (by its ends' bits) lies on a face of the box or on
+    // the plane's own rim; the charts' border x = 0 is held twice, by split vertices
+    // made bit for bit alike.
+    let mut held: HashMap<[[u32; 3]; 2], usize> = HashMap::new();
+    for t in cut.indices.chunks_exact(3) {
+        for k in 0..3 {
+            let (a, c) = (
+                cut.positions[t[k] as usize],
+                cut.positions[t[(k + 1) % 3] as usize],
+            );
+            let (a, c) = (a.map(f32::to_bits), c.map(f32::to_bits));
+            *held.entry(if a < c { [a, c] } else { [c, a] }).or_default() += 1;
+        }
+    }
+    let on_face = |q: DVec3| {
+        (0..3).any(|a| q[a] == f32_of(b.min[a]) || q[a] == f32_of(b.max[a])) || q.y == -1.0
+    };
+    let mut rim = 0;
+    for (e, &count) in &held {
+        assert!(count <= 2, "an edge held {count} times");
+        if count == 1 {
+            let [a, c] = e.map(|v| DVec3::from_array(v.map(|x| f32::from_bits(x) as f64)));
+            assert!(
+                on_face(a) && on_face(c),
+                "an open edge {a} – {c} inside the box"
+            );
+            rim += 1;
+        }
+    }
+    assert!(rim > 20, "{rim}");
+    // Inside each chart the triangles share their vertices, those made on the cut too:
+    // two pieces, one a chart.
+    assert_eq!(pieces(&cut), 2);
+}
+
+#[test]
+fn a_box_around_the_mesh_keeps_it_as_it_is_and_one_past_it_keeps_nothing() {
+    let mesh = two_charts(5);
+    let all = Aabb {
+        min: DVec3::splat(-1.0),
+        max: DVec3::splat(1.0),
+    };
+    assert!(
+        to_box(&mesh, all) == mesh,
+        "a box around the mesh changed it"
+    );
+    let tris = |m: &MeshData| -> Vec<[DVec3; 3]> {
+        m.indices
+            .chunks_exact(3)
+            .map(|t| [p(m, t[0]), p(m, t[1]), p(m, t[2])])
+            .collect()
+    };
+    assert!(reaches(tris(&mesh), all));
+    // Above the plane everywhere (its highest point is z = 0.5), and touching it at one
+    // corner only: nothing of non-zero area.
+    for past in [
+        Aabb {
+            min: DVec3::new(-1.0, -1.0, 0.51),
+            max: DVec3::splat(1.0),
+        },
+        Aabb {
+            min: DVec3::new(1.0, 1.0, -1.0),
+            max: DVec3::splat(2.0),
+        },
+    ] {
+        let cut = to_box(&mesh, past);
+        assert!(
+            cut.indices.is_empty() && cut.positions.is_empty(),
+            "{past:?}"
+        );
+        assert!(!reaches(tris(&mesh), past), "{past:?}");
+    }
+    // A sliver of it: kept, and `reaches` says so.
+    let sliver = Aabb {
+        min: DVec3::new(0.99, 0.99, -1.0),
+        max: DVec3::splat(2.0),
+    };
+    assert!(reaches(tris(&mesh), sliver));
+    let cut = to_box(&mesh, sliver);
+    let area: f64 = cut
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            0.5 * (p(&cut, t[1]) - p(&cut, t[0]))
+                .cross(p(&cut, t[2]) - p(&cut, t[0]))
+                .length()
+        })
+        .sum();
+    let want = 0.01f64 * 0.01 * 1.13f64.sqrt();
+    assert!((area - want).abs() < 1e-3 * want, "{area} against {want}");
+}

@@ -1073,15 +1073,23 @@ fn bench_bake_reports_the_stages_and_the_refinement() {
     assert!(err.contains("surface held:"), "{err}");
     // Without --bake, where clap's `requires` does not hold (a flag --bake conflicts
     // with), it is refused all the same.
-    let (code, _, err) = sdfc(&[
-        "bench",
-        "--seed-sweep",
-        "--bake-bounds",
-        "-1,-1,-1",
-        "1,1,1",
-    ]);
-    assert_eq!(code, 2, "{err}");
-    assert!(err.contains("it needs --bake"), "{err}");
+    // So are the bake's flags that have defaults (they ran the sweep, ignored).
+    for flag in [
+        &["--bake-bounds", "-1,-1,-1", "1,1,1"][..],
+        &["--atlas-size", "512"],
+        &["--bake-layout", "packed"],
+        &["--bake-texels", "fit"],
+    ] {
+        let mut args = vec!["bench", "--seed-sweep"];
+        args.extend_from_slice(flag);
+        let (code, _, err) = sdfc(&args);
+        assert_eq!(code, 2, "{flag:?}: {err}");
+        assert!(
+            err.contains(&format!("{} is an option of --bake", flag[0]))
+                && err.contains("it needs --bake"),
+            "{flag:?}: {err}"
+        );
+    }
 
     // With fitted texels: the fit's stage and its samples.
     let (code, _, err) = sdfc(&[

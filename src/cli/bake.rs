@@ -540,15 +540,18 @@ pub fn bench(scene: &std::path::Path, args: &super::BenchArgs) -> ExitCode {
             return ExitCode::from(exit::USAGE);
         }
     };
+    // What is not given is `sdfc bake`'s default.
+    let defaults = Options::default();
     let options = Options {
         bounds,
-        size: args.atlas_size,
+        size: args.atlas_size.unwrap_or(defaults.size),
         style: match args.bake_layout {
-            super::Layout::Flat => pipeline::Style::Flat,
-            super::Layout::Packed => pipeline::Style::Packed,
+            None => defaults.style,
+            Some(super::Layout::Flat) => pipeline::Style::Flat,
+            Some(super::Layout::Packed) => pipeline::Style::Packed,
         },
-        texels: args.bake_texels,
-        ..Options::default()
+        texels: args.bake_texels.unwrap_or(defaults.texels),
+        ..defaults
     };
     let base = super::base_dir(scene);
     let codegen = sdfc::codegen::Options {

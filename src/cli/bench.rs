@@ -28,8 +28,14 @@ pub fn run(args: BenchArgs) -> ExitCode {
         return code;
     }
     // (clap's `requires` does not hold where --bake conflicts with a flag given.)
-    if !args.bake && !args.bake_bounds.is_empty() {
-        eprintln!("error: --bake-bounds is the region --bake bakes: it needs --bake");
+    let bake_flags = [
+        ("--atlas-size", args.atlas_size.is_some()),
+        ("--bake-layout", args.bake_layout.is_some()),
+        ("--bake-texels", args.bake_texels.is_some()),
+        ("--bake-bounds", !args.bake_bounds.is_empty()),
+    ];
+    if let (false, Some((flag, _))) = (args.bake, bake_flags.iter().find(|f| f.1)) {
+        eprintln!("error: {flag} is an option of --bake, which bakes the scene: it needs --bake");
         return ExitCode::from(super::exit::USAGE);
     }
     if args.scale {

@@ -289,20 +289,15 @@ pub struct BenchArgs {
     /// walk) and report the time of each stage instead of frame times.
     #[arg(long, requires = "scene", conflicts_with_all = ["lsp_latency", "seed_sweep", "scale"])]
     pub bake: bool,
-    /// The atlas side for --bake.
-    #[arg(long, default_value = "2048", requires = "bake")]
-    pub atlas_size: u32,
-    /// The atlas layout for --bake.
-    #[arg(
-        long = "bake-layout",
-        value_enum,
-        default_value = "flat",
-        requires = "bake"
-    )]
-    pub bake_layout: Layout,
-    /// How --bake chooses its level-0 texels (as `sdfc bake --texels`).
-    #[arg(long = "bake-texels", value_name = "fit|points", default_value = "points", value_parser = bake::parse_texels, requires = "bake")]
-    pub bake_texels: sdfc::bake::pipeline::Texels,
+    /// The atlas side for --bake [default: 2048].
+    #[arg(long, requires = "bake")]
+    pub atlas_size: Option<u32>,
+    /// The atlas layout for --bake [default: flat].
+    #[arg(long = "bake-layout", value_enum, requires = "bake")]
+    pub bake_layout: Option<Layout>,
+    /// How --bake chooses its level-0 texels (as `sdfc bake --texels`) [default: points].
+    #[arg(long = "bake-texels", value_name = "fit|points", value_parser = bake::parse_texels, requires = "bake")]
+    pub bake_texels: Option<sdfc::bake::pipeline::Texels>,
     /// The region --bake bakes, MIN MAX, each x,y,z (as `sdfc bake --bounds`; needed for
     /// shapes without finite bounds).
     #[arg(long = "bake-bounds", num_args = 2, value_names = ["MIN", "MAX"], value_parser = bake::parse_point, allow_hyphen_values = true, requires = "bake")]

@@ -91,7 +91,7 @@ fn a_mesh_cut_at_the_box_ends_on_its_faces_with_its_texture_unchanged() {
         min: DVec3::new(-0.63, -2.0, -0.2),
         max: DVec3::new(0.71, 0.37, 5.0),
     };
-    let cut = to_box(&mesh, b);
+    let cut = to_box(mesh.clone(), b);
     assert!(!cut.indices.is_empty() && cut.indices.len() % 3 == 0);
     let n = cut.positions.len();
     assert!(cut.indices.iter().all(|&i| (i as usize) < n));
@@ -192,7 +192,7 @@ fn a_box_around_the_mesh_keeps_it_as_it_is_and_one_past_it_keeps_nothing() {
         max: DVec3::splat(1.0),
     };
     assert!(
-        to_box(&mesh, all) == mesh,
+        to_box(mesh.clone(), all) == mesh,
         "a box around the mesh changed it"
     );
     let tris = |m: &MeshData| -> Vec<[DVec3; 3]> {
@@ -214,7 +214,7 @@ fn a_box_around_the_mesh_keeps_it_as_it_is_and_one_past_it_keeps_nothing() {
             max: DVec3::splat(2.0),
         },
     ] {
-        let cut = to_box(&mesh, past);
+        let cut = to_box(mesh.clone(), past);
         assert!(
             cut.indices.is_empty() && cut.positions.is_empty(),
             "{past:?}"
@@ -227,7 +227,7 @@ fn a_box_around_the_mesh_keeps_it_as_it_is_and_one_past_it_keeps_nothing() {
         max: DVec3::splat(2.0),
     };
     assert!(reaches(tris(&mesh), sliver));
-    let cut = to_box(&mesh, sliver);
+    let cut = to_box(mesh.clone(), sliver);
     let area: f64 = cut
         .indices
         .chunks_exact(3)

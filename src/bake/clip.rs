@@ -255,20 +255,21 @@ impl Cutter<'_> {
 /// a face clipped to it (fanned from the clipped polygon's first corner, dropping a
 /// triangle of no area), those outside dropped; vertices renumbered in the order the
 /// kept triangles use them, and none left unused (a mesh wholly inside is returned as
-/// it is). The made vertices are held in a
-/// table of the crossed edges only, and the output is at most as large as `mesh` plus
-/// those, so the clip's peak is the glb encoder's, which follows it.
-pub fn to_box(mesh: &MeshData, bounds: Aabb) -> MeshData {
+/// it is, without a copy). The made vertices are held in a table of the crossed edges
+/// only, and the output is at most as large as `mesh` plus those: while it is made, the
+/// bake holds three meshes' worth (its own, `mesh`, the output), as while the glb
+/// encoder, which follows, fills its buffer (`bake::memory::VERTEX_BYTES`).
+pub fn to_box(mesh: MeshData, bounds: Aabb) -> MeshData {
     let planes = Plane::of(bounds);
     // Nothing to cut: the mesh as it is, in its own order.
     if mesh.positions.iter().all(|p| {
         let p = DVec3::from_array(p.map(f64::from));
         planes.iter().all(|pl| pl.inside(p) >= 0.0)
     }) {
-        return mesh.clone();
+        return mesh;
     }
     let mut c = Cutter {
-        mesh,
+        mesh: &mesh,
         made: Vec::new(),
         made_at: HashMap::new(),
         emitted: vec![u32::MAX; mesh.positions.len()],

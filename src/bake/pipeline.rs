@@ -264,7 +264,7 @@ impl Baked {
     pub fn exported_mesh(&self) -> MeshData {
         let welded = images::weld(&self.mesh, self.vertex_grid.n);
         match self.bounds {
-            Some(b) => super::clip::to_box(&welded, b),
+            Some(b) => super::clip::to_box(welded, b),
             None => welded,
         }
     }

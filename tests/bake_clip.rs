@@ -240,3 +240,151 @@ fn a_box_around_the_mesh_keeps_it_as_it_is_and_one_past_it_keeps_nothing() {
     let want = 0.01f64 * 0.01 * 1.13f64.sqrt();
     assert!((area - want).abs() < 1e-3 * want, "{area} against {want}");
 }
+
+/// A closed cube of side 1 turned by a rotation, six charts of `k × k` quads, their
+/// vertices split along the cube's edges (each face's texture coordinates its own,
+/// linear in the face's position); each vertex's chart is its uv's sixth of [0, 1].
+fn turned_cube(k: usize, turn: glam::DQuat) -> MeshData {
+    let mut m = MeshData::default();
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+    for f in 0..6 {
+        let (a, sign) = (f / 2, if f % 2 == 0 { 1.0 } else { -1.0 });
+        let n = axes[a] * sign;
+        let t = axes[(a + 1) % 3] * sign;
+        let b = n.cross(t);
+        let base = m.positions.len() as u32;
+        for j in 0..=k {
+            for i in 0..=k {
+                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                let p = 0.5 * n + (u - 0.5) * t + (v - 0.5) * b;
+                m.positions.push((turn * p).as_vec3().to_array());
+                m.normals.push((turn * n).as_vec3().to_array());
+                let tt = turn * t;
+                m.tangents
+                    .push([tt.x as f32, tt.y as f32, tt.z as f32, 1.0]);
+                m.texcoords.push([
+                    ((f as f64 + 0.1 + 0.8 * u) / 6.0) as f32,
+                    (0.1 + 0.8 * v) as f32,
+                ]);
+            }
+        }
+        let at = |i: usize, j: usize| base + (j * (k + 1) + i) as u32;
+        for j in 0..k {
+            for i in 0..k {
+                m.indices.extend([
+                    at(i, j),
+                    at(i + 1, j),
+                    at(i + 1, j + 1),
+                    at(i, j),
+                    at(i + 1, j + 1),
+                    at(i, j + 1),
+                ]);
+            }
+        }
+    }
+    m
+}
+
+fn area(m: &MeshData) -> f64 {
+    m.indices
+        .chunks_exact(3)
+        .map(|t| {
+            0.5 * (p(m, t[1]) - p(m, t[0]))
+                .cross(p(m, t[2]) - p(m, t[0]))
+                .length()
+        })
+        .sum()
+}
+
+/// Random boxes across a turned cube (every cut oblique to its triangles): the cut lies
+/// in the box, is closed but on the box's faces (bit for bit across the cube's chart
+/// borders), keeps every face's linear texture map, and its area adds up: the cuts of
+/// the two halves of a box, split by a plane, are the cut of the box.
+#[test]
+fn random_boxes_cut_a_turned_cube_into_closed_pieces_whose_areas_add_up() {
+    let turn = glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.5, -0.7, 0.3);
+    let cube = turned_cube(3, turn);
+    let whole = Aabb {
+        min: DVec3::splat(-1.0),
+        max: DVec3::splat(1.0),
+    };
+    assert!((area(&to_box(cube.clone(), whole)) - 6.0).abs() < 1e-5);
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut cut_some = 0;
+    for _ in 0..150 {
+        let (c, h) = (
+            DVec3::new(next(), next(), next()) * 1.2 - 0.6,
+            DVec3::new(next(), next(), next()) * 0.6 + 0.05,
+        );
+        let b = Aabb {
+            min: c - h,
+            max: c + h,
+        };
+        let cut = to_box(cube.clone(), b);
+        let f32_of = |x: f64| x as f32 as f64;
+        let on_face =
+            |q: DVec3| (0..3).any(|a| q[a] == f32_of(b.min[a]) || q[a] == f32_of(b.max[a]));
+        let mut held: HashMap<[[u32; 3]; 2], usize> = HashMap::new();
+        for t in cut.indices.chunks_exact(3) {
+            for k in 0..3 {
+                let (a, c) = (
+                    cut.positions[t[k] as usize],
+                    cut.positions[t[(k + 1) % 3] as usize],
+                );
+                let (a, c) = (a.map(f32::to_bits), c.map(f32::to_bits));
+                *held.entry(if a < c { [a, c] } else { [c, a] }).or_default() += 1;
+            }
+        }
+        for (e, &count) in &held {
+            let [a, c] = e.map(|v| DVec3::from_array(v.map(|x| f32::from_bits(x) as f64)));
+            assert!(count <= 2, "{b:?}: an edge held {count} times");
+            assert!(
+                count == 2 || (on_face(a) && on_face(c)),
+                "{b:?}: a hole at {a} – {c}"
+            );
+        }
+        for i in 0..cut.positions.len() {
+            let q = p(&cut, i as u32);
+            for a in 0..3 {
+                assert!(
+                    q[a] >= f32_of(b.min[a]) && q[a] <= f32_of(b.max[a]),
+                    "{b:?}: {q}"
+                );
+            }
+            // The face's own coordinates: its uv, back through the face's map.
+            let [s, t] = cut.texcoords[i].map(f64::from);
+            let f = (s * 6.0).floor() as usize;
+            let (u, v) = ((s * 6.0 - f as f64 - 0.1) / 0.8, (t - 0.1) / 0.8);
+            let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+            let (a, sign) = (f / 2, if f % 2 == 0 { 1.0 } else { -1.0 });
+            let (n, tt) = (axes[a] * sign, axes[(a + 1) % 3] * sign);
+            let want = turn * (0.5 * n + (u - 0.5) * tt + (v - 0.5) * n.cross(tt));
+            assert!(
+                (want - q).length() < 1e-5,
+                "{b:?}: {q} has the uv of {want}"
+            );
+        }
+        // Split along a random axis at a random point inside: the halves add up.
+        let axis = (next() * 3.0) as usize % 3;
+        let at = b.min[axis] + (0.2 + 0.6 * next()) * (b.max[axis] - b.min[axis]);
+        let (mut lo, mut hi) = (b, b);
+        lo.max[axis] = at;
+        hi.min[axis] = at;
+        let (whole, parts) = (
+            area(&cut),
+            area(&to_box(cube.clone(), lo)) + area(&to_box(cube.clone(), hi)),
+        );
+        assert!(
+            (whole - parts).abs() < 1e-5,
+            "{b:?}: {whole} against {parts} in two halves"
+        );
+        cut_some += usize::from(whole > 0.0 && whole < 6.0 - 1e-6);
+    }
+    assert!(cut_some > 50, "{cut_some} of the boxes cut the cube");
+}

@@ -506,9 +506,10 @@ fn bad_input_gets_a_message_a_status_and_no_file() {
 /// `--bounds` cut the exported mesh at their faces (bake/clip.rs), whatever their size:
 /// a box thinner than a mesh cell across a plane bakes the strip it holds (it was
 /// refused, when the mesh kept whole quads), exactly: its ends on the box's faces, its
-/// area the strip's.
+/// area the strip's. A flat face along a face of the box is kept whole, and the
+/// material's warnings count only what the file shows.
 #[test]
-fn bounds_thinner_than_a_cell_bake_the_strip_they_hold() {
+fn bounds_cut_the_file_at_their_faces_whatever_their_size() {
     if !has_gpu() {
         return;
     }
@@ -563,6 +564,62 @@ fn bounds_thinner_than_a_cell_bake_the_strip_they_hold() {
         (area - 0.02).abs() < 1e-6,
         "the strip's area is {area}, not 0.02"
     );
+    let line = format!(
+        "cut:            at the bounds' faces, {} triangles in the file",
+        mesh.indices.len() / 3
+    );
+    assert!(err.contains(&line), "{err}");
+
+    // A flat face along a face of the box (its vertices a rounding error off it) is kept
+    // whole (the box's bottom at y = -0.4 had no triangle, at random): the unit box's
+    // face of area 1, on the plane exactly.
+    let cube = dir.path().join("cube.sdf");
+    std::fs::write(
+        &cube,
+        "material m { color = [0.5, 0.5, 0.5]; }\nrender box([1, 1, 1]).translate([0, 0.1, 0]).paint(m);",
+    )
+    .unwrap();
+    let out = dir.path().join("cube.glb");
+    let out_s = out.to_str().unwrap();
+    let small = [
+        "--grid", "16", "--size", "256", "--walk", "loop", "-o", out_s,
+    ];
+    let bake = |scene: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["bake", scene.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&small);
+        sdfc(&args)
+    };
+    let (code, _, err) = bake(&cube, &["--bounds", "-1,-0.4,-1", "1,3,1"]);
+    assert_eq!(code, 0, "{err}");
+    let (mesh, _, _) = sdfc::bake::export::read_glb(&std::fs::read(&out).unwrap()).unwrap();
+    let p = |i: u32| glam::DVec3::from_array(mesh.positions[i as usize].map(f64::from));
+    let bottom: f64 = mesh
+        .indices
+        .chunks_exact(3)
+        .filter(|t| t.iter().all(|&i| mesh.positions[i as usize][1] == -0.4))
+        .map(|t| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length())
+        .sum();
+    assert!(
+        (bottom - 1.0).abs() < 1e-4,
+        "the bottom face's area is {bottom}"
+    );
+    assert!(mesh.positions.iter().all(|p| p[1] >= -0.4));
+
+    // The material's warnings count what the file shows: an emission below 0 only
+    // where x < 0.58, cut away by the box, is not said; uncut, it is.
+    let glow = dir.path().join("glow.sdf");
+    std::fs::write(
+        &glow,
+        "material m { color = [0.5, 0.5, 0.5]; emission = [position.x - 0.58, 0, 0]; }\nrender sphere(1).paint(m);",
+    )
+    .unwrap();
+    let (code, _, err) = bake(&glow, &["--bounds", "0.6,-1.2,-1.2", "1.2,1.2,1.2"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("out of the images' range"), "{err}");
+    let (code, _, err) = bake(&glow, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("out of the images' range"), "{err}");
 }
 
 /// Outputs are checked before any work, a GPU or not: a name ending in a separator or

@@ -8,6 +8,9 @@
 //! same linear map, need no change: the cut mesh shows exactly what the whole one showed
 //! inside the box, and ends on its faces.
 //!
+//! A vertex within a thousandth of a cell of a face ([`CUT_SLACK_CELLS`]) lies on it, so
+//! that a surface lying along a face is kept whole, and is moved onto the face.
+//!
 //! A crossing is computed from the edge's ends taken in the order of their positions,
 //! so both triangles of an edge, and both charts of a border (whose vertices are split
 //! for their texture coordinates), make the same point bit for bit: the cut mesh stays
@@ -21,21 +24,28 @@ use glam::DVec3;
 use std::cmp::Ordering;
 use std::collections::HashMap;
 
+/// How near a face of the box a vertex lies on it, in mesh cells ([`to_box`]'s `slack`):
+/// a flat face or a plane along a face of `--bounds` has its vertices a rounding error
+/// off it (1e-13 on a plane at 0), and is kept whole, not at random.
+pub const CUT_SLACK_CELLS: f64 = 1e-3;
+
 /// One of the box's six planes: the coordinate `axis` at `at`, the inside below it
-/// (`upper`) or above it.
+/// (`upper`) or above it; a point within `slack` of it lies on it.
 #[derive(Debug, Clone, Copy)]
 struct Plane {
     axis: usize,
     at: f64,
     upper: bool,
+    slack: f64,
 }
 
 impl Plane {
-    fn of(b: Aabb) -> [Plane; 6] {
+    fn of(b: Aabb, slack: f64) -> [Plane; 6] {
         let p = |axis: usize, upper: bool| Plane {
             axis,
             at: if upper { b.max[axis] } else { b.min[axis] },
             upper,
+            slack,
         };
         [
             p(0, false),
@@ -48,13 +58,30 @@ impl Plane {
     }
 
     /// How far `p` lies inside (negative outside).
-    fn inside(&self, p: DVec3) -> f64 {
+    fn distance(&self, p: DVec3) -> f64 {
         if self.upper {
             self.at - p[self.axis]
         } else {
             p[self.axis] - self.at
         }
     }
+
+    /// How far `p` lies inside, 0 within the slack: a surface that lies on a face of the
+    /// box (a flat face or a plane, whose mesh vertices sit a rounding error off it) is
+    /// kept whole on either side, and moved onto the face ([`clamp`]).
+    fn inside(&self, p: DVec3) -> f64 {
+        let d = self.distance(p);
+        if d.abs() <= self.slack {
+            0.0
+        } else {
+            d
+        }
+    }
+}
+
+/// `p` moved into the box: a kept point lies at most the slack outside it.
+fn clamp(p: DVec3, b: &Aabb) -> DVec3 {
+    p.clamp(b.min, b.max)
 }
 
 /// Orders two points by their coordinates, x first.
@@ -107,7 +134,7 @@ fn crossing(a: DVec3, b: DVec3, t: f64, plane: &Plane) -> DVec3 {
 
 /// Whether the triangle has a part of non-zero area inside the box (its corners as the
 /// exported mesh holds them, in f32).
-fn triangle_reaches(tri: [DVec3; 3], planes: &[Plane; 6]) -> bool {
+fn triangle_reaches(tri: [DVec3; 3], planes: &[Plane; 6], b: &Aabb) -> bool {
     if planes
         .iter()
         .any(|pl| tri.iter().all(|&p| pl.inside(p) < 0.0))
@@ -121,6 +148,7 @@ fn triangle_reaches(tri: [DVec3; 3], planes: &[Plane; 6]) -> bool {
         });
         std::mem::swap(&mut poly, &mut next);
     }
+    let poly: Vec<DVec3> = poly.iter().map(|&p| clamp(p, b)).collect();
     (2..poly.len()).any(|i| area2(poly[0], poly[i - 1], poly[i]) > 0.0)
 }
 
@@ -130,11 +158,14 @@ fn area2(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     (r(b) - r(a)).cross(r(c) - r(a)).length()
 }
 
-/// Whether any of `triangles` has a part of non-zero area inside `bounds`: whether
-/// [`to_box`] keeps anything of a mesh of them.
-pub fn reaches(triangles: impl IntoIterator<Item = [DVec3; 3]>, bounds: Aabb) -> bool {
-    let planes = Plane::of(bounds);
-    triangles.into_iter().any(|t| triangle_reaches(t, &planes))
+/// Whether any of `triangles` has a part of non-zero area inside `bounds` (a point
+/// within `slack` of a face lying on it): whether [`to_box`] keeps anything of a mesh
+/// of them.
+pub fn reaches(triangles: impl IntoIterator<Item = [DVec3; 3]>, bounds: Aabb, slack: f64) -> bool {
+    let planes = Plane::of(bounds, slack);
+    triangles
+        .into_iter()
+        .any(|t| triangle_reaches(t, &planes, &bounds))
 }
 
 /// A vertex's attributes in f64.
@@ -158,8 +189,10 @@ impl Attributes {
     }
 
     /// The attributes at `t` from `a` to `b`, the position on `plane`: linear, as a
-    /// rasterizer interpolates them; the normal and the tangent's direction made unit
-    /// again, the tangent's handedness `a`'s (a chart's vertices share it).
+    /// rasterizer interpolates them; the normal made unit again and the tangent made
+    /// unit and perpendicular to it (as a shader does with the interpolated pair: the
+    /// two can be far from perpendicular across a crease), the tangent's handedness
+    /// `a`'s (a chart's vertices share it).
     fn between(a: &Attributes, b: &Attributes, t: f64, plane: &Plane) -> Attributes {
         let n = a
             .normal
@@ -168,7 +201,10 @@ impl Attributes {
             .unwrap_or(a.normal);
         let ta = DVec3::new(a.tangent[0], a.tangent[1], a.tangent[2]);
         let tb = DVec3::new(b.tangent[0], b.tangent[1], b.tangent[2]);
-        let tt = ta.lerp(tb, t).try_normalize().unwrap_or(ta);
+        let across = |v: DVec3| (v - n * n.dot(v)).try_normalize();
+        let tt = across(ta.lerp(tb, t))
+            .or_else(|| across(ta))
+            .unwrap_or_else(|| n.any_orthonormal_vector());
         let lerp = |x: f64, y: f64| x + (y - x) * t;
         Attributes {
             position: crossing(a.position, b.position, t, plane),
@@ -192,6 +228,7 @@ struct Corner {
 /// when a kept triangle first uses it.
 struct Cutter<'m> {
     mesh: &'m MeshData,
+    bounds: Aabb,
     made: Vec<Attributes>,
     made_at: HashMap<(u32, u32, u8), u32>,
     emitted: Vec<u32>,
@@ -234,13 +271,20 @@ impl Cutter<'_> {
             let out = &mut self.out;
             if (id as usize) < n {
                 let i = id as usize;
-                out.positions.push(self.mesh.positions[i]);
+                let p = DVec3::from_array(self.mesh.positions[i].map(f64::from));
+                let q = clamp(p, &self.bounds);
+                out.positions.push(if q == p {
+                    self.mesh.positions[i]
+                } else {
+                    q.as_vec3().to_array()
+                });
                 out.normals.push(self.mesh.normals[i]);
                 out.tangents.push(self.mesh.tangents[i]);
                 out.texcoords.push(self.mesh.texcoords[i]);
             } else {
                 let a = self.made[id as usize - n];
-                out.positions.push(a.position.as_vec3().to_array());
+                out.positions
+                    .push(clamp(a.position, &self.bounds).as_vec3().to_array());
                 out.normals.push(a.normal.as_vec3().to_array());
                 out.tangents.push(a.tangent.map(|x| x as f32));
                 out.texcoords.push([a.uv[0] as f32, a.uv[1] as f32]);
@@ -253,23 +297,25 @@ impl Cutter<'_> {
 
 /// `mesh` cut at the faces of `bounds`: the triangles inside them whole, those across
 /// a face clipped to it (fanned from the clipped polygon's first corner, dropping a
-/// triangle of no area), those outside dropped; vertices renumbered in the order the
+/// triangle of no area), those outside dropped; a vertex within `slack` of a face lies
+/// on it (moved onto it where it lies outside); vertices renumbered in the order the
 /// kept triangles use them, and none left unused (a mesh wholly inside is returned as
 /// it is, without a copy). The made vertices are held in a table of the crossed edges
 /// only, and the output is at most as large as `mesh` plus those: while it is made, the
 /// bake holds three meshes' worth (its own, `mesh`, the output), as while the glb
 /// encoder, which follows, fills its buffer (`bake::memory::VERTEX_BYTES`).
-pub fn to_box(mesh: MeshData, bounds: Aabb) -> MeshData {
-    let planes = Plane::of(bounds);
+pub fn to_box(mesh: MeshData, bounds: Aabb, slack: f64) -> MeshData {
+    let planes = Plane::of(bounds, slack);
     // Nothing to cut: the mesh as it is, in its own order.
     if mesh.positions.iter().all(|p| {
         let p = DVec3::from_array(p.map(f64::from));
-        planes.iter().all(|pl| pl.inside(p) >= 0.0)
+        planes.iter().all(|pl| pl.distance(p) >= 0.0)
     }) {
         return mesh;
     }
     let mut c = Cutter {
         mesh: &mesh,
+        bounds,
         made: Vec::new(),
         made_at: HashMap::new(),
         emitted: vec![u32::MAX; mesh.positions.len()],
@@ -311,7 +357,8 @@ pub fn to_box(mesh: MeshData, bounds: Aabb) -> MeshData {
         }
         for i in 2..poly.len() {
             let (a, b, d) = (poly[0], poly[i - 1], poly[i]);
-            if area2(a.position, b.position, d.position) > 0.0 {
+            let at = |v: Corner| clamp(v.position, &bounds);
+            if area2(at(a), at(b), at(d)) > 0.0 {
                 for v in [a, b, d] {
                     let k = c.emit(v.id);
                     c.out.indices.push(k);

@@ -3,6 +3,7 @@
 mod plan;
 
 use super::charts::{ChartTable, Samples};
+use super::clip::CUT_SLACK_CELLS;
 use super::fit;
 pub use super::fit::Texels;
 use super::gpu::{BakePass, Shaded};
@@ -206,6 +207,9 @@ pub struct Report {
     pub samples: usize,
     /// The sub-texel samples shaded for [`Texels::Fit`] (0 with `Points`).
     pub fit_samples: usize,
+    /// Level-0 samples the file shows: with `--bounds`, those in them (the counts below
+    /// are of these).
+    pub shown: usize,
     /// Level-0 samples where the material is undefined (a channel not finite): the
     /// images hold 0 there.
     pub undefined: usize,
@@ -264,7 +268,7 @@ impl Baked {
     pub fn exported_mesh(&self) -> MeshData {
         let welded = images::weld(&self.mesh, self.vertex_grid.n);
         match self.bounds {
-            Some(b) => super::clip::to_box(welded, b),
+            Some(b) => super::clip::to_box(welded, b, CUT_SLACK_CELLS * self.quads.cell),
             None => welded,
         }
     }
@@ -438,7 +442,8 @@ pub fn bake<'s>(
     let grid_points = images::vertex_grid(&quads, &table, m, &project);
     // The quads kept may only come near the bounds: the cut must keep some of them.
     if let Some(b) = options.bounds {
-        if !super::clip::reaches(images::grid_triangles(&grid_points, &table), b) {
+        let slack = CUT_SLACK_CELLS * quads.cell;
+        if !super::clip::reaches(images::grid_triangles(&grid_points, &table), b, slack) {
             return Err(BakeError::Empty(grid.cell, refined_most(options)));
         }
     }
@@ -457,11 +462,12 @@ pub fn bake<'s>(
         &mut lap,
     )?;
     report.max_residual /= scale;
-    (
+    [
+        report.shown,
         report.undefined,
         report.emission_over_one,
         report.out_of_range,
-    ) = material_counts(&level0);
+    ] = material_counts(shown(&level0, &points, options.bounds));
 
     // 5. Mips.
     progress.stage("mips", 1);
@@ -473,7 +479,10 @@ pub fn bake<'s>(
     let mesh = images::mesh_data(&quads, &table, &atlas, &patches, &grid_points);
     let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
     report.emissive_strength = textures.emissive_strength;
-    (report.emitting, report.emission_lost) = emission_lost(&levels[0], report.emissive_strength);
+    (report.emitting, report.emission_lost) = emission_lost(
+        shown(&levels[0], &points, options.bounds),
+        report.emissive_strength,
+    );
     progress.finish();
     lap(&mut report, "images");
 
@@ -594,32 +603,48 @@ fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
     FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).map(|l| l.chart_size)
 }
 
-/// Level-0 samples where the material is undefined (a channel not finite), where its
-/// emission is finite and over 1, and where a finite value is out of what the images
-/// hold ([`Report::undefined`], [`Report::emission_over_one`], [`Report::out_of_range`]).
-fn material_counts(level0: &Samples<Texel<CHANNELS>>) -> (usize, usize, usize) {
-    let all = || {
-        level0
-            .corners
-            .iter()
-            .chain(&level0.edges)
-            .chain(&level0.interiors)
-    };
+/// Level 0's samples that the file shows: with `--bounds`, those whose point lies in
+/// them (the quads kept reach past the box, and the cut drops the rest).
+fn shown<'a>(
+    level0: &'a Samples<Texel<CHANNELS>>,
+    points: &'a Samples<[f32; 3]>,
+    bounds: Option<Aabb>,
+) -> impl Iterator<Item = &'a Texel<CHANNELS>> + 'a {
+    let all =
+        |s: &'a Samples<Texel<CHANNELS>>| s.corners.iter().chain(&s.edges).chain(&s.interiors);
+    let at = points
+        .corners
+        .iter()
+        .chain(&points.edges)
+        .chain(&points.interiors);
+    all(level0).zip(at).filter_map(move |(t, p)| {
+        let p = DVec3::from_array(p.map(f64::from));
+        let inside = bounds.is_none_or(|b| p.cmpge(b.min).all() && p.cmple(b.max).all());
+        inside.then_some(t)
+    })
+}
+
+/// Of level 0's samples the file shows ([`shown`]): how many; where the material is
+/// undefined (a channel not finite); where its emission is finite and over 1; and
+/// where a finite value is out of what the images hold ([`Report::shown`],
+/// [`Report::undefined`], [`Report::emission_over_one`], [`Report::out_of_range`]).
+fn material_counts<'a>(shown: impl Iterator<Item = &'a Texel<CHANNELS>>) -> [usize; 4] {
     // Half an 8-bit step: a clamp by less changes no texel.
     let slack = 0.5 / 255.0;
-    let out = |t: &&Texel<CHANNELS>| {
+    let out = |t: &Texel<CHANNELS>| {
         let unit = t[..EMISSION.start]
             .iter()
             .any(|&v| v.is_finite() && !(-slack..=1.0 + slack).contains(&v));
         unit || t[EMISSION].iter().any(|&v| v.is_finite() && v < -slack)
     };
-    (
-        all().filter(|t| t.iter().any(|v| !v.is_finite())).count(),
-        all()
-            .filter(|t| t[EMISSION].iter().any(|&v| v.is_finite() && v > 1.0))
-            .count(),
-        all().filter(out).count(),
-    )
+    let mut counts = [0; 4];
+    for t in shown {
+        counts[0] += 1;
+        counts[1] += usize::from(t.iter().any(|v| !v.is_finite()));
+        counts[2] += usize::from(t[EMISSION].iter().any(|&v| v.is_finite() && v > 1.0));
+        counts[3] += usize::from(out(t));
+    }
+    counts
 }
 
 /// Whether the mesh was refined as finely as a bake refines (`--refine 8`): then the
@@ -628,17 +653,16 @@ fn refined_most(options: &Options) -> bool {
     options.refine == Refine::Times(refine::MAX_REFINE)
 }
 
-/// Level-0 samples that emit, and those of them whose every emitting channel rounds to
-/// 0 in the 8-bit texture once divided by `strength` ([`Report::emission_lost`]).
-fn emission_lost(level0: &Samples<Texel<CHANNELS>>, strength: f32) -> (usize, usize) {
+/// Of level 0's samples the file shows ([`shown`]), those that emit, and those of them
+/// whose every emitting channel rounds to 0 in the 8-bit texture once divided by
+/// `strength` ([`Report::emission_lost`]).
+fn emission_lost<'a>(
+    shown: impl Iterator<Item = &'a Texel<CHANNELS>>,
+    strength: f32,
+) -> (usize, usize) {
     let emits = |v: f32| v.is_finite() && v > 0.0;
     let (mut emitting, mut lost) = (0, 0);
-    let all = level0
-        .corners
-        .iter()
-        .chain(&level0.edges)
-        .chain(&level0.interiors);
-    for t in all {
+    for t in shown {
         let e = &t[EMISSION];
         if e.iter().any(|&v| emits(v)) {
             emitting += 1;

@@ -358,13 +358,13 @@ fn print_material(r: &sdfc::bake::pipeline::Report) {
     if r.undefined > 0 {
         eprintln!(
             "warning: the material is undefined (NaN or infinite) at {} of the {} level-0 samples, which the file's images cannot hold (NaN is written as 0, an infinity as its channel's limit): look for a division by zero, or a square root or logarithm of a negative number, in its expressions",
-            r.undefined, r.samples
+            r.undefined, r.shown
         );
     }
     if r.out_of_range > 0 {
         eprintln!(
             "warning: the material is out of the images' range at {} of the {} level-0 samples (colour, roughness and metallic hold 0 to 1, emission 0 or more): the file holds it clamped",
-            r.out_of_range, r.samples
+            r.out_of_range, r.shown
         );
     }
     let strength = r.emissive_strength;
@@ -376,7 +376,7 @@ fn print_material(r: &sdfc::bake::pipeline::Report) {
     if r.emission_over_one > 0 {
         eprintln!(
             "emission:       over 1 at {} of the {} level-0 samples, up to {strength}: the emissive texture holds it divided by that, and the glTF's KHR_materials_emissive_strength multiplies it back (a viewer without that extension shows the emission that much dimmer)",
-            r.emission_over_one, r.samples
+            r.emission_over_one, r.shown
         );
     }
     if r.emission_lost > 0 {

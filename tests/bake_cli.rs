@@ -174,28 +174,7 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
         }
         // Welded: each chart is one connected piece of the mesh (by shared vertex
         // index), and the file has fewer vertices than three per triangle's corner.
-        let pieces = {
-            let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
-            fn find(p: &mut [usize], mut x: usize) -> usize {
-                while p[x] != x {
-                    p[x] = p[p[x]];
-                    x = p[x];
-                }
-                x
-            }
-            for t in mesh.indices.chunks(3) {
-                for k in 1..3 {
-                    let (a, b) = (
-                        find(&mut parent, t[0] as usize),
-                        find(&mut parent, t[k] as usize),
-                    );
-                    parent[a] = b;
-                }
-            }
-            let roots: std::collections::HashSet<usize> =
-                (0..parent.len()).map(|x| find(&mut parent, x)).collect();
-            roots.len()
-        };
+        let pieces = common::mesh_pieces(&mesh);
         let charts_in_layout = match &layout {
             sdfc::bake::ChartLayout::Flat(_) => file.charts.len(),
             sdfc::bake::ChartLayout::Packed(p) => p.charts.len(),

@@ -2,11 +2,11 @@
 //! attribute has a closed form: a tilted plane in two charts, its texture coordinates
 //! linear in the position on each.
 
+use crate::common;
 use glam::DVec3;
 use sdfc::bake::clip::{reaches, to_box};
 use sdfc::bake::MeshData;
 use sdfc::ir::Aabb;
-use std::collections::HashMap;
 
 /// The plane z = 0.3 x + 0.2 y.
 fn height(x: f64, y: f64) -> f64 {
@@ -56,32 +56,6 @@ fn two_charts(k: usize) -> MeshData {
 
 fn p(m: &MeshData, i: u32) -> DVec3 {
     DVec3::from_array(m.positions[i as usize].map(f64::from))
-}
-
-/// The mesh's connected pieces, by shared vertex index.
-fn pieces(m: &MeshData) -> usize {
-    let mut parent: Vec<usize> = (0..m.positions.len()).collect();
-    fn find(parent: &mut [usize], i: usize) -> usize {
-        let mut r = i;
-        while parent[r] != r {
-            r = parent[r];
-        }
-        parent[i] = r;
-        r
-    }
-    for t in m.indices.chunks_exact(3) {
-        for k in 1..3 {
-            let (a, b) = (
-                find(&mut parent, t[0] as usize),
-                find(&mut parent, t[k] as usize),
-            );
-            parent[a] = b;
-        }
-    }
-    let roots: std::collections::HashSet<usize> = (0..m.positions.len())
-        .map(|i| find(&mut parent, i))
-        .collect();
-    roots.len()
 }
 
 #[test]
@@ -156,17 +130,7 @@ fn a_mesh_cut_at_the_box_ends_on_its_faces_with_its_texture_unchanged() {
     // Watertight: an edge held once (by its ends' bits) lies on a face of the box or on
     // the plane's own rim; the charts' border x = 0 is held twice, by split vertices
     // made bit for bit alike.
-    let mut held: HashMap<[[u32; 3]; 2], usize> = HashMap::new();
-    for t in cut.indices.chunks_exact(3) {
-        for k in 0..3 {
-            let (a, c) = (
-                cut.positions[t[k] as usize],
-                cut.positions[t[(k + 1) % 3] as usize],
-            );
-            let (a, c) = (a.map(f32::to_bits), c.map(f32::to_bits));
-            *held.entry(if a < c { [a, c] } else { [c, a] }).or_default() += 1;
-        }
-    }
+    let held = common::edges_by_position(&cut);
     let on_face = |q: DVec3| {
         (0..3).any(|a| q[a] == f32_of(b.min[a]) || q[a] == f32_of(b.max[a])) || q.y == -1.0
     };
@@ -185,7 +149,7 @@ fn a_mesh_cut_at_the_box_ends_on_its_faces_with_its_texture_unchanged() {
     assert!(rim > 20, "{rim}");
     // Inside each chart the triangles share their vertices, those made on the cut too:
     // two pieces, one a chart.
-    assert_eq!(pieces(&cut), 2);
+    assert_eq!(common::mesh_pieces(&cut), 2);
 }
 
 #[test]
@@ -334,17 +298,7 @@ fn random_boxes_cut_a_turned_cube_into_closed_pieces_whose_areas_add_up() {
         let f32_of = |x: f64| x as f32 as f64;
         let on_face =
             |q: DVec3| (0..3).any(|a| q[a] == f32_of(b.min[a]) || q[a] == f32_of(b.max[a]));
-        let mut held: HashMap<[[u32; 3]; 2], usize> = HashMap::new();
-        for t in cut.indices.chunks_exact(3) {
-            for k in 0..3 {
-                let (a, c) = (
-                    cut.positions[t[k] as usize],
-                    cut.positions[t[(k + 1) % 3] as usize],
-                );
-                let (a, c) = (a.map(f32::to_bits), c.map(f32::to_bits));
-                *held.entry(if a < c { [a, c] } else { [c, a] }).or_default() += 1;
-            }
-        }
+        let held = common::edges_by_position(&cut);
         for (e, &count) in &held {
             let [a, c] = e.map(|v| DVec3::from_array(v.map(|x| f32::from_bits(x) as f64)));
             assert!(count <= 2, "{b:?}: an edge held {count} times");

@@ -454,3 +454,43 @@ pub fn check_and_compile_loop(
     .expect("compiles");
     (analysis, compiled)
 }
+
+/// The connected pieces of a mesh, by shared vertex index.
+pub fn mesh_pieces(m: &sdfc::bake::MeshData) -> usize {
+    let mut parent: Vec<usize> = (0..m.positions.len()).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for t in m.indices.chunks_exact(3) {
+        for k in 1..3 {
+            let (a, b) = (
+                find(&mut parent, t[0] as usize),
+                find(&mut parent, t[k] as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let roots: std::collections::HashSet<usize> =
+        (0..parent.len()).map(|x| find(&mut parent, x)).collect();
+    roots.len()
+}
+
+/// How many triangles hold each edge of a mesh, the edge by its ends' positions' bits
+/// (so split vertices at one place make one edge).
+pub fn edges_by_position(
+    m: &sdfc::bake::MeshData,
+) -> std::collections::HashMap<[[u32; 3]; 2], usize> {
+    let mut held = std::collections::HashMap::new();
+    for t in m.indices.chunks_exact(3) {
+        for k in 0..3 {
+            let a = m.positions[t[k] as usize].map(f32::to_bits);
+            let c = m.positions[t[(k + 1) % 3] as usize].map(f32::to_bits);
+            *held.entry(if a < c { [a, c] } else { [c, a] }).or_default() += 1;
+        }
+    }
+    held
+}

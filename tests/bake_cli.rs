@@ -599,6 +599,22 @@ fn bounds_cut_the_file_at_their_faces_whatever_their_size() {
     let (code, _, err) = bake(&glow, &[]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("out of the images' range"), "{err}");
+    // So does the emissive strength: an emission of 3 x, at most 0.9 in the box, needs
+    // none (a strength from the part cut away dimmed what the file shows).
+    std::fs::write(
+        &glow,
+        "material m { color = [0.5, 0.5, 0.5]; emission = [max(position.x * 3, 0), 0, 0]; }\nrender sphere(1).paint(m);",
+    )
+    .unwrap();
+    let (code, _, err) = bake(&glow, &["--bounds", "-1.2,-1.2,-1.2", "0.3,1.2,1.2"]);
+    assert_eq!(code, 0, "{err}");
+    let (_, textures, _) = sdfc::bake::export::read_glb(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(textures.emissive_strength, 1.0, "{err}");
+    assert!(!err.contains("emission:"), "{err}");
+    let (code, _, err) = bake(&glow, &[]);
+    assert_eq!(code, 0, "{err}");
+    let (_, textures, _) = sdfc::bake::export::read_glb(&std::fs::read(&out).unwrap()).unwrap();
+    assert!(textures.emissive_strength > 2.9, "{err}");
 }
 
 /// Outputs are checked before any work, a GPU or not: a name ending in a separator or

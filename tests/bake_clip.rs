@@ -383,3 +383,28 @@ fn a_surface_along_a_face_is_kept_whole_within_the_slack() {
     // Past the slack, it is outside.
     assert!(!reaches(tris(&flat), b, 1e-14));
 }
+
+/// A vertex just inside a face (within the slack) stays where it is, and the sliver
+/// between it and the face is cut as any other: counted on the face, it was dropped,
+/// leaving a hole along the cut (the red team's `--chart-quads 2` bakes).
+#[test]
+fn a_vertex_just_inside_a_face_keeps_the_sliver_beyond_it() {
+    let mesh = two_charts(12);
+    // Chart 0's column of vertices at x = -0.5 lies 1e-7 inside the face.
+    let b = Aabb {
+        min: DVec3::new(-0.5 - 1e-7, -2.0, -5.0),
+        max: DVec3::splat(5.0),
+    };
+    let cut = to_box(mesh, b, 1e-6);
+    let face = (b.min.x as f32) as f64;
+    for (e, &count) in &common::edges_by_position(&cut) {
+        let [a, c] = e.map(|v| DVec3::from_array(v.map(|x| f32::from_bits(x) as f64)));
+        let on_rim = |q: DVec3| q.x == face || q.x == 1.0 || q.y.abs() == 1.0;
+        assert!(
+            count == 2 || (on_rim(a) && on_rim(c)),
+            "a hole at {a} – {c}"
+        );
+    }
+    let lowest = cut.positions.iter().map(|p| p[0]).fold(f32::MAX, f32::min);
+    assert_eq!(lowest as f64, face, "the cut ends on the face");
+}

@@ -8,8 +8,8 @@
 //! same linear map, need no change: the cut mesh shows exactly what the whole one showed
 //! inside the box, and ends on its faces.
 //!
-//! A vertex within a thousandth of a cell of a face ([`CUT_SLACK_CELLS`]) lies on it, so
-//! that a surface lying along a face is kept whole, and is moved onto the face.
+//! A vertex outside a face by a thousandth of a cell or less ([`CUT_SLACK_CELLS`]) lies on
+//! it, so that a surface lying along a face is kept whole, and is moved onto the face.
 //!
 //! A crossing is computed from the edge's ends taken in the order of their positions,
 //! so both triangles of an edge, and both charts of a border (whose vertices are split
@@ -24,7 +24,8 @@ use glam::DVec3;
 use std::cmp::Ordering;
 use std::collections::HashMap;
 
-/// How near a face of the box a vertex lies on it, in mesh cells ([`to_box`]'s `slack`):
+/// How near outside a face of the box a vertex lies on it, in mesh cells ([`to_box`]'s
+/// `slack`):
 /// a flat face or a plane along a face of `--bounds` has its vertices a rounding error
 /// off it (1e-13 on a plane at 0), and is kept whole, not at random.
 pub const CUT_SLACK_CELLS: f64 = 1e-3;
@@ -66,12 +67,14 @@ impl Plane {
         }
     }
 
-    /// How far `p` lies inside, 0 within the slack: a surface that lies on a face of the
-    /// box (a flat face or a plane, whose mesh vertices sit a rounding error off it) is
-    /// kept whole on either side, and moved onto the face ([`clamp`]).
+    /// How far `p` lies inside, 0 where it lies outside by the slack or less: a surface
+    /// that lies on a face of the box (a flat face or a plane, whose mesh vertices sit a
+    /// rounding error off it) is kept whole, and moved onto the face ([`clamp`]). A
+    /// point just inside stays as it is, so that the sliver between it and the face is
+    /// cut as any other (counted on the face, it was dropped: a hole).
     fn inside(&self, p: DVec3) -> f64 {
         let d = self.distance(p);
-        if d.abs() <= self.slack {
+        if d < 0.0 && d >= -self.slack {
             0.0
         } else {
             d
@@ -159,8 +162,8 @@ fn area2(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 /// Whether any of `triangles` has a part of non-zero area inside `bounds` (a point
-/// within `slack` of a face lying on it): whether [`to_box`] keeps anything of a mesh
-/// of them.
+/// outside a face by `slack` or less lying on it): whether [`to_box`] keeps anything of
+/// a mesh of them.
 pub fn reaches(triangles: impl IntoIterator<Item = [DVec3; 3]>, bounds: Aabb, slack: f64) -> bool {
     let planes = Plane::of(bounds, slack);
     triangles
@@ -297,8 +300,8 @@ impl Cutter<'_> {
 
 /// `mesh` cut at the faces of `bounds`: the triangles inside them whole, those across
 /// a face clipped to it (fanned from the clipped polygon's first corner, dropping a
-/// triangle of no area), those outside dropped; a vertex within `slack` of a face lies
-/// on it (moved onto it where it lies outside); vertices renumbered in the order the
+/// triangle of no area), those outside dropped; a vertex outside a face by `slack` or
+/// less lies on it (moved onto it); vertices renumbered in the order the
 /// kept triangles use them, and none left unused (a mesh wholly inside is returned as
 /// it is, without a copy). The made vertices are held in a table of the crossed edges
 /// only, and the output is at most as large as `mesh` plus those: while it is made, the

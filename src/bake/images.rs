@@ -186,6 +186,7 @@ pub fn atlas_images(
     atlas: &ChartLayout,
     patches: &Patches,
     levels: &[Samples<Texel<CHANNELS>>],
+    strength: f32,
 ) -> Textures {
     let (w, h) = (atlas.width(), atlas.height());
     let blank = || RgbaImage::from_pixel(w, h, Rgba([0, 0, 0, 255]));
@@ -194,8 +195,8 @@ pub fn atlas_images(
     let mut normal = RgbaImage::from_pixel(w, h, Rgba([128, 128, 255, 255]));
     let mut emission = blank();
     let mut emits = false;
-    // Emission over 1 is carried by the strength: the image holds emission ÷ it.
-    let strength = emissive_strength(&levels[..atlas.levels().min(levels.len())]);
+    // Emission over 1 is carried by the strength (`emissive_strength`): the image
+    // holds emission ÷ it.
     let emitted = |e: &[f32]| {
         let [r, g, b] = [e[0], e[1], e[2]].map(|v| srgb8(v / strength));
         Rgba([r, g, b, 255])
@@ -287,12 +288,12 @@ pub fn atlas_images(
     }
 }
 
-/// The emissive texture's strength for `levels` (glTF's `emissiveStrength`): the
-/// largest finite emission of any channel at any level, or 1 where that is at most 1.
-pub fn emissive_strength(levels: &[Samples<Texel<CHANNELS>>]) -> f32 {
-    levels
-        .iter()
-        .flat_map(|l| l.corners.iter().chain(&l.edges).chain(&l.interiors))
+/// The emissive texture's strength for `texels` (glTF's `emissiveStrength`): the
+/// largest finite emission of any channel of any of them, or 1 where that is at most 1.
+/// The bake takes it over every level, or with `--bounds` over level 0's samples inside
+/// them (a brighter sample cut away would dim what the file shows).
+pub fn emissive_strength<'a>(texels: impl Iterator<Item = &'a Texel<CHANNELS>>) -> f32 {
+    texels
         .flat_map(|t| t[EMISSION].iter().copied())
         .filter(|v| v.is_finite())
         .fold(1.0f32, f32::max)

@@ -1,5 +1,6 @@
 //! The bake, stage by stage: mesh, charts, texel points, GPU shading, mips, images.
 
+mod counts;
 mod plan;
 
 use super::charts::{ChartTable, Samples};
@@ -15,12 +16,13 @@ pub use super::memory::{
     MAX_BAKE_BYTES, SHADE_SAMPLE_BYTES, VERTEX_BYTES,
 };
 use super::mesh::{contour_refining, refine, Grid, QuadMesh, Refining};
-use super::mips::{self, Texel, EMISSION};
+use super::mips::{self, Texel};
 use super::patches::{self, Patches};
 use super::{ChartLayout, FlatLayout, MeshData, PackedLayout, Textures};
 use crate::codegen::Module;
 use crate::gpu::{Gpu, GpuError};
 use crate::ir::{Aabb, Op, Shape};
+use counts::{count_emission, count_material, emissive_strength};
 use glam::DVec3;
 use plan::{check_precision, length, plan};
 pub use plan::{MAX_COORDINATE, MIN_F32_STEPS_A_CELL};
@@ -437,16 +439,9 @@ pub fn bake<'s>(
 
     // 3 and 4. Texel points where the exported mesh's triangles put them, shaded on
     // the GPU.
-    let tolerance = 1e-5 * scale;
-    let project = |p: DVec3| crate::ir::eval::project(shape, p, tolerance).unwrap_or(p);
+    let project = |p: DVec3| crate::ir::eval::project(shape, p, 1e-5 * scale).unwrap_or(p);
     let grid_points = images::vertex_grid(&quads, &table, m, &project);
-    // The quads kept may only come near the bounds: the cut must keep some of them.
-    if let Some(b) = options.bounds {
-        let slack = CUT_SLACK_CELLS * quads.cell;
-        if !super::clip::reaches(images::grid_triangles(&grid_points, &table), b, slack) {
-            return Err(BakeError::Empty(grid.cell, refined_most(options)));
-        }
-    }
+    check_reaches(options, &quads, &grid_points, &table, grid.cell)?;
     let n = atlas.cell_size() as usize;
     let (level0, points) = shade(
         gpu,
@@ -462,13 +457,7 @@ pub fn bake<'s>(
         &mut lap,
     )?;
     report.max_residual /= scale;
-    [
-        report.shown,
-        report.undefined,
-        report.emission_over_one,
-        report.out_of_range,
-    ] = material_counts(shown(&level0, &points, options.bounds));
-
+    count_material(&mut report, &level0, &points, options.bounds);
     // 5. Mips.
     progress.stage("mips", 1);
     let levels = mips::chain(&table, level0);
@@ -477,15 +466,12 @@ pub fn bake<'s>(
     // 6. Images and the mesh.
     progress.stage("images", 1);
     let mesh = images::mesh_data(&quads, &table, &atlas, &patches, &grid_points);
-    let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels);
+    let strength = emissive_strength(&levels, &atlas, &points, options.bounds);
+    let textures = images::atlas_images(&mesh, m, &table, &atlas, &patches, &levels, strength);
     report.emissive_strength = textures.emissive_strength;
-    (report.emitting, report.emission_lost) = emission_lost(
-        shown(&levels[0], &points, options.bounds),
-        report.emissive_strength,
-    );
+    count_emission(&mut report, &levels[0], &points, options.bounds);
     progress.finish();
     lap(&mut report, "images");
-
     report.utilisation = atlas.utilisation(table.len());
     (report.density_spread, report.slivers) = density_spread(&quads, &table, n);
     Ok(Baked {
@@ -603,77 +589,28 @@ fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
     FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).map(|l| l.chart_size)
 }
 
-/// Level 0's samples that the file shows: with `--bounds`, those whose point lies in
-/// them (the quads kept reach past the box, and the cut drops the rest).
-fn shown<'a>(
-    level0: &'a Samples<Texel<CHANNELS>>,
-    points: &'a Samples<[f32; 3]>,
-    bounds: Option<Aabb>,
-) -> impl Iterator<Item = &'a Texel<CHANNELS>> + 'a {
-    let all =
-        |s: &'a Samples<Texel<CHANNELS>>| s.corners.iter().chain(&s.edges).chain(&s.interiors);
-    let at = points
-        .corners
-        .iter()
-        .chain(&points.edges)
-        .chain(&points.interiors);
-    all(level0).zip(at).filter_map(move |(t, p)| {
-        let p = DVec3::from_array(p.map(f64::from));
-        let inside = bounds.is_none_or(|b| p.cmpge(b.min).all() && p.cmple(b.max).all());
-        inside.then_some(t)
-    })
-}
-
-/// Of level 0's samples the file shows ([`shown`]): how many; where the material is
-/// undefined (a channel not finite); where its emission is finite and over 1; and
-/// where a finite value is out of what the images hold ([`Report::shown`],
-/// [`Report::undefined`], [`Report::emission_over_one`], [`Report::out_of_range`]).
-fn material_counts<'a>(shown: impl Iterator<Item = &'a Texel<CHANNELS>>) -> [usize; 4] {
-    // Half an 8-bit step: a clamp by less changes no texel.
-    let slack = 0.5 / 255.0;
-    let out = |t: &Texel<CHANNELS>| {
-        let unit = t[..EMISSION.start]
-            .iter()
-            .any(|&v| v.is_finite() && !(-slack..=1.0 + slack).contains(&v));
-        unit || t[EMISSION].iter().any(|&v| v.is_finite() && v < -slack)
-    };
-    let mut counts = [0; 4];
-    for t in shown {
-        counts[0] += 1;
-        counts[1] += usize::from(t.iter().any(|v| !v.is_finite()));
-        counts[2] += usize::from(t[EMISSION].iter().any(|&v| v.is_finite() && v > 1.0));
-        counts[3] += usize::from(out(t));
+/// With `--bounds`, that the exported mesh has a triangle in them, cut (the quads kept
+/// may only come near them): else the bake finds no surface there.
+fn check_reaches(
+    options: &Options,
+    quads: &QuadMesh,
+    grid_points: &Samples<[f64; 3]>,
+    table: &ChartTable,
+    cell: f64,
+) -> Result<(), BakeError> {
+    if let Some(b) = options.bounds {
+        let slack = CUT_SLACK_CELLS * quads.cell;
+        if !super::clip::reaches(images::grid_triangles(grid_points, table), b, slack) {
+            return Err(BakeError::Empty(cell, refined_most(options)));
+        }
     }
-    counts
+    Ok(())
 }
 
 /// Whether the mesh was refined as finely as a bake refines (`--refine 8`): then the
 /// message for no surface does not suggest it.
 fn refined_most(options: &Options) -> bool {
     options.refine == Refine::Times(refine::MAX_REFINE)
-}
-
-/// Of level 0's samples the file shows ([`shown`]), those that emit, and those of them
-/// whose every emitting channel rounds to 0 in the 8-bit texture once divided by
-/// `strength` ([`Report::emission_lost`]).
-fn emission_lost<'a>(
-    shown: impl Iterator<Item = &'a Texel<CHANNELS>>,
-    strength: f32,
-) -> (usize, usize) {
-    let emits = |v: f32| v.is_finite() && v > 0.0;
-    let (mut emitting, mut lost) = (0, 0);
-    for t in shown {
-        let e = &t[EMISSION];
-        if e.iter().any(|&v| emits(v)) {
-            emitting += 1;
-            if e.iter()
-                .all(|&v| !emits(v) || images::srgb8(v / strength) == 0)
-            {
-                lost += 1;
-            }
-        }
-    }
-    (emitting, lost)
 }
 
 /// With `--bounds`, the part of the mesh that may reach into them

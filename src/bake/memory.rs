@@ -128,7 +128,11 @@ pub const CHARTS_FILE_CELL_BYTES: u64 = 800;
 /// stopped copying the mesh and the buffer they peaked at 584 and 1,794 MiB, against
 /// about 366 and 1,000 estimated at 168 bytes a vertex. (At `--chart-quads` 1 or 2
 /// every vertex goes through the weld's table, some 60–120 bytes each while it is
-/// built, before the buffer exists; there cells and samples are most of a bake.)
+/// built, before the buffer exists; there cells and samples are most of a bake.) Since
+/// the export drops the bake's own mesh once welded (`Baked::take_exported_mesh`) it
+/// holds two meshes at once, not three, and the same bakes peaked at 356 and 1,058 MiB
+/// (the sphere cut in half by `--bounds`, whose cut makes a third copy for a moment,
+/// at 279 against about 350): the constant keeps the third copy as a margin.
 pub const VERTEX_BYTES: u64 = 24 + 3 * (48 + 24) + 16;
 
 /// The estimated peak memory of a bake and of writing its outputs, in bytes: the

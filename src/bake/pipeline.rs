@@ -209,6 +209,8 @@ pub struct Report {
     pub samples: usize,
     /// The sub-texel samples shaded for [`Texels::Fit`] (0 with `Points`).
     pub fit_samples: usize,
+    /// The bake's mesh's triangles (before the export's cut).
+    pub triangles: usize,
     /// Level-0 samples the file shows: with `--bounds`, those in them (the counts below
     /// are of these).
     pub shown: usize,
@@ -254,7 +256,8 @@ pub struct Baked {
     /// points are placed on its triangles.
     pub vertex_grid: Samples<[f64; 3]>,
     /// The exported mesh chart by chart, as the images read it (each cell's vertices
-    /// its own, the whole of every cell kept): [`Baked::exported_mesh`] is the file's.
+    /// its own, the whole of every cell kept): [`Baked::take_exported_mesh`] makes the
+    /// file's of it.
     pub mesh: MeshData,
     pub textures: Textures,
     pub report: Report,
@@ -263,12 +266,15 @@ pub struct Baked {
 }
 
 impl Baked {
-    /// The mesh a file holds: the vertices inside each chart shared ([`images::weld`])
-    /// and, with `--bounds`, the triangles cut at the box's faces
-    /// ([`super::clip::to_box`]; the texels need no change, being placed through the
-    /// same linear map).
-    pub fn exported_mesh(&self) -> MeshData {
-        let welded = images::weld(&self.mesh, self.vertex_grid.n);
+    /// The mesh a file holds, taken out of the bake (`mesh` is left empty): the vertices
+    /// inside each chart shared ([`images::weld`]) and, with `--bounds`, the triangles
+    /// cut at the box's faces ([`super::clip::to_box`]; the texels need no change,
+    /// being placed through the same linear map). The bake's own mesh is dropped once
+    /// welded, so the export holds two meshes at once, not three.
+    pub fn take_exported_mesh(&mut self) -> MeshData {
+        let mesh = std::mem::take(&mut self.mesh);
+        let welded = images::weld(&mesh, self.vertex_grid.n);
+        drop(mesh);
         match self.bounds {
             Some(b) => super::clip::to_box(welded, b, CUT_SLACK_CELLS * self.quads.cell),
             None => welded,
@@ -472,8 +478,7 @@ pub fn bake<'s>(
     count_emission(&mut report, &levels[0], &points, options.bounds);
     progress.finish();
     lap(&mut report, "images");
-    report.utilisation = atlas.utilisation(table.len());
-    (report.density_spread, report.slivers) = density_spread(&quads, &table, n);
+    statistics(&mut report, (&quads, &table, &atlas, n), &mesh);
     Ok(Baked {
         quads,
         table,
@@ -589,6 +594,18 @@ fn flat_chart_size(mesh: &QuadMesh, options: &Options) -> Option<u32> {
     FlatLayout::fit_with(mesh.quads.len(), options.size, options.gutter).map(|l| l.chart_size)
 }
 
+/// The report's figures of the mesh and the atlas: the triangles, the utilisation, the
+/// texel density's spread and the slivers.
+fn statistics(
+    report: &mut Report,
+    (quads, table, atlas, n): (&QuadMesh, &ChartTable, &ChartLayout, usize),
+    mesh: &MeshData,
+) {
+    report.triangles = mesh.indices.len() / 3;
+    report.utilisation = atlas.utilisation(table.len());
+    (report.density_spread, report.slivers) = density_spread(quads, table, n);
+}
+
 /// With `--bounds`, that the exported mesh has a triangle in them, cut (the quads kept
 /// may only come near them): else the bake finds no surface there.
 fn check_reaches(
@@ -615,7 +632,7 @@ fn refined_most(options: &Options) -> bool {
 
 /// With `--bounds`, the part of the mesh that may reach into them
 /// ([`QuadMesh::retain_reaching`], by half a cell: the exported mesh's points bulge past
-/// a quad's corners by much less); [`Baked::exported_mesh`] then cuts the exported mesh
+/// a quad's corners by much less); [`Baked::take_exported_mesh`] then cuts the exported mesh
 /// at their faces. The box is the user's: where it reaches past the shape's own bounds
 /// (which hold the whole surface) it cuts nothing.
 fn clip(mesh: &mut QuadMesh, options: &Options) {

@@ -186,17 +186,16 @@ fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
 /// The files to write, and the file's triangles.
 fn encode(
     args: &BakeArgs,
-    baked: &Baked,
+    baked: &mut Baked,
     (name, material): (&str, &str),
 ) -> Result<(Vec<(PathBuf, Vec<u8>)>, usize), String> {
     // The file shares the vertices inside each chart (the bake's own mesh is chart by
     // chart, as its images read it) and ends at --bounds' faces.
-    let mesh = baked.exported_mesh();
+    let mesh = baked.take_exported_mesh();
     let triangles = mesh.indices.len() / 3;
-    let mut out = vec![(
-        args.output.clone(),
-        export::glb(&mesh, &baked.textures, &baked.atlas, name, material)?,
-    )];
+    let glb = export::glb(&mesh, &baked.textures, &baked.atlas, name, material)?;
+    drop(mesh);
+    let mut out = vec![(args.output.clone(), glb)];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
             .levels
@@ -333,7 +332,8 @@ pub fn run(args: BakeArgs) -> ExitCode {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let material = material_name(&analysis.program, shape, &name);
-    let (outputs, triangles) = match encode(&args, &baked, (&name, &material)) {
+    let mut baked = baked;
+    let (outputs, triangles) = match encode(&args, &mut baked, (&name, &material)) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: cannot encode the bake: {e}");
@@ -395,13 +395,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu, cut: Option<usize>) {
     eprintln!("adapter:        {}", gpu.describe());
     eprintln!(
         "mesh:           {} cells (chart grid {}×{}×{}), {} triangles ({}×{} quads per cell)",
-        r.cells,
-        r.grid[0],
-        r.grid[1],
-        r.grid[2],
-        baked.mesh.indices.len() / 3,
-        r.chart_quads,
-        r.chart_quads
+        r.cells, r.grid[0], r.grid[1], r.grid[2], r.triangles, r.chart_quads, r.chart_quads
     );
     if let Some(k) = cut {
         eprintln!("cut:            at the bounds' faces, {k} triangles in the file");

@@ -39,21 +39,6 @@ struct WalkState {
     level: f32,
 }
 
-// The first half of a walk's step (the atlas's `aim`): the point where its gradient is
-// taken and what the second half (`land`) needs of it.
-struct Aim {
-    // Where the step's gradient is taken, and that difference's step.
-    q: vec3<f32>,
-    h: f32,
-    // The step's direction, chord and time step, kappa and the normal at its start.
-    vh: vec3<f32>,
-    s: f32,
-    tau: f32,
-    kappa: f32,
-    n: vec3<f32>,
-    status: u32,
-}
-
 // Where a geodesic shot from a seed lands (the refinement, uv/refine.rs).
 struct Shot {
     end: vec3<f32>,
@@ -84,33 +69,6 @@ struct AtlasSample {
     bitangent: vec3<f32>,
 }
 
-// Alg. 2's state between walks (an atlas's open, next, take and close).
-struct Alg2 {
-    // The nearest seed's sample so far; whether one reached x; the Euclidean distance
-    // of the nearest failed seed's point, while none did.
-    best: AtlasSample,
-    found: bool,
-    fail_e: f32,
-    // The list being read (the seed grid's, then the merged neighbours'), and the phase:
-    // 2 the warm start's seed, 0 the nearest seed's search, 1 the blend.
-    t: u32,
-    end: u32,
-    phase: u32,
-    // The nearest seed's uv (with its offset) and distance, for the blend.
-    own: vec2<f32>,
-    d: f32,
-    // The blend's sums: uv, weights, the nearest seed's own weight, the frames.
-    sum: vec2<f32>,
-    total: f32,
-    w_own: f32,
-    t_sum: vec3<f32>,
-    b_sum: vec3<f32>,
-    // The next walk (after next): whether there is one, its seed and reach.
-    more: bool,
-    j: u32,
-    dmax: f32,
-}
-
 // Notes, item 2: the step whose parabolic chord is s; stable as alpha -> 0.
 fn uv_time_step(s: f32, alpha: f32) -> f32 {
     return s * sqrt(2.0 / (1.0 + sqrt(1.0 + s * s * alpha * alpha)));
@@ -137,13 +95,6 @@ fn uv_turn_curvature(n_next: vec3<f32>, vh: vec3<f32>, arc: f32) -> f32 {
         return 0.0;
     }
     return -asin(clamp(dot(n_next, vh), -1.0, 1.0)) / arc;
-}
-
-// Eq. 17 from f at three taps h apart along a unit tangent (behind, at, ahead), g the
-// gradient (uv/logmap.rs: normal_curvature).
-fn uv_curvature_of(behind: f32, at: f32, ahead: f32, h: f32, g: vec3<f32>) -> f32 {
-    let second = (behind - 2.0 * at + ahead) / (h * h);
-    return -second / max(length(g), 1e-12);
 }
 
 // Whether a step's normal turned more than the normal's rate of turn on either side of

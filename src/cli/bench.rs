@@ -235,8 +235,6 @@ struct Forms {
     differenced: Option<Module>,
     /// The loop walk with the multi-scale atlas pass, where materials read an atlas.
     multiscaled: Option<Module>,
-    /// The fused walk, per pixel and with the multi-scale pass (where it has one).
-    fused: Vec<Module>,
 }
 
 impl Forms {
@@ -261,15 +259,7 @@ impl Forms {
         // The multi-scale atlas pass (`render --multiscale on`), where it has one.
         let multiscaled =
             Some(from.looped(|o| o.multiscale = true)?).filter(|m| m.coarse_slots > 0);
-        let mut fused = vec![from.looped(|o| o.walk = WalkForm::Fused)?];
-        if multiscaled.is_some() {
-            fused.push(from.looped(|o| {
-                o.walk = WalkForm::Fused;
-                o.multiscale = true;
-            })?);
-        }
         Ok(Forms {
-            fused,
             plain,
             unrolled,
             rolled,
@@ -452,8 +442,6 @@ struct Rows<'a> {
     refined: Option<(usize, usize)>,
     differenced: Option<usize>,
     multiscaled: Option<usize>,
-    /// The fused walk's rows: per pixel, and with the pass where it has one.
-    fused: (usize, Option<usize>),
 }
 
 impl<'a> Rows<'a> {
@@ -527,17 +515,6 @@ impl<'a> Rows<'a> {
             .multiscaled
             .as_ref()
             .map(|m| push(&[("shaded, loop walk, multi-scale pass", m)]));
-        let fused = match &forms.fused[..] {
-            [per_pixel, pass] => {
-                let k = push(&[
-                    ("shaded, fused walk", per_pixel),
-                    ("shaded, fused walk, multi-scale pass", pass),
-                ]);
-                (k, Some(k + 1))
-            }
-            [per_pixel] => (push(&[("shaded, fused walk", per_pixel)]), None),
-            _ => unreachable!("one or two fused forms"),
-        };
         let refined = match &forms.refined[..] {
             [one, two] => {
                 let k = push(&[
@@ -558,7 +535,6 @@ impl<'a> Rows<'a> {
             refined,
             differenced,
             multiscaled,
-            fused,
         }
     }
 
@@ -588,13 +564,6 @@ impl<'a> Rows<'a> {
         if let Some(k) = self.multiscaled {
             pairs.push(("multi-scale pass ÷ per-pixel walk, loop", k, 2));
             pairs.push(("textured ÷ constant uv, loop, multi-scale pass", k, 4));
-        }
-        let (fused, fused_pass) = self.fused;
-        pairs.push(("fused ÷ loop walk", fused, 2));
-        pairs.push(("textured ÷ constant uv, fused", fused, 4));
-        if let (Some(k), Some(pass)) = (self.multiscaled, fused_pass) {
-            pairs.push(("fused ÷ loop walk, multi-scale pass", pass, k));
-            pairs.push(("textured ÷ constant uv, fused, multi-scale pass", pass, 4));
         }
         if let Some((plain_costly, costly, all)) = self.bounded {
             pairs.push(("node bounds ÷ none, plain", plain_costly, 0));

@@ -72,7 +72,6 @@ pub enum WalkForm {
     #[default]
     Unrolled = "unrolled": "N calls of the step, each with its constant N − i.",
     Loop = "loop": "A loop of N iterations.",
-    Fused = "fused": "Alg. 2 and its walks in one loop, one evaluation of the forward derivative an iteration (an atlas whose field has none walks in a loop).",
 }
 }
 
@@ -101,28 +100,7 @@ pub fn emit(
     let grad_value_fn = grad_value_fn(k, atlas, options);
     let (walk_begin, walk_end) = walk_mask(k, pruning.is_some());
     let n = p.steps.max(1);
-    // The fused form takes the curvature's taps from the derivative's value: only where
-    // the compiler writes one (else the gradient's w is the mean of difference taps).
-    let form = match form {
-        WalkForm::Fused if !(p.exact_gradient && !options.differences) => WalkForm::Loop,
-        form => form,
-    };
     let walk_steps = walk_steps(k, n, form);
-    let alg2 = template::fill(
-        if form == WalkForm::Fused {
-            template::FUSED
-        } else {
-            template::ALG2
-        },
-        &[
-            ("k", k.to_string()),
-            ("walk_begin", walk_begin),
-            ("walk_end", walk_end),
-            ("n", n.to_string()),
-            ("fd_start", lit(p.fd_start())),
-            ("min_reach", lit(p.min_reach)),
-        ][..if form == WalkForm::Fused { 6 } else { 3 }],
-    )?;
     let (refine_fns, refine_call) = refinement(k, n, p)?;
     let cells = grid.cells();
     // Outside the grid (or without one) the list is the full one; the grid's constants
@@ -152,7 +130,8 @@ pub fn emit(
         ("field_fn", field_fn),
         ("field_helpers", w.helpers),
         ("grad_value_fn", grad_value_fn),
-        ("alg2", alg2),
+        ("walk_begin", walk_begin),
+        ("walk_end", walk_end),
         ("h_gradient", lit(p.h_gradient)),
         ("onto_tolerance", lit(atlas.onto_tolerance())),
         ("reproject", p.reproject.to_string()),
@@ -169,7 +148,6 @@ pub fn emit(
             String::from(match form {
                 WalkForm::Unrolled => "unrolled",
                 WalkForm::Loop => "in a loop",
-                WalkForm::Fused => "in Alg. 2's loop, a stage an iteration (the fused form)",
             }),
         ),
         ("walk_steps", walk_steps),
@@ -303,7 +281,7 @@ fn walk_steps(k: usize, n: u32, form: WalkForm) -> String {
                 format!("    st = atlas_{k}_step(st, p, dmax, {remaining}, hmin);\n")
             })
             .collect::<String>(),
-        WalkForm::Loop | WalkForm::Fused => format!(
+        WalkForm::Loop => format!(
             "    for (var i = 0u; i < {n}u; i = i + 1u) {{\n        st = atlas_{k}_step(st, p, dmax, f32({n}u - i), hmin);\n    }}\n"
         ),
     }

@@ -5,10 +5,6 @@
 
 /// The code of one atlas (its field, walk, Alg. 2): `shaders/atlas.wgsl.in`.
 pub const ATLAS: &str = include_str!("../../shaders/atlas.wgsl.in");
-/// Alg. 2 calling an atlas's walk (the loop and unrolled forms): `shaders/alg2.wgsl.in`.
-pub const ALG2: &str = include_str!("../../shaders/alg2.wgsl.in");
-/// Alg. 2 with its walks in one loop (the fused form): `shaders/fused.wgsl.in`.
-pub const FUSED: &str = include_str!("../../shaders/fused.wgsl.in");
 /// An atlas's refinement (`refine` > 0): `shaders/refine.wgsl.in`.
 pub const REFINE: &str = include_str!("../../shaders/refine.wgsl.in");
 /// The scene-independent tail of every module (tracing, normals, entry points).

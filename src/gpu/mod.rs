@@ -268,7 +268,6 @@ pub enum WalkChoice {
     Auto = "auto": "Unrolled on a GPU (the loop where the unrolled module is too large, E0118), a loop on a software adapter (lavapipe, llvmpipe, SwiftShader, WARP), where the unrolled walk is 1.6-3.7x slower a frame and 2-12x slower to build.",
     Unrolled = "unrolled": "N calls of the step, each with its constant N − i.",
     Loop = "loop": "A loop of N iterations.",
-    Fused = "fused": "Alg. 2 and its walks in one loop, a stage of a walk an iteration (an atlas whose field has no forward derivative walks in a loop).",
 }
 }
 
@@ -288,7 +287,6 @@ impl WalkChoice {
         match self {
             WalkChoice::Loop | WalkChoice::Auto => crate::codegen::WalkForm::Loop,
             WalkChoice::Unrolled => crate::codegen::WalkForm::Unrolled,
-            WalkChoice::Fused => crate::codegen::WalkForm::Fused,
         }
     }
 }

@@ -163,12 +163,35 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
                 .map(|c| (c.cells[0] * c.cells[1]) as usize)
                 .sum(),
         };
-        // Uncut, two triangles a quad and one piece a chart (a cut chart may lose all
-        // its triangles or fall apart).
+        // The triangles left out as folded (two corners on one point), as the report
+        // says: none is left in the file, and no edge is held by more than two triangles
+        // (by position) where the mesh has no pinch (the folded ones had made the edges
+        // around a collapsed quad non-manifold).
+        let folded = common::report_count(&err, "folded:");
+        let held = common::edges_by_position(&mesh);
+        for t in mesh.indices.chunks_exact(3) {
+            let p = |k: usize| mesh.positions[t[k] as usize];
+            assert!(
+                p(0) != p(1) && p(1) != p(2) && p(0) != p(2),
+                "{stem}: a folded triangle {t:?} in the file"
+            );
+        }
+        let over = held.values().filter(|&&n| n > 2).count();
+        // Four keep a few edges held by four triangles at this coarse grid (8 cells):
+        // there two sheets of their surface, facing opposite ways, pass through one
+        // cell, and both sheets' quads share its one dual vertex (a pinch that dual
+        // contouring makes; 2, 15, 6 and 11 edges when this was written). Every other
+        // example is manifold here.
+        if !["blend", "csg", "primitives", "warps"].contains(&stem.as_str()) {
+            assert_eq!(over, 0, "{stem}: edges held by more than two triangles");
+        }
+        // Uncut, two triangles a quad, less the folded ones, and one piece a chart (a
+        // cut chart may lose all its triangles or fall apart; a chart of one quad
+        // collapsed to a point loses its two).
         if cut.is_none() {
             assert_eq!(
                 cells * chart_quads * chart_quads * 6,
-                mesh.indices.len(),
+                mesh.indices.len() + 3 * folded,
                 "{stem}: two triangles per quad"
             );
         }
@@ -180,13 +203,13 @@ fn every_example_bakes_validates_and_keeps_borders_identical() {
             sdfc::bake::ChartLayout::Packed(p) => p.charts.len(),
         };
         if cut.is_none() {
-            assert_eq!(
-                pieces, charts_in_layout,
-                "{stem}: one connected piece per chart"
+            assert!(
+                pieces <= charts_in_layout && pieces + folded / 2 >= charts_in_layout,
+                "{stem}: {pieces} pieces for {charts_in_layout} charts ({folded} folded triangles left out)"
             );
         }
         eprintln!(
-            "{stem}: {} vertices for {} triangles in {pieces} pieces (4 a cell unwelded: {})",
+            "{stem}: {} vertices for {} triangles in {pieces} pieces (4 a cell unwelded: {}); {folded} folded left out; {over} edges held by more than two",
             mesh.positions.len(),
             mesh.indices.len() / 3,
             cells * 4

@@ -132,7 +132,9 @@ pub const CHARTS_FILE_CELL_BYTES: u64 = 800;
 /// the export drops the bake's own mesh once welded (`Baked::take_exported_mesh`) it
 /// holds two meshes at once, not three, and the same bakes peaked at 356 and 1,058 MiB
 /// (the sphere cut in half by `--bounds`, whose cut makes a third copy for a moment,
-/// at 279 against about 350): the constant keeps the third copy as a margin.
+/// at 279 against about 350): the constant keeps the third copy as a margin, which
+/// also holds the moment when folded triangles are dropped (a second index list and
+/// four bytes a vertex).
 pub const VERTEX_BYTES: u64 = 24 + 3 * (48 + 24) + 16;
 
 /// The estimated peak memory of a bake and of writing its outputs, in bytes: the

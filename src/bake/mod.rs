@@ -17,6 +17,7 @@ pub mod clip;
 pub mod coverage;
 pub mod export;
 pub mod fit;
+pub mod folded;
 pub mod gpu;
 pub mod images;
 pub mod memory;

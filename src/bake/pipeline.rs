@@ -211,6 +211,9 @@ pub struct Report {
     pub fit_samples: usize,
     /// The bake's mesh's triangles (before the export's cut).
     pub triangles: usize,
+    /// The triangles left out of the file's mesh as folded, with two corners on one
+    /// point ([`super::folded::drop_folded`]): set by [`Baked::take_exported_mesh`].
+    pub folded: usize,
     /// Level-0 samples the file shows: with `--bounds`, those in them (the counts below
     /// are of these).
     pub shown: usize,
@@ -267,18 +270,21 @@ pub struct Baked {
 
 impl Baked {
     /// The mesh a file holds, taken out of the bake (`mesh` is left empty): the vertices
-    /// inside each chart shared ([`images::weld`]) and, with `--bounds`, the triangles
-    /// cut at the box's faces ([`super::clip::to_box`]; the texels need no change,
-    /// being placed through the same linear map). The bake's own mesh is dropped once
-    /// welded, so the export holds two meshes at once, not three.
+    /// inside each chart shared ([`images::weld`]); with `--bounds`, the triangles cut
+    /// at the box's faces ([`super::clip::to_box`]; the texels need no change, being
+    /// placed through the same linear map); and without the folded triangles, which
+    /// have two corners on one point ([`super::folded::drop_folded`]). The bake's own
+    /// mesh is dropped once welded, so the export holds two meshes at once, not three.
     pub fn take_exported_mesh(&mut self) -> MeshData {
         let mesh = std::mem::take(&mut self.mesh);
         let welded = images::weld(&mesh, self.vertex_grid.n);
         drop(mesh);
-        match self.bounds {
+        let (mesh, folded) = super::folded::drop_folded(match self.bounds {
             Some(b) => super::clip::to_box(welded, b, CUT_SLACK_CELLS * self.quads.cell),
             None => welded,
-        }
+        });
+        self.report.folded = folded;
+        mesh
     }
 }
 

@@ -400,6 +400,12 @@ pub fn print_report(baked: &Baked, gpu: &Gpu, cut: Option<usize>) {
     if let Some(k) = cut {
         eprintln!("cut:            at the bounds' faces, {k} triangles in the file");
     }
+    if r.folded > 0 {
+        eprintln!(
+            "folded:         {} triangles with two corners on one point left out of the file (no area; they made its edges non-manifold)",
+            r.folded
+        );
+    }
     if let Some(why) = &r.refine_dropped {
         eprintln!("refined:        none: the refined mesh's charts do not fit ({why}); baked the plain grid's mesh");
     }

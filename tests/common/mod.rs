@@ -479,6 +479,23 @@ pub fn mesh_pieces(m: &sdfc::bake::MeshData) -> usize {
     roots.len()
 }
 
+/// The number that starts the report line `label` of `sdfc bake` (0 without the
+/// line), as in `folded:         18 triangles ...`.
+pub fn report_count(report: &str, label: &str) -> usize {
+    report
+        .lines()
+        .find_map(|l| l.strip_prefix(label))
+        .map(|rest| {
+            let digits: String = rest
+                .trim_start()
+                .chars()
+                .take_while(char::is_ascii_digit)
+                .collect();
+            digits.parse().expect("a count")
+        })
+        .unwrap_or(0)
+}
+
 /// How many triangles hold each edge of a mesh, the edge by its ends' positions' bits
 /// (so split vertices at one place make one edge).
 pub fn edges_by_position(

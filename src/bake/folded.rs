@@ -1,18 +1,20 @@
 //! Folded triangles out of the exported mesh.
 //!
-//! Dual contouring puts each cell's vertex where the cell's surface samples say. Where
-//! several cells' vertices land on one point (a sphere's pole on a grid line, a box's
-//! corner, a thin shell's fold), a quad between them has two or more corners at the same
-//! position: a triangle with two equal corners has no area and two of its edges lie on
-//! each other. Such a triangle draws nothing, but it makes the mesh non-manifold (its
-//! third edge is then used by three or four triangles) and shows in a modeller's
-//! checks (degenerate faces, non-manifold edges). Removing it leaves the triangles
-//! around it sharing their edges directly, so the mesh is as watertight as before, and
-//! the texels, placed through each remaining triangle's own map, need no change.
+//! Where several cells' vertices lie on one point, a quad between them has two or more
+//! corners at the same position: the mesher gives vertices joined by a quad side under
+//! a tenth of a cell one position, so that creases grow no fins (`MERGE_CELLS`; the
+//! quads keep their four corners), and a box's corner or a sphere's pole on a grid
+//! line gathers several. A triangle with two equal corners has no area and two of its
+//! edges lie on each other. It draws nothing, but it makes the mesh non-manifold (its
+//! third edge is then held by three or four triangles) and shows in a modeller's checks
+//! (degenerate faces, non-manifold edges). Removing it leaves the triangles around it
+//! sharing their edges directly, so the mesh is as watertight as before, and the
+//! texels, placed through each remaining triangle's own map, need no change.
 //!
-//! A triangle is folded when two of its corners have equal positions (the f32s the file
-//! holds, compared as numbers: 0 and -0 are one point). Triangles of zero area with three distinct corners (on one line)
-//! are kept: removing one would leave a vertex in the middle of its neighbours' edge.
+//! A triangle is folded when two of its corners have equal positions (the f32s the
+//! file holds, compared as numbers: 0 and -0 are one point). Triangles of zero area
+//! with three distinct corners (on one line) are kept: removing one would leave a
+//! vertex in the middle of its neighbours' edge.
 
 use crate::asset::MeshData;
 

@@ -781,6 +781,53 @@ fn auto_refinement_finds_a_part_the_plain_grid_misses_entirely() {
     );
 }
 
+/// A box frame 0.03 thick on cells of 0.042 (a red team's scene): the plain grid's mesh
+/// is folded quads alone (each with two corners on one point), which the file leaves
+/// out. Never refined, that is no surface (exit 1, before the GPU's work), not an empty
+/// file that failed to encode (it had exited 5, "the mesh is empty"); refined, it bakes
+/// with the folded triangles counted.
+#[test]
+fn a_mesh_of_folded_quads_alone_is_no_surface() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("frame.sdf");
+    std::fs::write(
+        &scene,
+        "material m { color = [0.5, 0.5, 0.5]; }\nrender box_frame([1, 1, 1], 0.03).paint(m);",
+    )
+    .unwrap();
+    let out = dir.path().join("frame.glb");
+    let args = [
+        "bake",
+        scene.to_str().unwrap(),
+        "--grid",
+        "24",
+        "--size",
+        "512",
+        "--walk",
+        "loop",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    for refine in ["1", "2"] {
+        let (code, _, err) = sdfc(&[&args[..], &["--refine", refine]].concat());
+        assert_eq!(code, 1, "--refine {refine}: {err}");
+        assert!(
+            err.contains("no surface inside the bounds") && err.contains("--refine 8"),
+            "--refine {refine}: {err}"
+        );
+        assert!(!err.contains("shade (GPU)"), "--refine {refine}: {err}");
+        assert!(!out.exists(), "--refine {refine}");
+    }
+    let (code, _, err) = sdfc(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(common::report_count(&err, "folded:") > 0, "{err}");
+    let (mesh, _, _) = sdfc::bake::export::read_glb(&std::fs::read(&out).unwrap()).unwrap();
+    assert!(!mesh.indices.is_empty());
+}
+
 /// The bake's memory model (`pipeline::estimated_peak_bytes`) is the formula its
 /// documentation states, with each phase the largest for some bake.
 #[test]

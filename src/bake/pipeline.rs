@@ -538,8 +538,11 @@ fn statistics(
     (report.density_spread, report.slivers) = density_spread(quads, table, n);
 }
 
-/// With `--bounds`, that the exported mesh has a triangle in them, cut (the quads kept
-/// may only come near them): else the bake finds no surface there.
+/// That the file's mesh will hold a triangle: one that is not folded (two corners on one
+/// point in f32, which the export leaves out: [`super::folded`]) and, with `--bounds`,
+/// that has a part in them once cut (the quads kept may only come near them). Else the
+/// bake finds no surface to bake (a thin frame on a coarse grid can mesh into folded
+/// quads alone), which is said before the GPU's work.
 fn check_reaches(
     options: &Options,
     quads: &QuadMesh,
@@ -547,13 +550,17 @@ fn check_reaches(
     table: &ChartTable,
     cell: f64,
 ) -> Result<(), BakeError> {
-    if let Some(b) = options.bounds {
-        let slack = CUT_SLACK_CELLS * quads.cell;
-        if !super::clip::reaches(images::grid_triangles(grid_points, table), b, slack) {
-            return Err(BakeError::Empty(cell, refined_most(options)));
-        }
+    let folded = |t: &[DVec3; 3]| t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+    let mut triangles = images::grid_triangles(grid_points, table).filter(|t| !folded(t));
+    let held = match options.bounds {
+        Some(b) => super::clip::reaches(triangles, b, CUT_SLACK_CELLS * quads.cell),
+        None => triangles.next().is_some(),
+    };
+    if held {
+        Ok(())
+    } else {
+        Err(BakeError::Empty(cell, refined_most(options)))
     }
-    Ok(())
 }
 
 /// Whether the mesh was refined as finely as a bake refines (`--refine 8`): then the

@@ -3,7 +3,7 @@
 use super::{compile, exit, BakeArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use sdfc::bake::pipeline::{self, BakeError, Baked, Options, Progress, Refine, Resolution, Texels};
-use sdfc::bake::{export, table::ChartsFile};
+use sdfc::bake::{export, table::ChartsFile, MeshData};
 use sdfc::fsutil::write_output;
 use sdfc::gpu::Gpu;
 use sdfc::ir::Aabb;
@@ -183,18 +183,39 @@ fn write_all(outputs: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
     Ok(())
 }
 
-/// The files to write, and the file's triangles.
+/// The files to write, and the file's triangles; or the message and exit status.
 fn encode(
     args: &BakeArgs,
     baked: &mut Baked,
     (name, material): (&str, &str),
-) -> Result<(Vec<(PathBuf, Vec<u8>)>, usize), String> {
+) -> Result<(Vec<(PathBuf, Vec<u8>)>, usize), (String, u8)> {
     // The file shares the vertices inside each chart (the bake's own mesh is chart by
     // chart, as its images read it) and ends at --bounds' faces.
     let mesh = baked.take_exported_mesh();
     let triangles = mesh.indices.len() / 3;
-    let glb = export::glb(&mesh, &baked.textures, &baked.atlas, name, material)?;
-    drop(mesh);
+    // The bake checked that a triangle is left before its GPU work; a cut whose every
+    // piece folds in f32 (within a rounding error of the box's faces) could still leave
+    // none.
+    if triangles == 0 {
+        return Err((
+            String::from("no triangle of the mesh is left inside the bounds once cut (those at their faces fold to a line in f32): nothing to bake (a finer --grid or --edge, or bounds a little wider, keep the surface)"),
+            exit::SCENE,
+        ));
+    }
+    let encoded = encode_files(args, baked, &mesh, (name, material));
+    encoded
+        .map(|out| (out, triangles))
+        .map_err(|e| (format!("cannot encode the bake: {e}"), exit::RESOURCE))
+}
+
+/// The files of [`encode`] for the file's mesh `mesh`.
+fn encode_files(
+    args: &BakeArgs,
+    baked: &Baked,
+    mesh: &MeshData,
+    (name, material): (&str, &str),
+) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+    let glb = export::glb(mesh, &baked.textures, &baked.atlas, name, material)?;
     let mut out = vec![(args.output.clone(), glb)];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked
@@ -222,7 +243,7 @@ fn encode(
         let json = serde_json::to_vec_pretty(&file).map_err(|e| e.to_string())?;
         out.push((path.clone(), json));
     }
-    Ok((out, triangles))
+    Ok(out)
 }
 
 pub fn run(args: BakeArgs) -> ExitCode {
@@ -335,9 +356,9 @@ pub fn run(args: BakeArgs) -> ExitCode {
     let mut baked = baked;
     let (outputs, triangles) = match encode(&args, &mut baked, (&name, &material)) {
         Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: cannot encode the bake: {e}");
-            return ExitCode::from(exit::RESOURCE);
+        Err((e, status)) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(status);
         }
     };
     if let Err(e) = write_all(&outputs) {
@@ -402,7 +423,7 @@ pub fn print_report(baked: &Baked, gpu: &Gpu, cut: Option<usize>) {
     }
     if r.folded > 0 {
         eprintln!(
-            "folded:         {} triangles with two corners on one point left out of the file (no area; they made its edges non-manifold)",
+            "folded:         {} triangles with two corners on one point left out of the file (no area; each lay folded onto a neighbour's edge)",
             r.folded
         );
     }

@@ -202,20 +202,21 @@ fn encode(
             exit::SCENE,
         ));
     }
-    let encoded = encode_files(args, baked, &mesh, (name, material));
+    let encoded = encode_files(args, baked, mesh, (name, material));
     encoded
         .map(|out| (out, triangles))
         .map_err(|e| (format!("cannot encode the bake: {e}"), exit::RESOURCE))
 }
 
-/// The files of [`encode`] for the file's mesh `mesh`.
+/// The files of [`encode`] for the file's mesh `mesh` (dropped once in the `.glb`).
 fn encode_files(
     args: &BakeArgs,
     baked: &Baked,
-    mesh: &MeshData,
+    mesh: MeshData,
     (name, material): (&str, &str),
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
-    let glb = export::glb(mesh, &baked.textures, &baked.atlas, name, material)?;
+    let glb = export::glb(&mesh, &baked.textures, &baked.atlas, name, material)?;
+    drop(mesh);
     let mut out = vec![(args.output.clone(), glb)];
     if let (Some(path), sdfc::bake::ChartLayout::Flat(layout)) = (&args.ktx2, &baked.atlas) {
         let levels: Vec<image::RgbaImage> = baked

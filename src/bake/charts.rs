@@ -171,6 +171,14 @@ impl<T: Copy> Samples<T> {
         }
     }
 
+    /// Every sample once: the corners, the edges', the interiors'.
+    pub fn iter(&self) -> impl Iterator<Item = &T> {
+        self.corners
+            .iter()
+            .chain(&self.edges)
+            .chain(&self.interiors)
+    }
+
     /// The sample of chart `c` at chart-local texel `(i, j)`.
     pub fn get(&self, table: &ChartTable, c: usize, i: usize, j: usize) -> T {
         let n = self.n;

@@ -22,10 +22,7 @@ use crate::asset::MeshData;
 /// more (the others keep their order; returned as it is when it has none), and how
 /// many triangles were left out.
 pub fn drop_folded(mut mesh: MeshData) -> (MeshData, usize) {
-    let folded = |t: &[u32]| {
-        let p = |k: usize| mesh.positions[t[k] as usize];
-        p(0) == p(1) || p(1) == p(2) || p(0) == p(2)
-    };
+    let folded = |t: &[u32]| is_folded([0, 1, 2].map(|k| mesh.positions[t[k] as usize]));
     if !mesh.indices.chunks_exact(3).any(folded) {
         return (mesh, 0);
     }
@@ -58,6 +55,14 @@ pub fn drop_folded(mut mesh: MeshData) -> (MeshData, usize) {
     }
     let left_out = before - mesh.indices.len() / 3;
     (mesh, left_out)
+}
+
+/// Whether a triangle with these corners is folded: two of them equal (compared as
+/// numbers, so 0 and -0 are one point). The bake checks its mesh with it before the
+/// GPU's work (`pipeline::check_reaches`), as the export then drops such triangles.
+pub fn is_folded<P: PartialEq>(corners: [P; 3]) -> bool {
+    let [a, b, c] = corners;
+    a == b || b == c || a == c
 }
 
 /// `values` with only the entries whose index `keep` holds, in order.

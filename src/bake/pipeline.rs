@@ -550,8 +550,8 @@ fn check_reaches(
     table: &ChartTable,
     cell: f64,
 ) -> Result<(), BakeError> {
-    let folded = |t: &[DVec3; 3]| t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
-    let mut triangles = images::grid_triangles(grid_points, table).filter(|t| !folded(t));
+    let mut triangles =
+        images::grid_triangles(grid_points, table).filter(|&t| !super::folded::is_folded(t));
     let held = match options.bounds {
         Some(b) => super::clip::reaches(triangles, b, CUT_SLACK_CELLS * quads.cell),
         None => triangles.next().is_some(),

@@ -22,7 +22,7 @@ pub(super) fn emissive_strength(
         None => images::emissive_strength(
             levels[..atlas.levels().min(levels.len())]
                 .iter()
-                .flat_map(|l| l.corners.iter().chain(&l.edges).chain(&l.interiors)),
+                .flat_map(|l| l.iter()),
         ),
         bounds => images::emissive_strength(shown(&levels[0], points, bounds)),
     }
@@ -35,14 +35,7 @@ fn shown<'a>(
     points: &'a Samples<[f32; 3]>,
     bounds: Option<Aabb>,
 ) -> impl Iterator<Item = &'a Texel<CHANNELS>> + 'a {
-    let all =
-        |s: &'a Samples<Texel<CHANNELS>>| s.corners.iter().chain(&s.edges).chain(&s.interiors);
-    let at = points
-        .corners
-        .iter()
-        .chain(&points.edges)
-        .chain(&points.interiors);
-    all(level0).zip(at).filter_map(move |(t, p)| {
+    level0.iter().zip(points.iter()).filter_map(move |(t, p)| {
         let p = DVec3::from_array(p.map(f64::from));
         let inside = bounds.is_none_or(|b| p.cmpge(b.min).all() && p.cmple(b.max).all());
         inside.then_some(t)

@@ -362,13 +362,76 @@ fn dense_cloud(n: usize) -> String {
     src
 }
 
+/// One traced group of 48 leaves through a cube, painted red and blue in turn, the
+/// leaves' kinds taken from `kinds` in turn.
+fn painted_group(kinds: &[&str]) -> String {
+    let mut rng = Rng(11);
+    let mut src = String::from(
+        "material red {\n    color = [0.8, 0.1, 0.1];\n}\nmaterial blue {\n    color = [0.1, 0.2, 0.9];\n}\nlet cloud =\n",
+    );
+    for i in 0..48 {
+        let c = [0; 3].map(|_| 3.0 * rng.unit() - 1.5);
+        let (kind, paint) = (kinds[i % kinds.len()], ["red", "blue"][i % 2]);
+        let sep = if i + 1 < 48 { " |" } else { ";" };
+        src.push_str(&format!(
+            "    {kind}.translate([{:.3}, {:.3}, {:.3}]).paint({paint}){sep}\n",
+            c[0], c[1], c[2]
+        ));
+    }
+    src.push_str(
+        "render cloud {\n    camera = look_at(eye: [0, 1.5, 6], target: [0, 0, 0], fov: 40deg);\n}\n",
+    );
+    src
+}
+
+const ROUND_BOX: &str = "round_box([0.4, 0.3, 0.35], radius: 0.05)";
+const CYLINDER: &str = "cylinder(0.15, 0.4)";
+const CAPSULE: &str = "capsule(a: [0, -0.15, 0], b: [0.15, 0.15, 0], radius: 0.1)";
+const TURNED_BOX: &str =
+    "round_box([0.35, 0.3, 0.2], radius: 0.08).rotate(axis: [1, 1, 0], angle: 35deg)";
+
+#[test]
+fn a_rays_first_leaves_are_cached_where_a_group_is_one_unturned_kind() {
+    // The cull reads the first leaves a ray meets into registers for a group of one
+    // kind, unturned, whose parameters fit four words; the walker starts from them.
+    let wgsl = |src: &str| module(&analysis(src), true).wgsl;
+    let cached = [
+        (
+            painted_group(&[ROUND_BOX]),
+            "sd_round_box(q, l.params.xyz, l.params.w)",
+        ),
+        (
+            painted_group(&[CYLINDER]),
+            "sd_cylinder(q, l.params.x, l.params.y)",
+        ),
+        (city(300, 0), "sd_sphere(q, l.params.x)"),
+    ];
+    for (src, call) in cached {
+        let w = wgsl(&src);
+        assert!(w.contains(call), "{call}");
+        assert!(w.contains("scene_skip[0], p, scene_cached_0(p))"));
+    }
+    // Seven words (a capsule), turned leaves, or two kinds: the loop reads them all.
+    for kinds in [&[CAPSULE][..], &[TURNED_BOX], &[ROUND_BOX, CYLINDER]] {
+        let w = wgsl(&painted_group(kinds));
+        assert!(w.contains("fn group_tiled_"), "{kinds:?}");
+        assert!(!w.contains("fn scene_cached_"), "{kinds:?}");
+        assert!(w.contains("scene_skip[0], p, vec2<f32>(3.0e38, 0.0))"));
+    }
+}
+
 /// The scenes traced with and without tiles on the GPU.
-fn compared_scenes() -> [(&'static str, String); 4] {
+fn compared_scenes() -> [(&'static str, String); 6] {
     [
         ("scattered(400)", scattered(400, 0)),
         ("city(300)", city(300, 0)),
         ("scattered(400) over a floor as code", cloud_over_a_floor()),
         ("a dense cloud of 1,200", dense_cloud(1200)),
+        ("round boxes, painted (cached)", painted_group(&[ROUND_BOX])),
+        (
+            "capsules and turned round boxes, painted",
+            painted_group(&[CAPSULE, TURNED_BOX]),
+        ),
     ]
 }
 

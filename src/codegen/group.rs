@@ -5,6 +5,7 @@
 
 use super::emit::Writer;
 use crate::ir::group::{Group, INNER};
+use crate::ir::prim::{Kind, Slot, KINDS};
 use crate::ir::Shape;
 use std::fmt::Write;
 
@@ -28,28 +29,38 @@ fn group_box(at: u32, p: vec3<f32>) -> f32 {
 /// The distance call of a primitive kind at local point `q`, its parameters read from
 /// the record at word `k` in the kind's slot order ([`crate::ir::prim::KINDS`]).
 fn call_of(code: u32) -> Option<String> {
-    use crate::ir::prim::{Slot, KINDS};
     let kind = KINDS.get(code as usize)?;
-    let mut args = vec![String::from("q")];
-    let mut at = 0u32;
-    for slot in kind.slots {
+    Some(kind_call(kind, |at, slot| {
         let k = if at == 0 {
             String::from("k")
         } else {
             format!("k + {at}u")
         };
         match slot {
-            Slot::Float => {
-                args.push(format!("tables_f32({k})"));
-                at += 1;
-            }
-            Slot::Vec3 => {
-                args.push(format!("tables_vec3({k})"));
-                at += 3;
-            }
+            Slot::Float => format!("tables_f32({k})"),
+            Slot::Vec3 => format!("tables_vec3({k})"),
         }
+    }))
+}
+
+/// The call of `kind`'s distance function at `q`, each parameter the expression `arg`
+/// gives for its first word (counted from the record's parameters) and its slot.
+fn kind_call(kind: &Kind, arg: impl Fn(u32, Slot) -> String) -> String {
+    let mut args = vec![String::from("q")];
+    let mut at = 0u32;
+    for &slot in kind.slots {
+        args.push(arg(at, slot));
+        at += words(slot);
     }
-    Some(format!("{}({})", kind.wgsl, args.join(", ")))
+    format!("{}({})", kind.wgsl, args.join(", "))
+}
+
+/// The words of one parameter slot in a leaf record.
+fn words(slot: Slot) -> u32 {
+    match slot {
+        Slot::Float => 1,
+        Slot::Vec3 => 3,
+    }
 }
 
 /// The bit of a walker's mask that says some leaf holds a matrix.
@@ -184,19 +195,101 @@ pub const WHOLE: u32 = u32::MAX;
 
 /// The call of group `g`'s tiled walker in slot `slot` at point `p`, in a function
 /// with the tile in `tile`, skipping the entries the current ray's culling skips
-/// (`scene_skip`, `codegen::tiles`): (distance, material).
+/// (`scene_skip`, `codegen::tiles`) and starting from the leaves it cached
+/// ([`cached_kind`]): (distance, material).
 pub fn tiled_call(g: &Group, slot: u32, p: &str) -> String {
+    let first = match cached_kind(g, slot) {
+        Some(_) => format!("scene_cached_{slot}({p})"),
+        None => String::from("vec2<f32>(3.0e38, 0.0)"),
+    };
     format!(
-        "group_tiled_{:x}(GROUP_{}_AT, {slot}u, tile, scene_skip[{slot}], {p})",
+        "group_tiled_{:x}(GROUP_{}_AT, {slot}u, tile, scene_skip[{slot}], {p}, {first})",
         mask(g),
         g.key,
     )
 }
 
-/// `fn group_tiled_MASK(at0, slot, tile, skip, p) -> vec2<f32>`: the union of the
-/// leaves listed for `tile` and `slot` (ties to the first listed, the lowest record,
-/// as the tree walk's), less those of the first [`CULLED`] entries whose bit is set in `skip`
-/// (those whose boxes the ray being traced misses). A crowded tile's list (`WHOLE`)
+/// How many of the leaves a ray meets in a cached group's list the cull reads into the
+/// invocation's registers (`scene_cull`, `codegen::tiles`), so that each step of the
+/// trace evaluates them without reading a buffer.
+pub const CACHED: u32 = 4;
+
+/// The first slots whose groups may be cached (the registers grow with them).
+pub const CACHED_SLOTS: u32 = 4;
+
+/// The kind of group `g`'s leaves where the ray's first [`CACHED`] leaves in slot `slot`
+/// are cached: one kind, no leaf turned, its parameters in at most four words (every
+/// kind but the capsule), among the first [`CACHED_SLOTS`] slots.
+pub fn cached_kind(g: &Group, slot: u32) -> Option<&'static Kind> {
+    let m = mask(g);
+    if slot >= CACHED_SLOTS || m & TURNED != 0 || m.count_ones() != 1 {
+        return None;
+    }
+    let kind = KINDS.get(m.trailing_zeros() as usize)?;
+    (kind.slots.iter().map(|&s| words(s)).sum::<u32>() <= 4).then_some(kind)
+}
+
+/// For a cached slot ([`cached_kind`]): `fn scene_cached_SLOT(p) -> vec2<f32>`, the union
+/// of the leaves cached for the ray being traced (distance, material; ties to the
+/// first, which is the first listed), and `fn scene_cache_leaf_SLOT(record)`, one leaf
+/// read from its record into a `SceneLeaf`.
+pub fn cached_leaves(slot: u32, at: &str, kind: &Kind) -> String {
+    let swizzle = |at: u32, slot: Slot| {
+        let lanes = &"xyzw"[at as usize..(at + words(slot)) as usize];
+        format!("l.params.{lanes}")
+    };
+    let call = kind_call(kind, swizzle);
+    let used = kind.slots.iter().map(|&s| words(s)).sum::<u32>();
+    let params: Vec<String> = (0..4u32)
+        .map(|w| match w < used {
+            true => format!("tables_f32(r + {}u)", 5 + w),
+            false => String::from("0.0"),
+        })
+        .collect();
+    let mut body = String::new();
+    for j in 0..CACHED {
+        let _ = write!(
+            body,
+            "    {{
+        let l = scene_cache_{slot}[{j}];
+        let q = p + l.frame.xyz;
+        let d = select(3.0e38, {call}, {j}u < scene_cached_n[{slot}]);
+        if (d < best.x) {{
+            best = vec2<f32>(d, l.frame.w);
+        }}
+    }}
+"
+        );
+    }
+    format!(
+        "// The leaves of traced group {slot} ({wgsl}) that the ray being traced meets first,
+// read once by scene_cull.
+var<private> scene_cache_{slot}: array<SceneLeaf, {CACHED}>;
+
+// Leaf `record` of traced group {slot}: its translation and material, its parameters.
+fn scene_cache_leaf_{slot}(record: u32) -> SceneLeaf {{
+    let r = {at} + record;
+    return SceneLeaf(vec4<f32>(tables_vec3(r + 2u), tables_f32(r + 1u)), vec4<f32>({params}));
+}}
+
+// The union of the cached leaves (the first scene_cached_n[{slot}] of them).
+fn scene_cached_{slot}(p: vec3<f32>) -> vec2<f32> {{
+    var best = vec2<f32>(3.0e38, 0.0);
+{body}    return best;
+}}
+
+",
+        wgsl = kind.wgsl,
+        params = params.join(", "),
+    )
+}
+
+/// `fn group_tiled_MASK(at0, slot, tile, skip, p, first) -> vec2<f32>`: the union of
+/// `first` (the leaves the cull cached, [`cached_kind`], or nothing) and the leaves
+/// listed for `tile` and `slot` (ties to the first listed, the lowest record, as the
+/// tree walk's), less those of the first [`CULLED`] entries whose bit is set in `skip`
+/// (those whose boxes the ray being traced misses, and those cached, which come before
+/// any other the ray meets). A crowded tile's list (`WHOLE`)
 /// never reaches it: such rays trace the whole scene (`scene_whole`, `codegen::tiles`).
 /// One loop, no call to the tree walk: on Mesa's software adapter a branch's other
 /// side costs as much as its own, every step.
@@ -206,11 +299,11 @@ pub fn tiled_walker(mask: u32) -> String {
 // buffer, binned by the runtime each frame: src/gpu/tiles.rs), less those the ray
 // being traced misses (`skip`, from scene_cull). A crowded tile (a list too long) is
 // traced over the whole scene instead (scene_whole), and reads as empty here.
-fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: vec2<u32>, p: vec3<f32>) -> vec2<f32> {{
+fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: vec2<u32>, p: vec3<f32>, first: vec2<f32>) -> vec2<f32> {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
     let start = tiles[h];
     let count = select(tiles[h + 1u], 0u, tiles[h + 1u] == {WHOLE}u);
-    var best = vec2<f32>(3.0e38, 0.0);
+    var best = first;
     // The first {CULLED} entries by their bits (x, then y), in order; then any past them.
     let low = select(0xffffffffu, (1u << min(count, 31u)) - 1u, count < 32u);
     let high = select(0xffffffffu, (1u << (min(max(count, 32u), 63u) - 32u)) - 1u, count < 64u);

@@ -14,11 +14,12 @@
 
 use super::emit::Writer;
 use crate::ir::group::Group;
+use crate::ir::prim::Kind;
 use crate::ir::{Aabb, NodeId, Op, Shape};
 use std::collections::HashMap;
 use std::fmt::Write;
 
-pub use super::group::{CULLED, TILES_HEADER, TILE_ENTRY, WHOLE};
+pub use super::group::{CACHED, CULLED, TILES_HEADER, TILE_ENTRY, WHOLE};
 
 /// The pipeline-overridable constant of a module with per-tile culling that keeps
 /// the whole-scene paths for crowded tiles ([`DISPATCH`]); true unless a pipeline
@@ -155,7 +156,7 @@ fn scene_trace_map(p: vec3<f32>, tile: u32) -> vec2<f32> {{
 }}
 
 ",
-        cull(slots.len(), only_groups(target)),
+        cull(&cached(target, slots), only_groups(target)),
         w.helpers,
         w.out
     );
@@ -163,6 +164,19 @@ fn scene_trace_map(p: vec3<f32>, tile: u32) -> vec2<f32> {{
     out.push_str(&marches("_whole", "scene_whole_map"));
     out.push_str(DISPATCH);
     w.groups
+}
+
+/// By slot, the traced groups whose rays' first leaves are cached
+/// ([`super::group::cached_kind`]): the name of the group's offset and its leaves' kind.
+fn cached(target: &Shape, slots: &HashMap<NodeId, u32>) -> Vec<Option<(String, &'static Kind)>> {
+    let mut out = vec![None; slots.len()];
+    for (&id, &slot) in slots {
+        if let Some(g) = target.group(id) {
+            out[slot as usize] = super::group::cached_kind(g, slot)
+                .map(|kind| (format!("GROUP_{}_AT", g.key), kind));
+        }
+    }
+    out
 }
 
 /// `shaders/trace.wgsl.in` over the field `map`, its functions named with `suffix`.
@@ -271,16 +285,43 @@ fn only_groups(target: &Shape) -> bool {
 /// the span of the ray where it may meet the surface: with `only` (the target is its
 /// groups alone, [`only_groups`]), from the nearest entry into a box it meets to the
 /// farthest exit (empty, start past end, where it meets none), else `(0, far)`.
-fn cull(slots: usize, only: bool) -> String {
+///
+/// In the slots `cached` names (by slot: the group's offset and its leaves' kind), the
+/// first [`CACHED`] leaves the ray meets are read into registers (`scene_cache_SLOT`,
+/// [`super::group::cached_leaves`]) and skipped in the list: the walker's loop then
+/// reads only the leaves past them, and a ray that meets few leaves reads no buffer at
+/// its steps. (On Mesa's software adapter, 1,200 scattered spheres at 160 × 120: a
+/// frame of 10-11 ms took 6.0-6.5.)
+fn cull(cached: &[Option<(String, &'static Kind)>], only: bool) -> String {
     const _: () = assert!(CULLED == 64, "the mask is two words");
-    let mut set = String::new();
-    let mut clear = String::new();
-    for k in 0..slots {
+    const _: () = assert!(CACHED == 4, "the cached records are a vec4");
+    let slots = cached.len();
+    let (mut set, mut clear, mut leaves) = (String::new(), String::new(), String::new());
+    for (k, cache) in cached.iter().enumerate() {
+        let _ = writeln!(
+            clear,
+            "    scene_skip[{k}] = vec2<u32>(0u);\n    scene_cached_n[{k}] = 0u;"
+        );
+        let Some((at, kind)) = cache else {
+            let _ = writeln!(
+                set,
+                "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far, 0u).skip;\n    scene_cached_n[{k}] = 0u;"
+            );
+            continue;
+        };
         let _ = writeln!(
             set,
-            "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far);"
+            "    let c{k} = scene_cull_list(ro, inv, tile, {k}u, far, {CACHED}u);
+    scene_skip[{k}] = c{k}.skip;
+    scene_cached_n[{k}] = c{k}.cached;"
         );
-        let _ = writeln!(clear, "    scene_skip[{k}] = vec2<u32>(0u);");
+        for (j, lane) in ["x", "y", "z", "w"].iter().enumerate() {
+            let _ = writeln!(
+                set,
+                "    scene_cache_{k}[{j}] = scene_cache_leaf_{k}(c{k}.first.{lane});"
+            );
+        }
+        leaves.push_str(&super::group::cached_leaves(k as u32, at, kind));
     }
     let (first, span) = if only {
         (
@@ -305,18 +346,37 @@ var<private> scene_span: vec2<f32>;
 // Whether a list the ray reads was too long (`WHOLE`): it then traces the whole scene.
 var<private> scene_whole: bool;
 
-// Bit i (of x, then of y from 32 on) set where the ray ro + t / inv (0 <= t <= far)
-// misses entry i's box, for the first {CULLED} entries of `tile`'s list of group `slot`.
-fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32) -> vec2<u32> {{
+// Per traced group, how many leaves scene_cull cached for the ray being traced.
+var<private> scene_cached_n: array<u32, {slots}>;
+
+// A cached leaf: its translation and material (w), its parameters.
+struct SceneLeaf {{
+    frame: vec4<f32>,
+    params: vec4<f32>,
+}}
+
+// One list culled to a ray: the entries it misses or caches (bits as scene_skip's), how
+// many it cached and their records (0 past them).
+struct SceneCulled {{
+    skip: vec2<u32>,
+    cached: u32,
+    first: vec4<u32>,
+}}
+
+{leaves}// Bit i (of x, then of y from 32 on) set where the ray ro + t / inv (0 <= t <= far)
+// misses entry i's box, for the first {CULLED} entries of `tile`'s list of group `slot`;
+// the first `cache` (at most {CACHED}) entries it meets are set too and their records kept.
+fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32, cache: u32) -> SceneCulled {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);
     let start = tiles[h];
     let count = tiles[h + 1u];
+    var out = SceneCulled(vec2<u32>(0u), 0u, vec4<u32>(0u));
     if (count == {WHOLE}u || count > {CULLED}u) {{
         scene_span = vec2<f32>(0.0, far);
     }}
     if (count == {WHOLE}u) {{
         scene_whole = true;
-        return vec2<u32>(0u);
+        return out;
     }}
     var skip = vec2<u32>(0u);
     for (var i = 0u; i < min(count, {CULLED}u); i = i + 1u) {{
@@ -327,14 +387,22 @@ fn scene_cull_list(ro: vec3<f32>, inv: vec3<f32>, tile: u32, slot: u32, far: f32
         let b = (hi - ro) * inv;
         let near = max(max(min(a.x, b.x), min(a.y, b.y)), max(min(a.z, b.z), 0.0));
         let far_side = min(min(max(a.x, b.x), max(a.y, b.y)), min(max(a.z, b.z), far));
+        let bit = 1u << (i & 31u);
+        let mark = select(vec2<u32>(bit, 0u), vec2<u32>(0u, bit), i >= 32u);
         if (near > far_side) {{
-            let bit = 1u << (i & 31u);
-            skip = skip | select(vec2<u32>(bit, 0u), vec2<u32>(0u, bit), i >= 32u);
+            skip = skip | mark;
         }} else {{
             scene_span = vec2<f32>(min(scene_span.x, near), max(scene_span.y, far_side));
+            if (out.cached < cache) {{
+                let n = out.cached;
+                out.first = select(out.first, vec4<u32>(tiles[e]), vec4<bool>(n == 0u, n == 1u, n == 2u, n == 3u));
+                out.cached = n + 1u;
+                skip = skip | mark;
+            }}
         }}
     }}
-    return skip;
+    out.skip = skip;
+    return out;
 }}
 
 // Culls the tiles' lists to the ray ro + t rd, 0 <= t <= far (rd need not be unit);

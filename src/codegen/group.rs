@@ -4,7 +4,7 @@
 //! hierarchy, one `switch` arm per kind. `ir::group::Group::eval` is its CPU mirror.
 
 use super::emit::Writer;
-use crate::ir::group::{Group, INNER};
+use crate::ir::group::{Group, INNER, RECORD_PARAMS};
 use crate::ir::prim::{Kind, Slot, KINDS};
 use crate::ir::Shape;
 use std::fmt::Write;
@@ -57,10 +57,12 @@ fn kind_call(kind: &Kind, arg: impl Fn(u32, Slot) -> String) -> String {
 
 /// The words of one parameter slot in a leaf record.
 fn words(slot: Slot) -> u32 {
-    match slot {
-        Slot::Float => 1,
-        Slot::Vec3 => 3,
-    }
+    slot.words() as u32
+}
+
+/// The words of a kind's parameters in a leaf record.
+fn kind_words(kind: &Kind) -> u32 {
+    kind.slots.iter().map(|&s| words(s)).sum()
 }
 
 /// The bit of a walker's mask that says some leaf holds a matrix.
@@ -100,18 +102,22 @@ pub fn walker(mask: u32) -> String {
     }
     // A leaf record's distance: its point in the primitive's frame, then its kind's arm.
     let frame = if mask & TURNED != 0 {
-        "    let head = tables[r];
+        String::from(
+            "    let head = tables[r];
     var q = p + tables_vec3(r + 2u);
     var k = r + 5u;
     if ((head & 256u) != 0u) {
         q = mat3x3<f32>(tables_vec3(r + 5u), tables_vec3(r + 8u), tables_vec3(r + 11u)) * p + tables_vec3(r + 2u);
         k = r + 14u;
     }
-"
+",
+        )
     } else {
-        "    let q = p + tables_vec3(r + 2u);
-    let k = r + 5u;
+        format!(
+            "    let q = p + tables_vec3(r + 2u);
+    let k = r + {RECORD_PARAMS}u;
 "
+        )
     };
     let body = match (&kinds[..], mask & TURNED != 0) {
         // One kind, no matrix: the record's head is not read.
@@ -226,7 +232,7 @@ pub fn cached_kind(g: &Group, slot: u32) -> Option<&'static Kind> {
         return None;
     }
     let kind = KINDS.get(m.trailing_zeros() as usize)?;
-    (kind.slots.iter().map(|&s| words(s)).sum::<u32>() <= 4).then_some(kind)
+    (kind_words(kind) <= 4).then_some(kind)
 }
 
 /// For a cached slot ([`cached_kind`]): `fn scene_cached_SLOT(p) -> vec2<f32>`, the union
@@ -239,10 +245,10 @@ pub fn cached_leaves(slot: u32, at: &str, kind: &Kind) -> String {
         format!("l.params.{lanes}")
     };
     let call = kind_call(kind, swizzle);
-    let used = kind.slots.iter().map(|&s| words(s)).sum::<u32>();
+    let used = kind_words(kind);
     let params: Vec<String> = (0..4u32)
         .map(|w| match w < used {
-            true => format!("tables_f32(r + {}u)", 5 + w),
+            true => format!("tables_f32(r + {}u)", RECORD_PARAMS + w),
             false => String::from("0.0"),
         })
         .collect();
@@ -297,7 +303,8 @@ pub fn tiled_walker(mask: u32) -> String {
     format!(
         "// A large union over the leaves a screen tile's rays can come near (the `tiles`
 // buffer, binned by the runtime each frame: src/gpu/tiles.rs), less those the ray
-// being traced misses (`skip`, from scene_cull). A crowded tile (a list too long) is
+// being traced misses or whose union scene_cull cached (`skip`), from `first` (that
+// union, or nothing). A crowded tile (a list too long) is
 // traced over the whole scene instead (scene_whole), and reads as empty here.
 fn group_tiled_{mask:x}(at0: u32, slot: u32, tile: u32, skip: vec2<u32>, p: vec3<f32>, first: vec2<f32>) -> vec2<f32> {{
     let h = {TILES_HEADER}u + 2u * (tile * tiles[3] + slot);

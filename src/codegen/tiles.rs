@@ -290,39 +290,12 @@ fn only_groups(target: &Shape) -> bool {
 /// first [`CACHED`] leaves the ray meets are read into registers (`scene_cache_SLOT`,
 /// [`super::group::cached_leaves`]) and skipped in the list: the walker's loop then
 /// reads only the leaves past them, and a ray that meets few leaves reads no buffer at
-/// its steps. (On Mesa's software adapter, 1,200 scattered spheres at 160 × 120: a
-/// frame of 10-11 ms took 6.0-6.5.)
+/// its steps (docs/performance.md, "A ray's first leaves in registers", for what it
+/// saved).
 fn cull(cached: &[Option<(String, &'static Kind)>], only: bool) -> String {
     const _: () = assert!(CULLED == 64, "the mask is two words");
-    const _: () = assert!(CACHED == 4, "the cached records are a vec4");
     let slots = cached.len();
-    let (mut set, mut clear, mut leaves) = (String::new(), String::new(), String::new());
-    for (k, cache) in cached.iter().enumerate() {
-        let _ = writeln!(
-            clear,
-            "    scene_skip[{k}] = vec2<u32>(0u);\n    scene_cached_n[{k}] = 0u;"
-        );
-        let Some((at, kind)) = cache else {
-            let _ = writeln!(
-                set,
-                "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far, 0u).skip;\n    scene_cached_n[{k}] = 0u;"
-            );
-            continue;
-        };
-        let _ = writeln!(
-            set,
-            "    let c{k} = scene_cull_list(ro, inv, tile, {k}u, far, {CACHED}u);
-    scene_skip[{k}] = c{k}.skip;
-    scene_cached_n[{k}] = c{k}.cached;"
-        );
-        for (j, lane) in ["x", "y", "z", "w"].iter().enumerate() {
-            let _ = writeln!(
-                set,
-                "    scene_cache_{k}[{j}] = scene_cache_leaf_{k}(c{k}.first.{lane});"
-            );
-        }
-        leaves.push_str(&super::group::cached_leaves(k as u32, at, kind));
-    }
+    let (set, clear, leaves) = cull_slots(cached);
     let (first, span) = if only {
         (
             " (the target is its traced groups alone: from the nearest entry into a box\n// to the farthest exit, empty where it meets none)",
@@ -422,4 +395,38 @@ fn scene_cull_none() {{
 
 "
     )
+}
+
+/// `scene_cull`'s statements for each slot (`set`), `scene_cull_none`'s (`clear`), and
+/// the cached slots' leaves and their union (`cached_leaves`), for [`cull`].
+fn cull_slots(cached: &[Option<(String, &'static Kind)>]) -> (String, String, String) {
+    const _: () = assert!(CACHED == 4, "the cached records are a vec4");
+    let (mut set, mut clear, mut leaves) = (String::new(), String::new(), String::new());
+    for (k, cache) in cached.iter().enumerate() {
+        let _ = writeln!(
+            clear,
+            "    scene_skip[{k}] = vec2<u32>(0u);\n    scene_cached_n[{k}] = 0u;"
+        );
+        let Some((at, kind)) = cache else {
+            let _ = writeln!(
+                set,
+                "    scene_skip[{k}] = scene_cull_list(ro, inv, tile, {k}u, far, 0u).skip;\n    scene_cached_n[{k}] = 0u;"
+            );
+            continue;
+        };
+        let _ = writeln!(
+            set,
+            "    let c{k} = scene_cull_list(ro, inv, tile, {k}u, far, {CACHED}u);
+    scene_skip[{k}] = c{k}.skip;
+    scene_cached_n[{k}] = c{k}.cached;"
+        );
+        for (j, lane) in ["x", "y", "z", "w"].iter().enumerate() {
+            let _ = writeln!(
+                set,
+                "    scene_cache_{k}[{j}] = scene_cache_leaf_{k}(c{k}.first.{lane});"
+            );
+        }
+        leaves.push_str(&super::group::cached_leaves(k as u32, at, kind));
+    }
+    (set, clear, leaves)
 }

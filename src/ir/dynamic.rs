@@ -157,10 +157,7 @@ pub fn apply(d: &Dyn, op: &mut Op, values: Values) -> Option<()> {
             let mut params = p.params();
             let mut at = 0;
             for (i, kind) in p.kind().slots.iter().enumerate() {
-                let width = match kind {
-                    PrimSlot::Float => 1,
-                    PrimSlot::Vec3 => 3,
-                };
+                let width = kind.words();
                 if let Some(s) = slots.get(i).and_then(Option::as_ref) {
                     let c = number(s, values)?;
                     match kind {

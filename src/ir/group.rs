@@ -27,6 +27,10 @@ pub const INNER: u32 = u32::MAX;
 /// Words per tree node: box min (3), skip, box max (3), leaf record offset.
 pub const NODE_WORDS: usize = 8;
 
+/// Where an unturned leaf's parameters start in its record: after its head, its
+/// material and its translation (`Group::encode`; a turned leaf's matrix comes first).
+pub const RECORD_PARAMS: u32 = 5;
+
 /// A primitive with the affine map to its local frame, `q = m p + c`, and its material.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Leaf {

@@ -82,6 +82,16 @@ pub enum Slot {
     Vec3,
 }
 
+impl Slot {
+    /// Its words in a group record (and floats in `Prim::params`).
+    pub const fn words(self) -> usize {
+        match self {
+            Slot::Float => 1,
+            Slot::Vec3 => 3,
+        }
+    }
+}
+
 /// The facts of a primitive kind that do not depend on its parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kind {
@@ -275,10 +285,7 @@ impl Prim {
         let mut args = vec![p.to_string()];
         let mut at = 0;
         for (i, slot) in self.kind().slots.iter().enumerate() {
-            let width = match slot {
-                Slot::Float => 1,
-                Slot::Vec3 => 3,
-            };
+            let width = slot.words();
             let written = run_time(i, *slot).unwrap_or_else(|| match slot {
                 Slot::Float => float(params[at]),
                 Slot::Vec3 => vec3(DVec3::from_slice(&params[at..at + 3])),
